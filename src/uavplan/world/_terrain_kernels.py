@@ -1,0 +1,303 @@
+"""Numba kernels for exact terrain queries along straight segments.
+
+The terrain is the bilinear interpolant of a DEM grid. Along a straight segment, inside one DEM
+cell, that interpolant is a quadratic in the segment parameter ``t``, so the clearance
+``z(t) - h(t)`` is a quadratic too and its minimum over the cell is found exactly (end points and
+the stationary point). To avoid walking every cell of every segment, a branch-and-bound over
+``t`` prunes any sub-segment whose lowest altitude is above the highest terrain in its bounding
+box, read from a max-pyramid of the grid (level ``L`` holds the max over blocks of ``2**L``
+cells). The result is the exact minimum clearance (to rounding), not a sampled one.
+
+Coordinates here are *cell coordinates*: ``u = (x - x0) / dx``, ``v = (y - y0) / dy``; node
+``(j, i)`` of the grid sits at ``(u, v) = (i, j)`` and cell ``(cj, ci)`` spans
+``[ci, ci + 1] x [cj, cj + 1]``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+_STACK = 256
+
+
+def build_max_pyramid(heights: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Max-pyramid over the cells of ``heights`` (ny, nx).
+
+    Returns ``(flat, offsets, shapes)``: level ``L`` is
+    ``flat[offsets[L]:offsets[L] + shapes[L, 0] * shapes[L, 1]].reshape(shapes[L])`` and holds, for
+    each block of ``2**L x 2**L`` cells, the largest grid value at any corner of those cells.
+    """
+    h = np.asarray(heights, dtype=np.float64)
+    level = np.maximum(np.maximum(h[:-1, :-1], h[1:, :-1]), np.maximum(h[:-1, 1:], h[1:, 1:]))
+    levels = [level]
+    while level.shape[0] > 1 or level.shape[1] > 1:
+        ny, nx = level.shape
+        py, px = ny + (ny % 2), nx + (nx % 2)
+        padded = np.full((py, px), -np.inf)
+        padded[:ny, :nx] = level
+        level = padded.reshape(py // 2, 2, px // 2, 2).max(axis=(1, 3))
+        levels.append(level)
+    shapes = np.array([lv.shape for lv in levels], dtype=np.int64)
+    sizes = shapes[:, 0] * shapes[:, 1]
+    offsets = np.concatenate(([0], np.cumsum(sizes)[:-1])).astype(np.int64)
+    flat = np.concatenate([lv.ravel() for lv in levels])
+    return flat, offsets, shapes
+
+
+@njit(cache=True, inline="always")
+def _bilinear_cell(H, ci, cj, s, r):  # pragma: no cover - numba
+    h00 = H[cj, ci]
+    h10 = H[cj, ci + 1]
+    h01 = H[cj + 1, ci]
+    h11 = H[cj + 1, ci + 1]
+    return h00 + (h10 - h00) * s + (h01 - h00) * r + (h00 - h10 - h01 + h11) * s * r
+
+
+@njit(cache=True)
+def _box_max(flat, offsets, shapes, ci0, ci1, cj0, cj1):  # pragma: no cover - numba
+    """Upper bound of the terrain over cells [ci0..ci1] x [cj0..cj1] from the pyramid."""
+    L = 0
+    nlev = shapes.shape[0]
+    while L < nlev - 1 and ((ci1 >> L) - (ci0 >> L) > 1 or (cj1 >> L) - (cj0 >> L) > 1):
+        L += 1
+    off = offsets[L]
+    nx = shapes[L, 1]
+    best = -np.inf
+    for bj in range(cj0 >> L, (cj1 >> L) + 1):
+        for bi in range(ci0 >> L, (ci1 >> L) + 1):
+            val = flat[off + bj * nx + bi]
+            if val > best:
+                best = val
+    return best
+
+
+@njit(cache=True)
+def _clip_to_grid(u0, v0, du, dv, ncx, ncy):  # pragma: no cover - numba
+    """Parameter interval [ta, tb] of the segment inside the grid rectangle [0,ncx] x [0,ncy]."""
+    ta = 0.0
+    tb = 1.0
+    if du != 0.0:
+        t1 = (0.0 - u0) / du
+        t2 = (ncx - u0) / du
+        lo = min(t1, t2)
+        hi = max(t1, t2)
+        ta = max(ta, lo)
+        tb = min(tb, hi)
+    elif u0 < 0.0 or u0 > ncx:
+        return 1.0, 0.0
+    if dv != 0.0:
+        t1 = (0.0 - v0) / dv
+        t2 = (ncy - v0) / dv
+        lo = min(t1, t2)
+        hi = max(t1, t2)
+        ta = max(ta, lo)
+        tb = min(tb, hi)
+    elif v0 < 0.0 or v0 > ncy:
+        return 1.0, 0.0
+    return ta, tb
+
+
+@njit(cache=True)
+def _leaf_min(H, u0, v0, z0, du, dv, dz, ta, tb, ncx, ncy):  # pragma: no cover - numba
+    """Exact minimum of z(t) - h(t) for t in [ta, tb] (the sub-segment spans few cells)."""
+    ts = np.empty(64)
+    n = 0
+    ts[n] = ta
+    n += 1
+    # integer crossings of u and v inside (ta, tb)
+    if du != 0.0:
+        ua = u0 + du * ta
+        ub = u0 + du * tb
+        k0 = int(np.floor(min(ua, ub))) + 1
+        k1 = int(np.ceil(max(ua, ub))) - 1
+        for k in range(k0, k1 + 1):
+            if n < 62:
+                ts[n] = (k - u0) / du
+                n += 1
+    if dv != 0.0:
+        va = v0 + dv * ta
+        vb = v0 + dv * tb
+        k0 = int(np.floor(min(va, vb))) + 1
+        k1 = int(np.ceil(max(va, vb))) - 1
+        for k in range(k0, k1 + 1):
+            if n < 63:
+                ts[n] = (k - v0) / dv
+                n += 1
+    ts[n] = tb
+    n += 1
+    tsorted = np.sort(ts[:n])
+    best = np.inf
+    for q in range(n - 1):
+        a = tsorted[q]
+        b = tsorted[q + 1]
+        if b < a:
+            continue
+        tm = 0.5 * (a + b)
+        ci = int(np.floor(u0 + du * tm))
+        cj = int(np.floor(v0 + dv * tm))
+        ci = min(max(ci, 0), ncx - 1)
+        cj = min(max(cj, 0), ncy - 1)
+        h00 = H[cj, ci]
+        bx = H[cj, ci + 1] - h00
+        by = H[cj + 1, ci] - h00
+        cc = h00 - H[cj, ci + 1] - H[cj + 1, ci] + H[cj + 1, ci + 1]
+        s0 = u0 - ci
+        r0 = v0 - cj
+        # h(t) = qa + qb t + qc t^2
+        qa = h00 + bx * s0 + by * r0 + cc * s0 * r0
+        qb = bx * du + by * dv + cc * (s0 * dv + r0 * du)
+        qc = cc * du * dv
+        # g(t) = z0 + dz t - h(t)
+        ga = (z0 - qa) + (dz - qb) * a - qc * a * a
+        gb = (z0 - qa) + (dz - qb) * b - qc * b * b
+        g = min(ga, gb)
+        if qc < 0.0:  # g convex: interior minimum possible
+            tstar = (dz - qb) / (2.0 * qc)
+            if a < tstar < b:
+                gs = (z0 - qa) + (dz - qb) * tstar - qc * tstar * tstar
+                if gs < g:
+                    g = gs
+        if g < best:
+            best = g
+    return best
+
+
+@njit(cache=True)
+def _segment_min_clearance(
+    H, flat, offsets, shapes, u0, v0, z0, u1, v1, z1, cap, stop_below
+):  # pragma: no cover - numba
+    ncy = H.shape[0] - 1
+    ncx = H.shape[1] - 1
+    du = u1 - u0
+    dv = v1 - v0
+    dz = z1 - z0
+    ta, tb = _clip_to_grid(u0, v0, du, dv, ncx, ncy)
+    if ta > tb:
+        return np.inf
+    best = np.inf
+    stack_a = np.empty(_STACK)
+    stack_b = np.empty(_STACK)
+    top = 0
+    stack_a[0] = ta
+    stack_b[0] = tb
+    top = 1
+    while top > 0:
+        top -= 1
+        a = stack_a[top]
+        b = stack_b[top]
+        ua = u0 + du * a
+        ub = u0 + du * b
+        va = v0 + dv * a
+        vb = v0 + dv * b
+        ci0 = min(max(int(np.floor(min(ua, ub))), 0), ncx - 1)
+        ci1 = min(max(int(np.floor(max(ua, ub))), 0), ncx - 1)
+        cj0 = min(max(int(np.floor(min(va, vb))), 0), ncy - 1)
+        cj1 = min(max(int(np.floor(max(va, vb))), 0), ncy - 1)
+        zmin = min(z0 + dz * a, z0 + dz * b)
+        hmax = _box_max(flat, offsets, shapes, ci0, ci1, cj0, cj1)
+        bound = zmin - hmax
+        if bound >= best or bound >= cap:
+            continue
+        if (ci1 - ci0 <= 1 and cj1 - cj0 <= 1) or top >= _STACK - 2:
+            g = _leaf_min(H, u0, v0, z0, du, dv, dz, a, b, ncx, ncy)
+            if g < best:
+                best = g
+                if stop_below and best < cap:
+                    return best
+            continue
+        m = 0.5 * (a + b)
+        stack_a[top] = a
+        stack_b[top] = m
+        stack_a[top + 1] = m
+        stack_b[top + 1] = b
+        top += 2
+    return best
+
+
+@njit(cache=True, parallel=True)
+def min_clearance_batch(H, flat, offsets, shapes, u, v, z, cap, stop_below):  # pragma: no cover
+    """Min of z - h along every segment of ``(P, N)`` polylines in cell coordinates, (P, N - 1).
+
+    A value ``>= cap`` means "at least ``cap``" (pruned early). With ``stop_below`` the search
+    also stops at the first point found below ``cap``: the value is then below ``cap`` but not
+    necessarily the minimum (a fast yes/no test). Otherwise values below ``cap`` are exact.
+    Parts of a segment outside the grid are ignored (the bounds check covers them).
+    """
+    P, N = u.shape
+    out = np.empty((P, N - 1))
+    for p in prange(P):
+        for s in range(N - 1):
+            out[p, s] = _segment_min_clearance(
+                H, flat, offsets, shapes, u[p, s], v[p, s], z[p, s],
+                u[p, s + 1], v[p, s + 1], z[p, s + 1], cap, stop_below,
+            )
+    return out
+
+
+@njit(cache=True, parallel=True)
+def mean_height_batch(H, u, v):  # pragma: no cover - numba
+    """Exact mean of the bilinear terrain along the xy projection of each segment, (P, N - 1).
+
+    The mean is over the segment parameter (uniform in xy arc length); a vertical segment gives
+    the height at its point. Parts outside the grid use the nearest edge cell's interpolant.
+    """
+    P, N = u.shape
+    ncy = H.shape[0] - 1
+    ncx = H.shape[1] - 1
+    out = np.empty((P, N - 1))
+    for p in prange(P):
+        for s in range(N - 1):
+            u0 = u[p, s]
+            v0 = v[p, s]
+            du = u[p, s + 1] - u0
+            dv = v[p, s + 1] - v0
+            # breakpoints: integer crossings of u and v
+            nu = 0
+            nv = 0
+            if du != 0.0:
+                nu = int(abs(np.floor(u0 + du) - np.floor(u0))) + 1
+            if dv != 0.0:
+                nv = int(abs(np.floor(v0 + dv) - np.floor(v0))) + 1
+            ts = np.empty(nu + nv + 2)
+            n = 0
+            ts[n] = 0.0
+            n += 1
+            if du != 0.0:
+                lo = min(u0, u0 + du)
+                hi = max(u0, u0 + du)
+                for k in range(int(np.floor(lo)) + 1, int(np.ceil(hi))):
+                    ts[n] = (k - u0) / du
+                    n += 1
+            if dv != 0.0:
+                lo = min(v0, v0 + dv)
+                hi = max(v0, v0 + dv)
+                for k in range(int(np.floor(lo)) + 1, int(np.ceil(hi))):
+                    ts[n] = (k - v0) / dv
+                    n += 1
+            ts[n] = 1.0
+            n += 1
+            tsorted = np.sort(ts[:n])
+            total = 0.0
+            for q in range(n - 1):
+                a = tsorted[q]
+                b = tsorted[q + 1]
+                tm = 0.5 * (a + b)
+                ci = min(max(int(np.floor(u0 + du * tm)), 0), ncx - 1)
+                cj = min(max(int(np.floor(v0 + dv * tm)), 0), ncy - 1)
+                h00 = H[cj, ci]
+                bx = H[cj, ci + 1] - h00
+                by = H[cj + 1, ci] - h00
+                cc = h00 - H[cj, ci + 1] - H[cj + 1, ci] + H[cj + 1, ci + 1]
+                s0 = u0 - ci
+                r0 = v0 - cj
+                qa = h00 + bx * s0 + by * r0 + cc * s0 * r0
+                qb = bx * du + by * dv + cc * (s0 * dv + r0 * du)
+                qc = cc * du * dv
+                total += qa * (b - a) + qb * (b * b - a * a) / 2.0 + qc * (b**3 - a**3) / 3.0
+            if du == 0.0 and dv == 0.0:
+                ci = min(max(int(np.floor(u0)), 0), ncx - 1)
+                cj = min(max(int(np.floor(v0)), 0), ncy - 1)
+                total = _bilinear_cell(H, ci, cj, u0 - ci, v0 - cj)
+            out[p, s] = total
+    return out

@@ -1,0 +1,191 @@
+"""The world a planner sees: bounds, terrain, obstacles, UAV limits and tasks."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from uavplan.world.dynamic import MovingObstacle
+from uavplan.world.geometry import pack_polygons
+from uavplan.world.obstacles import (
+    AltitudeBand,
+    Circle,
+    Cylinder,
+    DangerArea,
+    Polygon,
+    UncertainArea,
+)
+from uavplan.world.terrain import Terrain
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """Axis-aligned box the paths must stay in: ``lower``/``upper`` of length ``dim`` metres."""
+
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        lo = np.asarray(self.lower, dtype=np.float64)
+        hi = np.asarray(self.upper, dtype=np.float64)
+        if lo.shape != hi.shape or lo.ndim != 1 or lo.shape[0] not in (2, 3):
+            raise ValueError(f"bounds need 2 or 3 lower and upper values, got {lo} and {hi}")
+        if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))) or np.any(hi <= lo):
+            raise ValueError(f"bounds need finite lower < upper, got {lo} and {hi}")
+        object.__setattr__(self, "lower", tuple(float(v) for v in lo))
+        object.__setattr__(self, "upper", tuple(float(v) for v in hi))
+
+    @property
+    def dim(self) -> int:
+        return len(self.lower)
+
+    @property
+    def lo(self) -> FloatArray:
+        return np.asarray(self.lower)
+
+    @property
+    def hi(self) -> FloatArray:
+        return np.asarray(self.upper)
+
+    def contains(self, points: FloatArray, tol: float = 1e-9) -> NDArray[np.bool_]:
+        p = np.asarray(points, dtype=np.float64)[..., : self.dim]
+        return np.asarray(np.all((p >= self.lo - tol) & (p <= self.hi + tol), axis=-1))
+
+
+@dataclass(frozen=True)
+class UAV:
+    """UAV limits: cruise ``speed`` m/s, minimum ``turn_radius`` m, safety distance ``s1`` to
+    threats and ``s2`` between UAVs (PPSwarm Sect. 5.1: 20 m/s, 20 m, 15 m, 10 m), ``size`` m."""
+
+    speed: float = 20.0
+    turn_radius: float = 20.0
+    s1: float = 15.0
+    s2: float = 10.0
+    size: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name in ("speed", "turn_radius", "s1", "s2", "size"):
+            value = getattr(self, name)
+            if not np.isfinite(value) or value < 0 or (name == "speed" and value == 0):
+                raise ValueError(f"uav {name} must be {'positive' if name == 'speed' else '>= 0'}")
+
+
+@dataclass(frozen=True)
+class Task:
+    """A UAV's mission: fly from ``start`` to ``goal`` (absolute metres), leaving at
+    ``start_time`` seconds."""
+
+    id: str
+    start: tuple[float, ...]
+    goal: tuple[float, ...]
+    start_time: float = 0.0
+
+    def __post_init__(self) -> None:
+        s = np.asarray(self.start, dtype=np.float64)
+        g = np.asarray(self.goal, dtype=np.float64)
+        if s.shape != g.shape or s.ndim != 1 or s.shape[0] not in (2, 3):
+            raise ValueError(f"task {self.id}: start and goal need 2 or 3 coordinates")
+        object.__setattr__(self, "start", tuple(float(v) for v in s))
+        object.__setattr__(self, "goal", tuple(float(v) for v in g))
+
+
+@dataclass(frozen=True, eq=False)
+class Scenario:
+    """Everything a planner needs to know about the world and the mission.
+
+    ``dim`` is 2 for flat scenes (circles and polygons; no terrain) or 3. Coordinates are metres in
+    a local frame (x east, y north, z up). ``cost`` and ``n_waypoints`` are the defaults a planner
+    uses for this scenario (a cost preset name from :mod:`uavplan.problems.costs`).
+    """
+
+    name: str
+    bounds: Bounds
+    tasks: tuple[Task, ...]
+    terrain: Terrain | None = None
+    circles: tuple[Circle, ...] = ()
+    polygons: tuple[Polygon, ...] = ()
+    cylinders: tuple[Cylinder, ...] = ()
+    danger_areas: tuple[DangerArea, ...] = ()
+    uncertain_areas: tuple[UncertainArea, ...] = ()
+    moving_obstacles: tuple[MovingObstacle, ...] = ()
+    altitude: AltitudeBand | None = None
+    uav: UAV = field(default_factory=UAV)
+    cost: str = "ppswarm"
+    n_waypoints: int = 10
+    description: str = ""
+    metadata: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not self.tasks:
+            raise ValueError("a scenario needs at least one task")
+        for t in self.tasks:
+            if len(t.start) != self.dim:
+                raise ValueError(f"task {t.id} has {len(t.start)} coordinates, scenario is {self.dim}-D")
+        if self.dim == 2 and (self.terrain is not None or self.cylinders):
+            raise ValueError("a 2-D scenario has no terrain and no cylinders (use circles)")
+
+    @property
+    def dim(self) -> int:
+        return self.bounds.dim
+
+    def task(self, task_id: str | int | None = None) -> Task:
+        """The task by id or index (the first one by default)."""
+        if task_id is None:
+            return self.tasks[0]
+        if isinstance(task_id, int):
+            return self.tasks[task_id]
+        for t in self.tasks:
+            if t.id == task_id:
+                return t
+        raise KeyError(f"no task {task_id!r} in scenario {self.name!r}")
+
+    # ---------------------------------------------------------------- packed arrays for kernels
+    @property
+    def no_fly_polygons(self) -> tuple[Polygon, ...]:
+        """Polygons plus revealed uncertain areas."""
+        return self.polygons + tuple(u.as_polygon() for u in self.uncertain_areas if u.revealed)
+
+    def packed_polygons(self) -> tuple[FloatArray, NDArray[np.int64]]:
+        return pack_polygons([p.array for p in self.no_fly_polygons])
+
+    def ground(self, x: FloatArray, y: FloatArray) -> FloatArray:
+        """Terrain height (0 where the scenario has no terrain)."""
+        if self.terrain is None:
+            return np.zeros(np.broadcast_shapes(np.shape(x), np.shape(y)))
+        return self.terrain.height(x, y)
+
+    def point_problems(self, point: FloatArray) -> list[str]:
+        """Why a single point (a start or a goal) is not a valid place to be; empty if it is."""
+        p = np.asarray(point, dtype=np.float64)
+        out: list[str] = []
+        if not bool(self.bounds.contains(p)):
+            out.append(f"outside the bounds {list(self.bounds.lower)}..{list(self.bounds.upper)}")
+        for i, c in enumerate(self.circles):
+            if bool(c.contains(p)):
+                out.append(f"inside circle {i}")
+        for i, poly in enumerate(self.no_fly_polygons):
+            if bool(poly.contains(p[:2])):
+                out.append(f"inside polygon {i}")
+        if self.dim == 3:
+            z = float(p[2])
+            for i, cyl in enumerate(self.cylinders):
+                d = float(np.hypot(p[0] - cyl.center[0], p[1] - cyl.center[1]))
+                if d < cyl.effective_radius and cyl.z_min - cyl.margin <= z <= cyl.z_max + cyl.margin:
+                    out.append(f"inside cylinder {i}")
+            g = float(self.ground(p[0], p[1]))
+            if self.terrain is not None and z < g:
+                out.append(f"under the terrain (z={z:g} m, ground {g:.1f} m)")
+            if self.altitude is not None:
+                h = z - g if self.altitude.reference == "ground" else z
+                what = "above ground" if self.altitude.reference == "ground" else "altitude"
+                if not (self.altitude.min - 1e-9 <= h <= self.altitude.max + 1e-9):
+                    out.append(
+                        f"{what} {h:.1f} m outside the band [{self.altitude.min:g}, "
+                        f"{self.altitude.max:g}]"
+                    )
+        return out

@@ -1,0 +1,338 @@
+"""Terrain: a DEM grid with bilinear height lookup, exact segment clearance, built-in maps.
+
+Frame: x east, y north, z up, metres. Grid node ``heights[j, i]`` sits at
+``(x0 + i * dx, y0 + j * dy)``; row 0 is the southern edge (y grows with the row index).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from uavplan.world import _terrain_kernels as tk
+
+FloatArray = NDArray[np.float64]
+
+#: Mean Earth metres per degree of latitude (WGS84 mean meridional), for the built-in lon/lat DEMs.
+METRES_PER_DEGREE = 111_195.0
+
+BUILTIN_TERRAINS = ("spso", "jacksboro", "topobathy")
+
+
+class TerrainError(ValueError):
+    """A DEM file or array that cannot be used, with the reason."""
+
+
+@dataclass(frozen=True, eq=False)
+class Terrain:
+    """A digital elevation model sampled on a regular grid.
+
+    Attributes:
+        heights: (ny, nx) float64 metres; ``heights[j, i]`` at ``(x0 + i*dx, y0 + j*dy)``.
+        x0, y0: position of node (0, 0), metres.
+        dx, dy: grid spacing, metres (> 0).
+        name: a label (the built-in name or the file it came from).
+        georef: optional metadata on where the grid sits on Earth (CRS name, origin), kept for
+            mission export; the planner works in the local metric frame only.
+    """
+
+    heights: FloatArray
+    x0: float = 0.0
+    y0: float = 0.0
+    dx: float = 1.0
+    dy: float = 1.0
+    name: str = "terrain"
+    georef: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        h = np.ascontiguousarray(self.heights, dtype=np.float64)
+        if h.ndim != 2 or h.shape[0] < 2 or h.shape[1] < 2:
+            raise TerrainError(f"heights must be a 2-D grid of at least 2x2, got shape {h.shape}")
+        if not np.all(np.isfinite(h)):
+            raise TerrainError(f"heights contain {int((~np.isfinite(h)).sum())} non-finite values")
+        if not (self.dx > 0 and self.dy > 0 and np.isfinite(self.dx) and np.isfinite(self.dy)):
+            raise TerrainError(f"cell size must be positive and finite, got dx={self.dx}, dy={self.dy}")
+        h.setflags(write=False)
+        object.__setattr__(self, "heights", h)
+
+    # ------------------------------------------------------------------ geometry
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.heights.shape  # type: ignore[return-value]
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """(xmin, xmax, ymin, ymax) of the grid nodes, metres."""
+        ny, nx = self.heights.shape
+        return (self.x0, self.x0 + (nx - 1) * self.dx, self.y0, self.y0 + (ny - 1) * self.dy)
+
+    @property
+    def cell_size(self) -> float:
+        return float(min(self.dx, self.dy))
+
+    def _uv(self, x: ArrayLike, y: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        u = (np.asarray(x, dtype=np.float64) - self.x0) / self.dx
+        v = (np.asarray(y, dtype=np.float64) - self.y0) / self.dy
+        return u, v
+
+    def height(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
+        """Bilinear terrain height at any array of points (broadcast ``x`` with ``y``).
+
+        Points outside the grid take the height of the nearest edge point.
+        """
+        u, v = self._uv(x, y)
+        u, v = np.broadcast_arrays(u, v)
+        ny, nx = self.heights.shape
+        u = np.clip(u, 0.0, nx - 1.0)
+        v = np.clip(v, 0.0, ny - 1.0)
+        i = np.minimum(np.floor(u).astype(np.intp), nx - 2)
+        j = np.minimum(np.floor(v).astype(np.intp), ny - 2)
+        s = u - i
+        r = v - j
+        H = self.heights
+        h00 = H[j, i]
+        h10 = H[j, i + 1]
+        h01 = H[j + 1, i]
+        h11 = H[j + 1, i + 1]
+        return np.asarray(h00 + (h10 - h00) * s + (h01 - h00) * r + (h00 - h10 - h01 + h11) * s * r)
+
+    def height_nearest(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
+        """Height of the nearest grid node, rounding halves up as MATLAB's ``round`` does for
+        positive indices (SPSO's ``H(round(y), round(x))``)."""
+        u, v = self._uv(x, y)
+        u, v = np.broadcast_arrays(u, v)
+        ny, nx = self.heights.shape
+        i = np.clip(np.floor(u + 0.5).astype(np.intp), 0, nx - 1)
+        j = np.clip(np.floor(v + 0.5).astype(np.intp), 0, ny - 1)
+        return np.asarray(self.heights[j, i])
+
+    def lookup(self, x: ArrayLike, y: ArrayLike, method: str = "bilinear") -> FloatArray:
+        """Height by ``method``: ``"bilinear"`` (default) or ``"nearest"``."""
+        if method == "bilinear":
+            return self.height(x, y)
+        if method == "nearest":
+            return self.height_nearest(x, y)
+        raise ValueError(f"unknown terrain lookup method {method!r}")
+
+    # ------------------------------------------------------------------ segment queries
+    @cached_property
+    def _pyramid(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return tk.build_max_pyramid(self.heights)
+
+    @cached_property
+    def _neg(self) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        neg = np.ascontiguousarray(-self.heights)
+        return neg, tk.build_max_pyramid(neg)
+
+    def min_clearance(self, paths: ArrayLike, cap: float = np.inf) -> FloatArray:
+        """Exact minimum of ``z - h(x, y)`` along every segment of a batch of polylines.
+
+        Args:
+            paths: (pop, n_points, 3) metres.
+            cap: values at or above ``cap`` may be reported as any number ``>= cap`` (the search
+                prunes there); values below ``cap`` are exact.
+
+        Returns:
+            (pop, n_points - 1) metres. Segment parts outside the grid are not checked.
+        """
+        return self._min_clearance(paths, cap, False)
+
+    def clears(self, paths: ArrayLike, clearance: float = 0.0) -> NDArray[np.bool_]:
+        """Whether every point of every segment is at least ``clearance`` above the terrain.
+
+        The fast yes/no form of :meth:`min_clearance` (it stops at the first violation found).
+        Returns (pop, n_points - 1) bool.
+        """
+        return np.asarray(self._min_clearance(paths, clearance, True) >= clearance)
+
+    def _min_clearance(self, paths: ArrayLike, cap: float, stop_below: bool) -> FloatArray:
+        p = np.asarray(paths, dtype=np.float64)
+        u, v = self._uv(p[..., 0], p[..., 1])
+        flat, off, shp = self._pyramid
+        return np.asarray(
+            tk.min_clearance_batch(
+                self.heights, flat, off, shp, np.ascontiguousarray(u), np.ascontiguousarray(v),
+                np.ascontiguousarray(p[..., 2]), float(cap), bool(stop_below),
+            )
+        )
+
+    def max_clearance(self, paths: ArrayLike) -> FloatArray:
+        """Exact maximum of ``z - h(x, y)`` along every segment, (pop, n_points - 1) metres."""
+        p = np.asarray(paths, dtype=np.float64)
+        u, v = self._uv(p[..., 0], p[..., 1])
+        neg, (flat, off, shp) = self._neg
+        out = tk.min_clearance_batch(
+            neg, flat, off, shp, np.ascontiguousarray(u), np.ascontiguousarray(v),
+            np.ascontiguousarray(-p[..., 2]), np.inf, False,
+        )
+        return np.asarray(-out)
+
+    def mean_height(self, paths: ArrayLike) -> FloatArray:
+        """Exact mean terrain height under each segment's ground track, (pop, n_points - 1)."""
+        p = np.asarray(paths, dtype=np.float64)
+        u, v = self._uv(p[..., 0], p[..., 1])
+        return np.asarray(
+            tk.mean_height_batch(self.heights, np.ascontiguousarray(u), np.ascontiguousarray(v))
+        )
+
+    def downsample(self, factor: int) -> Terrain:
+        """Every ``factor``-th node (a coarser map for multi-resolution planners)."""
+        if factor < 1:
+            raise ValueError("factor must be >= 1")
+        return Terrain(
+            self.heights[::factor, ::factor], self.x0, self.y0, self.dx * factor,
+            self.dy * factor, f"{self.name}/{factor}", dict(self.georef),
+        )
+
+    # ------------------------------------------------------------------ loading
+    @classmethod
+    def builtin(cls, name: str) -> Terrain:
+        """One of the built-in maps: ``spso``, ``jacksboro``, ``topobathy``."""
+        if name == "spso":
+            return _spso_terrain()
+        if name == "jacksboro":
+            return _jacksboro_terrain()
+        if name == "topobathy":
+            return _topobathy_terrain()
+        raise TerrainError(f"unknown built-in terrain {name!r}; choose from {BUILTIN_TERRAINS}")
+
+    @classmethod
+    def from_file(
+        cls,
+        path: str | Path,
+        *,
+        cell_size: float | None = None,
+        origin: tuple[float, float] = (0.0, 0.0),
+        key: str | None = None,
+    ) -> Terrain:
+        """Load a DEM from a GeoTIFF (``.tif``/``.tiff``), ``.npy`` or ``.npz`` file.
+
+        GeoTIFF: the pixel size comes from the file's ModelPixelScale tag unless ``cell_size`` is
+        given; rows are flipped so that +y is north; the grid is placed at ``origin`` (the local
+        frame), and the file's tie point and CRS name are kept in ``georef``.
+        ``.npy``: a 2-D array, rows south to north. ``.npz``: the array under ``key`` (or
+        ``heights``/``elevation``/``topo``), with optional scalars ``dx``, ``dy``, ``x0``, ``y0``.
+        """
+        p = Path(path)
+        if not p.exists():
+            raise TerrainError(f"DEM file {str(p)!r} does not exist")
+        suffix = p.suffix.lower()
+        try:
+            if suffix in (".tif", ".tiff"):
+                return _load_geotiff(p, cell_size, origin)
+            if suffix == ".npy":
+                arr = np.load(p, allow_pickle=False)
+                d = cell_size or 1.0
+                return cls(arr, origin[0], origin[1], d, d, p.name)
+            if suffix == ".npz":
+                with np.load(p, allow_pickle=False) as z:
+                    names = [key] if key else ["heights", "elevation", "topo"]
+                    found = next((n for n in names if n in z.files), None)
+                    if found is None:
+                        raise TerrainError(
+                            f"{p}: no array named {' or '.join(names)} (has {z.files})"
+                        )
+                    arr = z[found]
+                    dx = float(z["dx"]) if "dx" in z.files else (cell_size or 1.0)
+                    dy = float(z["dy"]) if "dy" in z.files else dx
+                    x0 = float(z["x0"]) if "x0" in z.files else origin[0]
+                    y0 = float(z["y0"]) if "y0" in z.files else origin[1]
+                return cls(arr, x0, y0, dx, dy, p.name)
+        except TerrainError:
+            raise
+        except Exception as exc:  # a corrupt or foreign file: say which and why
+            raise TerrainError(f"cannot read DEM file {str(p)!r}: {exc}") from exc
+        raise TerrainError(f"DEM file {str(p)!r}: unsupported type {suffix!r} (.tif, .npy, .npz)")
+
+
+def _read_tiff(path: Path) -> tuple[np.ndarray, dict[int, Any]]:
+    import logging
+
+    import tifffile
+
+    logging.getLogger("tifffile").setLevel(logging.ERROR)  # GDAL_NODATA float32 tag: harmless
+    with tifffile.TiffFile(path) as tif:
+        page = tif.pages[0]
+        arr = page.asarray()  # type: ignore[union-attr]
+        tags = {t.code: t.value for t in page.tags.values()}  # type: ignore[union-attr]
+    if arr.ndim == 3:
+        arr = arr[..., 0]
+    return np.asarray(arr, dtype=np.float64), tags
+
+
+def _load_geotiff(path: Path, cell_size: float | None, origin: tuple[float, float]) -> Terrain:
+    arr, tags = _read_tiff(path)
+    scale = tags.get(33550)
+    tie = tags.get(33922)
+    dx = dy = cell_size or 1.0
+    if cell_size is None and scale is not None:
+        dx, dy = float(scale[0]), float(scale[1])
+    georef: dict[str, Any] = {"file": path.name}
+    if tie is not None:
+        georef["tiepoint"] = [float(t) for t in tie]
+    if 34737 in tags:
+        georef["crs"] = str(tags[34737]).split("|")[0]
+    arr = arr[::-1].copy()  # GeoTIFF row 0 is north
+    return Terrain(arr, origin[0], origin[1], dx, dy, path.name, georef)
+
+
+def _data_path(name: str) -> Path:
+    return Path(str(resources.files("uavplan") / "data" / name))
+
+
+def _spso_terrain() -> Terrain:
+    """The SPSO benchmark map (Phung & Ha 2021; ``data/ChrismasTerrain.tif``, BSD licence beside it).
+
+    Taken exactly as the authors' MATLAB code reads it: one cell per metre, node (1, 1) of the
+    file at x = y = 1, row index = y (so no north flip), negative heights clipped to 0.
+    """
+    arr, _ = _read_tiff(_data_path("ChrismasTerrain.tif"))
+    arr = np.maximum(arr, 0.0)
+    return Terrain(arr, 1.0, 1.0, 1.0, 1.0, "spso", {"source": "ChrismasTerrain.tif (SPSO)"})
+
+
+def _jacksboro_terrain() -> Terrain:
+    """Jacksboro fault DEM (Tennessee), from matplotlib's sample data; 3 arc-second cells
+    converted to metres at the map's mean latitude, rows flipped so that +y is north."""
+    from matplotlib import cbook
+
+    d = cbook.get_sample_data("jacksboro_fault_dem.npz")
+    elev = np.asarray(d["elevation"], dtype=np.float64)
+    # The file's ymin (36.733) is the northern edge: row 0 is north. Flip to south-first.
+    lat_n, lat_s = float(d["ymin"]), float(d["ymax"])
+    lat0 = 0.5 * (lat_n + lat_s)
+    dx = float(d["dx"]) * METRES_PER_DEGREE * np.cos(np.radians(lat0))
+    dy = float(d["dy"]) * METRES_PER_DEGREE
+    georef = {"source": "matplotlib jacksboro_fault_dem.npz", "lon0": float(d["xmin"]),
+              "lat0": min(lat_n, lat_s), "units": "elevation metres"}
+    return Terrain(elev[::-1].copy(), 0.0, 0.0, dx, dy, "jacksboro", georef)
+
+
+def _topobathy_terrain() -> Terrain:
+    """Topography/bathymetry off the Pacific Northwest coast, from matplotlib's sample data.
+
+    Longitude/latitude cells converted to metres at the mean latitude. The sea surface is what a
+    UAV must clear, so heights below 0 (bathymetry) are raised to 0.
+    """
+    from matplotlib import cbook
+
+    d = cbook.get_sample_data("topobathy.npz")
+    topo = np.asarray(d["topo"], dtype=np.float64)
+    lon = np.asarray(d["longitude"], dtype=np.float64)
+    lat = np.asarray(d["latitude"], dtype=np.float64)
+    if lat[0] > lat[-1]:
+        topo, lat = topo[::-1], lat[::-1]
+    if lon[0] > lon[-1]:
+        topo, lon = topo[:, ::-1], lon[::-1]
+    lat0 = float(lat.mean())
+    dx = float(np.mean(np.diff(lon))) * METRES_PER_DEGREE * np.cos(np.radians(lat0))
+    dy = float(np.mean(np.diff(lat))) * METRES_PER_DEGREE
+    georef = {"source": "matplotlib topobathy.npz", "lon0": float(lon[0]) - 360.0,
+              "lat0": float(lat[0]), "sea_level_clipped": True}
+    return Terrain(np.maximum(topo, 0.0), 0.0, 0.0, dx, dy, "topobathy", georef)
