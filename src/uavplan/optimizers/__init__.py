@@ -16,12 +16,18 @@ from uavplan.optimizers.base import (
 )
 
 __all__ = [
+    "DE",
+    "GA",
+    "PSO",
     "Budget",
+    "DEConfig",
     "FunctionProblem",
+    "GAConfig",
     "OptimizeResult",
     "Optimizer",
     "OptimizerConfig",
     "OptimizerError",
+    "PSOConfig",
     "Problem",
     "available",
     "get",
@@ -29,3 +35,8 @@ __all__ = [
     "register",
     "run",
 ]
+
+# Built-in optimizers: importing their modules registers them.
+from uavplan.optimizers.de import DE, DEConfig
+from uavplan.optimizers.ga import GA, GAConfig
+from uavplan.optimizers.pso import PSO, PSOConfig

@@ -59,7 +59,7 @@ def _box_max(flat, offsets, shapes, ci0, ci1, cj0, cj1):  # pragma: no cover - n
     """Upper bound of the terrain over cells [ci0..ci1] x [cj0..cj1] from the pyramid."""
     L = 0
     nlev = shapes.shape[0]
-    while L < nlev - 1 and ((ci1 >> L) - (ci0 >> L) > 1 or (cj1 >> L) - (cj0 >> L) > 1):
+    while nlev - 1 > L and ((ci1 >> L) - (ci0 >> L) > 1 or (cj1 >> L) - (cj0 >> L) > 1):
         L += 1
     off = offsets[L]
     nx = shapes[L, 1]
@@ -229,8 +229,18 @@ def min_clearance_batch(H, flat, offsets, shapes, u, v, z, cap, stop_below):  # 
     for p in prange(P):
         for s in range(N - 1):
             out[p, s] = _segment_min_clearance(
-                H, flat, offsets, shapes, u[p, s], v[p, s], z[p, s],
-                u[p, s + 1], v[p, s + 1], z[p, s + 1], cap, stop_below,
+                H,
+                flat,
+                offsets,
+                shapes,
+                u[p, s],
+                v[p, s],
+                z[p, s],
+                u[p, s + 1],
+                v[p, s + 1],
+                z[p, s + 1],
+                cap,
+                stop_below,
             )
     return out
 

@@ -92,8 +92,12 @@ def segment_cylinder_distance(paths, centers, z_lo, z_hi):  # pragma: no cover -
                 ex = bx - ax
                 ey = by - ay
                 out[p, s, j] = _seg_point_dist(
-                    ax + t0 * ex, ay + t0 * ey, ax + t1 * ex, ay + t1 * ey,
-                    centers[j, 0], centers[j, 1],
+                    ax + t0 * ex,
+                    ay + t0 * ey,
+                    ax + t1 * ex,
+                    ay + t1 * ey,
+                    centers[j, 0],
+                    centers[j, 1],
                 )
     return out
 
@@ -280,8 +284,9 @@ def segment_polygon_inside_fraction(paths, verts, starts):  # pragma: no cover -
                 n += 1
                 j = v1 - 1
                 for i in range(v0, v1):
-                    t = _seg_seg_param(ax, ay, bx, by, verts[j, 0], verts[j, 1],
-                                       verts[i, 0], verts[i, 1])
+                    t = _seg_seg_param(
+                        ax, ay, bx, by, verts[j, 0], verts[j, 1], verts[i, 0], verts[i, 1]
+                    )
                     if t > 0.0 and t < 1.0:
                         ts[n] = t
                         n += 1

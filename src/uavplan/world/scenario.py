@@ -125,7 +125,9 @@ class Scenario:
             raise ValueError("a scenario needs at least one task")
         for t in self.tasks:
             if len(t.start) != self.dim:
-                raise ValueError(f"task {t.id} has {len(t.start)} coordinates, scenario is {self.dim}-D")
+                raise ValueError(
+                    f"task {t.id} has {len(t.start)} coordinates, scenario is {self.dim}-D"
+                )
         if self.dim == 2 and (self.terrain is not None or self.cylinders):
             raise ValueError("a 2-D scenario has no terrain and no cylinders (use circles)")
 
@@ -175,7 +177,10 @@ class Scenario:
             z = float(p[2])
             for i, cyl in enumerate(self.cylinders):
                 d = float(np.hypot(p[0] - cyl.center[0], p[1] - cyl.center[1]))
-                if d < cyl.effective_radius and cyl.z_min - cyl.margin <= z <= cyl.z_max + cyl.margin:
+                if (
+                    d < cyl.effective_radius
+                    and cyl.z_min - cyl.margin <= z <= cyl.z_max + cyl.margin
+                ):
                     out.append(f"inside cylinder {i}")
             g = float(self.ground(p[0], p[1]))
             if self.terrain is not None and z < g:

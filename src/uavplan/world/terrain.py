@@ -57,14 +57,17 @@ class Terrain:
         if not np.all(np.isfinite(h)):
             raise TerrainError(f"heights contain {int((~np.isfinite(h)).sum())} non-finite values")
         if not (self.dx > 0 and self.dy > 0 and np.isfinite(self.dx) and np.isfinite(self.dy)):
-            raise TerrainError(f"cell size must be positive and finite, got dx={self.dx}, dy={self.dy}")
+            raise TerrainError(
+                f"cell size must be positive and finite, got dx={self.dx}, dy={self.dy}"
+            )
         h.setflags(write=False)
         object.__setattr__(self, "heights", h)
 
     # ------------------------------------------------------------------ geometry
     @property
     def shape(self) -> tuple[int, int]:
-        return self.heights.shape  # type: ignore[return-value]
+        ny, nx = self.heights.shape
+        return int(ny), int(nx)
 
     @property
     def extent(self) -> tuple[float, float, float, float]:
@@ -157,8 +160,15 @@ class Terrain:
         flat, off, shp = self._pyramid
         return np.asarray(
             tk.min_clearance_batch(
-                self.heights, flat, off, shp, np.ascontiguousarray(u), np.ascontiguousarray(v),
-                np.ascontiguousarray(p[..., 2]), float(cap), bool(stop_below),
+                self.heights,
+                flat,
+                off,
+                shp,
+                np.ascontiguousarray(u),
+                np.ascontiguousarray(v),
+                np.ascontiguousarray(p[..., 2]),
+                float(cap),
+                bool(stop_below),
             )
         )
 
@@ -168,8 +178,15 @@ class Terrain:
         u, v = self._uv(p[..., 0], p[..., 1])
         neg, (flat, off, shp) = self._neg
         out = tk.min_clearance_batch(
-            neg, flat, off, shp, np.ascontiguousarray(u), np.ascontiguousarray(v),
-            np.ascontiguousarray(-p[..., 2]), np.inf, False,
+            neg,
+            flat,
+            off,
+            shp,
+            np.ascontiguousarray(u),
+            np.ascontiguousarray(v),
+            np.ascontiguousarray(-p[..., 2]),
+            np.inf,
+            False,
         )
         return np.asarray(-out)
 
@@ -186,8 +203,13 @@ class Terrain:
         if factor < 1:
             raise ValueError("factor must be >= 1")
         return Terrain(
-            self.heights[::factor, ::factor], self.x0, self.y0, self.dx * factor,
-            self.dy * factor, f"{self.name}/{factor}", dict(self.georef),
+            self.heights[::factor, ::factor],
+            self.x0,
+            self.y0,
+            self.dx * factor,
+            self.dy * factor,
+            f"{self.name}/{factor}",
+            dict(self.georef),
         )
 
     # ------------------------------------------------------------------ loading
@@ -259,7 +281,7 @@ def _read_tiff(path: Path) -> tuple[np.ndarray, dict[int, Any]]:
     logging.getLogger("tifffile").setLevel(logging.ERROR)  # GDAL_NODATA float32 tag: harmless
     with tifffile.TiffFile(path) as tif:
         page = tif.pages[0]
-        arr = page.asarray()  # type: ignore[union-attr]
+        arr = page.asarray()
         tags = {t.code: t.value for t in page.tags.values()}  # type: ignore[union-attr]
     if arr.ndim == 3:
         arr = arr[..., 0]
@@ -287,7 +309,7 @@ def _data_path(name: str) -> Path:
 
 
 def _spso_terrain() -> Terrain:
-    """The SPSO benchmark map (Phung & Ha 2021; ``data/ChrismasTerrain.tif``, BSD licence beside it).
+    """The SPSO benchmark map (Phung & Ha 2021; ``data/ChrismasTerrain.tif``, BSD licence).
 
     Taken exactly as the authors' MATLAB code reads it: one cell per metre, node (1, 1) of the
     file at x = y = 1, row index = y (so no north flip), negative heights clipped to 0.
@@ -302,15 +324,19 @@ def _jacksboro_terrain() -> Terrain:
     converted to metres at the map's mean latitude, rows flipped so that +y is north."""
     from matplotlib import cbook
 
-    d = cbook.get_sample_data("jacksboro_fault_dem.npz")
+    d: Any = cbook.get_sample_data("jacksboro_fault_dem.npz")
     elev = np.asarray(d["elevation"], dtype=np.float64)
     # The file's ymin (36.733) is the northern edge: row 0 is north. Flip to south-first.
     lat_n, lat_s = float(d["ymin"]), float(d["ymax"])
     lat0 = 0.5 * (lat_n + lat_s)
     dx = float(d["dx"]) * METRES_PER_DEGREE * np.cos(np.radians(lat0))
     dy = float(d["dy"]) * METRES_PER_DEGREE
-    georef = {"source": "matplotlib jacksboro_fault_dem.npz", "lon0": float(d["xmin"]),
-              "lat0": min(lat_n, lat_s), "units": "elevation metres"}
+    georef = {
+        "source": "matplotlib jacksboro_fault_dem.npz",
+        "lon0": float(d["xmin"]),
+        "lat0": min(lat_n, lat_s),
+        "units": "elevation metres",
+    }
     return Terrain(elev[::-1].copy(), 0.0, 0.0, dx, dy, "jacksboro", georef)
 
 
@@ -322,7 +348,7 @@ def _topobathy_terrain() -> Terrain:
     """
     from matplotlib import cbook
 
-    d = cbook.get_sample_data("topobathy.npz")
+    d: Any = cbook.get_sample_data("topobathy.npz")
     topo = np.asarray(d["topo"], dtype=np.float64)
     lon = np.asarray(d["longitude"], dtype=np.float64)
     lat = np.asarray(d["latitude"], dtype=np.float64)
@@ -333,6 +359,10 @@ def _topobathy_terrain() -> Terrain:
     lat0 = float(lat.mean())
     dx = float(np.mean(np.diff(lon))) * METRES_PER_DEGREE * np.cos(np.radians(lat0))
     dy = float(np.mean(np.diff(lat))) * METRES_PER_DEGREE
-    georef = {"source": "matplotlib topobathy.npz", "lon0": float(lon[0]) - 360.0,
-              "lat0": float(lat[0]), "sea_level_clipped": True}
+    georef = {
+        "source": "matplotlib topobathy.npz",
+        "lon0": float(lon[0]) - 360.0,
+        "lat0": float(lat[0]),
+        "sea_level_clipped": True,
+    }
     return Terrain(np.maximum(topo, 0.0), 0.0, 0.0, dx, dy, "topobathy", georef)

@@ -1,0 +1,149 @@
+"""Differential evolution DE/rand/1/bin, vectorized over the population.
+
+Storn & Price, "Differential evolution - a simple and efficient heuristic for global
+optimization over continuous spaces", J. Global Optimization 11, 341-359, 1997. With the target
+vectors ``x_i`` (``i = 1..NP``):
+
+* mutation (Eq. 2): ``v_i = x_r1 + F (x_r2 - x_r3)``, ``r1, r2, r3`` distinct and distinct from
+  ``i``; drawn for all rows at once as the first three columns of the argsort of random keys with
+  the key of ``i`` set to +inf;
+* binomial crossover (Eq. 4): ``u_ij = v_ij`` if ``randb(j) <= CR`` or ``j = rnbr(i)``
+  (``j_rand``, one guaranteed mutant gene per row), else ``x_ij``;
+* selection: ``u_i`` replaces ``x_i`` if ``f(u_i) <= f(x_i)`` (greedy, one-to-one; ``<=`` lets
+  the population drift across plateaus, including all-``inf`` ones).
+
+Hyperparameters (:class:`DEConfig`): ``F = 0.8``, ``CR = 0.9`` as in PPSwarm Table 2 (Meng, Chen &
+Qu, Drones 2024); ``NP = pop_size = 100``, the population size of RGG-PSO+ Sect. 5.2.2.
+
+Bounds (not part of the 1997 paper; our choice): a mutant gene outside the box is **bounced
+back** between the base vector and the violated bound, ``v_ij = x_r1,j + rand (lower_j - x_r1,j)``
+(resp. ``upper_j``), the "bounce-back" rule of Price, Storn & Lampinen (Differential Evolution,
+2005), which keeps diversity near the walls better than clipping; the result is then clipped as a
+safeguard, so every trial vector lies in the box.
+
+Ask/tell: the first :meth:`ask` returns the initial population, every later one the trial
+population ``u``; the evaluated ``X`` handed to :meth:`tell` is taken as that population.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from uavplan.optimizers.base import (
+    FloatArray,
+    Optimizer,
+    OptimizerConfig,
+    OptimizerError,
+    Problem,
+    register,
+)
+
+
+@dataclass(frozen=True)
+class DEConfig(OptimizerConfig):
+    """DE/rand/1/bin hyperparameters; F and CR from PPSwarm Table 2."""
+
+    pop_size: int = 100  # NP; needs NP >= 4 for r1, r2, r3, i distinct
+    F: float = 0.8  # differential weight (mutation scale factor)
+    CR: float = 0.9  # crossover probability
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.pop_size < 4:
+            raise OptimizerError(f"DE needs pop_size >= 4, got {self.pop_size}")
+        if self.F <= 0:
+            raise OptimizerError(f"F must be > 0, got {self.F}")
+        if not 0.0 <= self.CR <= 1.0:
+            raise OptimizerError(f"CR must be in [0, 1], got {self.CR}")
+
+
+def _initial_population(
+    init: ArrayLike | None, pop_size: int, lower: FloatArray, upper: FloatArray, name: str
+) -> FloatArray | None:
+    """Validate a user-supplied first population (pop_size, dim); clip it to the box."""
+    if init is None:
+        return None
+    X = np.array(init, dtype=np.float64)
+    if X.ndim != 2 or X.shape != (pop_size, lower.shape[0]):
+        raise OptimizerError(
+            f"{name}: init must have shape (pop_size, dim) = {(pop_size, lower.shape[0])}, "
+            f"got {X.shape}"
+        )
+    if not np.all(np.isfinite(X)):
+        raise OptimizerError(f"{name}: init must be finite")
+    return np.clip(X, lower, upper)
+
+
+@register
+class DE(Optimizer):
+    """DE/rand/1/bin with bounce-back bound handling and greedy one-to-one selection.
+
+    Args:
+        init: optional first population (pop_size, dim) used instead of uniform random points
+            (e.g. paths seeded by RRT* or RGG); clipped to the box.
+    """
+
+    name: ClassVar[str] = "de"
+    Config: ClassVar[type[OptimizerConfig]] = DEConfig
+    config: DEConfig
+
+    def __init__(
+        self,
+        problem: Problem,
+        config: OptimizerConfig | None = None,
+        seed: int | np.random.SeedSequence | np.random.Generator | None = None,
+        *,
+        init: ArrayLike | None = None,
+        **overrides: Any,
+    ) -> None:
+        super().__init__(problem, config, seed=seed, **overrides)
+        self.init = _initial_population(
+            init, self.config.pop_size, self.lower, self.upper, self.name
+        )
+        NP = self.config.pop_size
+        self.x: FloatArray = np.empty((NP, self.dim))  # target vectors
+        self.fx: FloatArray = np.full(NP, np.inf)  # their costs
+        self.r = np.zeros((NP, 3), dtype=np.int64)  # r1, r2, r3 of the last trial, per row
+        self.j_rand = np.zeros(NP, dtype=np.int64)  # guaranteed mutant gene of the last trial
+
+    def _initialize(self) -> FloatArray:
+        NP = self.config.pop_size
+        return self.init.copy() if self.init is not None else self.uniform(NP)
+
+    def _ask(self) -> FloatArray:
+        cfg = self.config
+        rng = self.rng
+        x = self.x
+        NP, D = x.shape
+        rows = np.arange(NP)
+
+        # r1, r2, r3: distinct, and distinct from i
+        keys = rng.random((NP, NP))
+        keys[rows, rows] = np.inf
+        r = self.r = np.argsort(keys, axis=1)[:, :3]
+        x_r1 = x[r[:, 0]]
+        v = x_r1 + cfg.F * (x[r[:, 1]] - x[r[:, 2]])
+
+        # bounce back between the base vector and the violated bound
+        u_rand = rng.random((NP, D))
+        v = np.where(v < self.lower, x_r1 + u_rand * (self.lower - x_r1), v)
+        v = np.where(v > self.upper, x_r1 + u_rand * (self.upper - x_r1), v)
+        v = self.clip(v)
+
+        # binomial crossover with one guaranteed mutant gene j_rand
+        take = rng.random((NP, D)) <= cfg.CR
+        self.j_rand = np.asarray(rng.integers(D, size=NP), dtype=np.int64)
+        take[rows, self.j_rand] = True
+        return np.where(take, v, x)
+
+    def _tell(self, X: FloatArray, f: FloatArray) -> None:
+        if self.iterations == 0:
+            self.x, self.fx = X.copy(), f.copy()
+            return
+        replace = f <= self.fx
+        self.x[replace] = X[replace]
+        self.fx[replace] = f[replace]

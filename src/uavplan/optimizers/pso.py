@@ -1,0 +1,159 @@
+"""Global-best particle swarm optimization (PSO), vectorized over the swarm.
+
+Update rule, Liu et al. 2024 (RGG-PSO+) Eq. (1) and Meng, Chen & Qu 2024 (PPSwarm) Eq. (14)::
+
+    v_i^{k+1} = w v_i^k + c_1 r_1 (pbest_i^k - x_i^k) + c_2 r_2 (gbest^k - x_i^k)
+    x_i^{k+1} = x_i^k + v_i^{k+1}
+
+with ``r_1``, ``r_2`` uniform in [0, 1], drawn per particle and per gene.
+
+Hyperparameters (:class:`PSOConfig`): RGG-PSO+ Sect. 5.2.2 runs all PSO variants with
+``w = 1`` damped by 0.98 per iteration, ``c_1 = c_2 = 1.5`` (its eta_1, eta_2) and 100 particles;
+the same values are SPSO's (Phung & Ha, Applied Soft Computing 107, 2021) and PPSwarm Table 1.
+The velocity is clamped to ``[-v_max, v_max]`` with ``v_max = velocity_fraction * (upper - lower)``
+and ``velocity_fraction = 0.5``, as in the SPSO reference code.
+
+Implementation follows the usual Yarpiz-style global-best PSO that SPSO's code builds on:
+
+* velocities start at zero; positions are uniform in the box (or the ``init`` population);
+* after the move, a particle gene that left the box has its velocity mirrored (``v = -v``) and its
+  position clipped to the box;
+* ``pbest`` / ``gbest`` are replaced only on a strict improvement (``<``), so infeasible
+  (``inf``) costs never displace a known point; when every cost so far is ``inf``, ``pbest`` is the
+  initial position and ``gbest`` the first particle's;
+* ``w`` is multiplied by ``w_damp`` after every swarm move, so the first move uses ``w = 1``
+  and after ``k`` moves ``w = w_0 w_damp^k``. The evaluation of the initial swarm is iteration 1
+  of the base class's count but not a move, so it does not damp ``w``.
+
+The evaluated ``X`` handed to :meth:`tell` is taken as the particle positions (a caller may repair
+points before evaluating them).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from uavplan.optimizers.base import (
+    FloatArray,
+    Optimizer,
+    OptimizerConfig,
+    OptimizerError,
+    Problem,
+    register,
+)
+
+
+@dataclass(frozen=True)
+class PSOConfig(OptimizerConfig):
+    """PSO hyperparameters; defaults from RGG-PSO+ Sect. 5.2.2 / SPSO (Phung & Ha 2021)."""
+
+    pop_size: int = 100
+    w: float = 1.0  # inertia weight w, initial value
+    w_damp: float = 0.98  # w <- w * w_damp after each iteration
+    c1: float = 1.5  # cognitive coefficient c_1 (eta_1 in RGG-PSO+)
+    c2: float = 1.5  # social coefficient c_2 (eta_2 in RGG-PSO+)
+    velocity_fraction: float = 0.5  # v_max = velocity_fraction * (upper - lower)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.w_damp <= 0:
+            raise OptimizerError(f"w_damp must be > 0, got {self.w_damp}")
+        if self.c1 < 0 or self.c2 < 0:
+            raise OptimizerError(f"c1, c2 must be >= 0, got {self.c1}, {self.c2}")
+        if self.velocity_fraction <= 0:
+            raise OptimizerError(f"velocity_fraction must be > 0, got {self.velocity_fraction}")
+
+
+def _initial_population(
+    init: ArrayLike | None, pop_size: int, lower: FloatArray, upper: FloatArray, name: str
+) -> FloatArray | None:
+    """Validate a user-supplied first population (pop_size, dim); clip it to the box."""
+    if init is None:
+        return None
+    X = np.array(init, dtype=np.float64)  # a copy: later edits of the caller's array are ignored
+    if X.ndim != 2 or X.shape != (pop_size, lower.shape[0]):
+        raise OptimizerError(
+            f"{name}: init must have shape (pop_size, dim) = {(pop_size, lower.shape[0])}, "
+            f"got {X.shape}"
+        )
+    if not np.all(np.isfinite(X)):
+        raise OptimizerError(f"{name}: init must be finite")
+    return np.clip(X, lower, upper)
+
+
+@register
+class PSO(Optimizer):
+    """Global-best PSO with inertia damping, velocity clamping and mirrored walls.
+
+    Args:
+        init: optional first population (pop_size, dim) used instead of uniform random positions
+            (e.g. paths seeded by RRT* or RGG); clipped to the box.
+    """
+
+    name: ClassVar[str] = "pso"
+    Config: ClassVar[type[OptimizerConfig]] = PSOConfig
+    config: PSOConfig
+
+    def __init__(
+        self,
+        problem: Problem,
+        config: OptimizerConfig | None = None,
+        seed: int | np.random.SeedSequence | np.random.Generator | None = None,
+        *,
+        init: ArrayLike | None = None,
+        **overrides: Any,
+    ) -> None:
+        super().__init__(problem, config, seed=seed, **overrides)
+        self.init = _initial_population(
+            init, self.config.pop_size, self.lower, self.upper, self.name
+        )
+        n, d = self.config.pop_size, self.dim
+        self.v_max = self.config.velocity_fraction * (self.upper - self.lower)
+        self.w = float(self.config.w)
+        self.x: FloatArray = np.empty((n, d))
+        self.v: FloatArray = np.zeros((n, d))
+        self.pbest_x: FloatArray = np.empty((n, d))
+        self.pbest_f: FloatArray = np.full(n, np.inf)
+        self.gbest_x: FloatArray = np.empty(d)
+        self.gbest_f = np.inf
+
+    def _initialize(self) -> FloatArray:
+        n = self.config.pop_size
+        self.x = self.init.copy() if self.init is not None else self.uniform(n)
+        self.v = np.zeros_like(self.x)
+        return self.x.copy()
+
+    def _ask(self) -> FloatArray:
+        cfg = self.config
+        x, v = self.x, self.v
+        r1 = self.rng.random(x.shape)
+        r2 = self.rng.random(x.shape)
+        v = self.w * v + cfg.c1 * r1 * (self.pbest_x - x) + cfg.c2 * r2 * (self.gbest_x - x)
+        v = np.clip(v, -self.v_max, self.v_max)
+        x = x + v
+        outside = (x < self.lower) | (x > self.upper)
+        v = np.where(outside, -v, v)
+        x = self.clip(x)
+        self.x, self.v = x, v
+        return x.copy()
+
+    def _tell(self, X: FloatArray, f: FloatArray) -> None:
+        first = self.iterations == 0
+        self.x = X.copy()
+        if first:
+            self.pbest_x = X.copy()
+            self.pbest_f = f.copy()
+        else:
+            better = f < self.pbest_f
+            self.pbest_x[better] = X[better]
+            self.pbest_f[better] = f[better]
+        i = int(np.argmin(self.pbest_f))
+        if first or self.pbest_f[i] < self.gbest_f:
+            self.gbest_x = self.pbest_x[i].copy()
+            self.gbest_f = float(self.pbest_f[i])
+        if not first:  # the swarm moved with the current w: damp it for the next move
+            self.w *= self.config.w_damp

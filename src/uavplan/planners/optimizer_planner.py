@@ -1,0 +1,116 @@
+"""A planner that wraps any registered optimizer with the Cartesian waypoint encoding.
+
+The optimizer searches ``n_waypoints`` free waypoints (x, y[, z]) between the task's start and
+goal under the scenario's cost preset (see :mod:`uavplan.problems.path_problem`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import fields
+from typing import Any
+
+from uavplan import optimizers
+from uavplan.optimizers.base import Budget, config_dict
+from uavplan.planners.base import (
+    _REGISTRY,
+    Planner,
+    PlannerError,
+    PlanResult,
+    ProgressCallback,
+    register_planner,
+)
+from uavplan.problems.encoding import CartesianEncoding
+from uavplan.problems.path_problem import PathProblem
+from uavplan.world.scenario import Scenario, Task
+
+#: Iterations when no budget is given (SPSO's 200).
+DEFAULT_ITERATIONS = 200
+
+
+class OptimizerPlanner(Planner):
+    """Plan with optimizer ``algorithm`` over Cartesian waypoints.
+
+    Args:
+        algorithm: a registered optimizer name.
+        n_waypoints: free waypoints (default: the scenario's).
+        cost: cost preset (default: the scenario's).
+        weights: term weight overrides.
+        init: optional initial population of paths (pop, n_waypoints + 2, dim) to seed from.
+        **params: optimizer hyperparameters (e.g. ``pop_size=500``).
+    """
+
+    def __init__(
+        self,
+        algorithm: str,
+        n_waypoints: int | None = None,
+        cost: str | None = None,
+        weights: dict[str, float] | None = None,
+        **params: Any,
+    ) -> None:
+        self.algorithm = algorithm.lower()
+        self.name = self.algorithm  # type: ignore[misc]
+        self.optimizer_cls = optimizers.get(self.algorithm)
+        known = {f.name for f in fields(self.optimizer_cls.Config)}
+        unknown = set(params) - known
+        if unknown:
+            raise PlannerError(
+                f"{self.algorithm}: unknown parameter(s) {sorted(unknown)}; known: {sorted(known)}"
+            )
+        self.config = self.optimizer_cls.Config(**params)
+        self.n_waypoints = n_waypoints
+        self.cost = cost
+        self.weights = weights
+
+    def describe(self) -> dict[str, Any]:
+        return {
+            "name": self.algorithm,
+            "encoding": "cartesian",
+            "n_waypoints": self.n_waypoints,
+            "cost": self.cost,
+            "weights": self.weights,
+            **config_dict(self.config),
+        }
+
+    def _plan(
+        self,
+        scenario: Scenario,
+        task: Task,
+        budget: Budget | int | None,
+        seed: int | None,
+        callback: ProgressCallback | None,
+    ) -> PlanResult:
+        problem = PathProblem(scenario, task, cost=self.cost, weights=self.weights)
+        enc = CartesianEncoding(problem, self.n_waypoints)
+        opt = self.optimizer_cls(enc, self.config, seed=seed)
+
+        def cb(o: optimizers.Optimizer) -> bool:
+            return bool(callback(o.iterations, o.best_f)) if callback else False
+
+        res = optimizers.run(opt, budget if budget is not None else DEFAULT_ITERATIONS, seed, cb)
+        path = enc.decode(res.x[None])
+        ev = problem.evaluate(path)
+        times = problem.times(path)[0]
+        return PlanResult(
+            uav_id=task.id,
+            waypoints=path[0],
+            times=times,
+            cost=float(ev.cost[0]),
+            terms={k: float(v[0]) for k, v in ev.terms.items()},
+            feasible=bool(ev.feasible[0]),
+            evaluations=res.evaluations,
+            iterations=res.iterations,
+            wall_time=res.wall_time,
+            history=res.history,
+            algorithm=self.algorithm,
+            config=self.describe(),
+            seed=seed,
+            cost_model=problem.cost_name,
+            violations=tuple(k for k, v in ev.violations.items() if v[0]),
+        )
+
+
+def register_all() -> None:
+    """Register an optimizer planner for every registered optimizer not yet a planner."""
+    for name in optimizers.available():
+        if name not in _REGISTRY:
+            register_planner(name, lambda _n=name, **kw: OptimizerPlanner(_n, **kw))

@@ -1,0 +1,82 @@
+"""Plan every task of a scenario and write ``plan.json`` / ``plan.png`` (used by the CLI)."""
+
+from __future__ import annotations
+
+import platform
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from uavplan import __version__
+from uavplan.io.atomic import write_json_atomic
+from uavplan.optimizers.base import Budget
+from uavplan.planners.base import Planner, PlanResult, ProgressCallback
+from uavplan.world.scenario import Scenario
+
+
+@dataclass(frozen=True)
+class FleetPlan:
+    """Independent plans for every task of a scenario (the fleet planner comes later)."""
+
+    scenario: Scenario
+    algorithm: str
+    config: dict[str, Any]
+    seed: int | None
+    results: tuple[PlanResult, ...]
+
+    @property
+    def feasible(self) -> bool:
+        return all(r.feasible for r in self.results)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "format": "uavplan.plan/1",
+            "scenario": self.scenario.name,
+            "algorithm": self.algorithm,
+            "config": self.config,
+            "seed": self.seed,
+            "version": __version__,
+            "python": platform.python_version(),
+            "frame": "local ENU metres: x east, y north, z up (absolute altitude)",
+            "uavs": [r.to_dict() for r in self.results],
+        }
+
+
+def task_seeds(seed: int | None, n: int) -> list[int | None]:
+    """One seed per task derived from the root ``seed`` (SeedSequence), or None."""
+    if seed is None:
+        return [None] * n
+    return [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(n)]
+
+
+def plan_all(
+    scenario: Scenario,
+    planner: Planner,
+    budget: Budget | int | None,
+    seed: int | None,
+    progress: Callable[[str], ProgressCallback | None] | None = None,
+    tasks: Sequence[str] | None = None,
+) -> FleetPlan:
+    """Plan each task (or those named in ``tasks``) independently."""
+    chosen = [t for t in scenario.tasks if tasks is None or t.id in tasks]
+    results = []
+    for task, s in zip(chosen, task_seeds(seed, len(chosen)), strict=True):
+        cb = progress(task.id) if progress else None
+        results.append(planner.plan(scenario, task, budget, s, cb))
+    return FleetPlan(scenario, planner.name, planner.describe(), seed, tuple(results))
+
+
+def write_plan(plan: FleetPlan, out: str | Path, figure: bool = True) -> list[Path]:
+    """Write ``out/plan.json`` (atomically) and ``out/plan.png``; returns the paths."""
+    d = Path(out)
+    d.mkdir(parents=True, exist_ok=True)
+    written = [write_json_atomic(d / "plan.json", plan.to_dict())]
+    if figure:
+        from uavplan.plotting import save_plan_figure
+
+        title = f"{plan.scenario.name}: {plan.algorithm}, seed {plan.seed}"
+        written.append(save_plan_figure(plan.scenario, plan.results, d / "plan.png", title))
+    return written

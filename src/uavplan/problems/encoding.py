@@ -1,0 +1,78 @@
+"""Encodings: turn an optimizer's flat vectors into paths for a :class:`PathProblem`.
+
+:class:`CartesianEncoding` is the direct waypoint encoding (HR-MAGA Eq. 3; the PSO/GA/DE baselines):
+``n_waypoints`` free waypoints between the fixed start and goal, each ``(x, y[, z])``. In 3-D, when
+the scenario has an altitude band above ground, the z gene is the height above the terrain inside
+the band (as SPSO encodes it), turned into absolute altitude at decoding; with an absolute band it
+is the absolute altitude inside the band; otherwise z spans the bounds.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from uavplan.problems.path_problem import Evaluation, PathProblem
+
+FloatArray = NDArray[np.float64]
+
+
+class CartesianEncoding:
+    """An optimizer-facing problem (``dim``, ``lower``, ``upper``, ``block``, ``evaluate``)."""
+
+    def __init__(self, problem: PathProblem, n_waypoints: int | None = None) -> None:
+        self.problem = problem
+        sc = problem.scenario
+        self.n_waypoints = int(n_waypoints if n_waypoints is not None else sc.n_waypoints)
+        if self.n_waypoints < 1:
+            raise ValueError(f"n_waypoints must be >= 1, got {self.n_waypoints}")
+        d = sc.dim
+        lo = sc.bounds.lo.copy()
+        hi = sc.bounds.hi.copy()
+        self.z_mode = "absolute"
+        if d == 3 and sc.altitude is not None:
+            lo[2], hi[2] = sc.altitude.min, sc.altitude.max
+            if sc.altitude.reference == "ground" and sc.terrain is not None:
+                self.z_mode = "ground"
+            else:
+                lo[2], hi[2] = max(lo[2], sc.altitude.min), min(hi[2], sc.altitude.max)
+        self.point_lower = lo
+        self.point_upper = hi
+        self.block = d
+        self.lower = np.tile(lo, self.n_waypoints)
+        self.upper = np.tile(hi, self.n_waypoints)
+        self.evaluations = 0
+
+    @property
+    def dim(self) -> int:
+        return int(self.lower.shape[0])
+
+    def decode(self, X: FloatArray) -> FloatArray:
+        """(pop, dim) genes -> (pop, n_waypoints + 2, scenario dim) absolute paths."""
+        X = np.asarray(X, dtype=np.float64)
+        d = self.problem.dim
+        free = X.reshape(X.shape[0], self.n_waypoints, d).copy()
+        if self.z_mode == "ground":
+            terrain = self.problem.scenario.terrain
+            assert terrain is not None
+            free[..., 2] += terrain.lookup(free[..., 0], free[..., 1], self.problem.lookup)
+        return self.problem.with_endpoints(free)
+
+    def encode(self, paths: FloatArray) -> FloatArray:
+        """Inverse of :meth:`decode` for paths with ``n_waypoints`` free waypoints."""
+        p = np.asarray(paths, dtype=np.float64)[:, 1:-1].copy()
+        if p.shape[1] != self.n_waypoints:
+            raise ValueError(f"paths have {p.shape[1]} free waypoints, need {self.n_waypoints}")
+        if self.z_mode == "ground":
+            terrain = self.problem.scenario.terrain
+            assert terrain is not None
+            p[..., 2] -= terrain.lookup(p[..., 0], p[..., 1], self.problem.lookup)
+        return p.reshape(p.shape[0], -1)
+
+    def evaluate(self, X: FloatArray) -> FloatArray:
+        """Total cost of each gene vector, (pop,)."""
+        self.evaluations += len(X)
+        return self.problem.cost(self.decode(X))
+
+    def evaluate_full(self, X: FloatArray) -> Evaluation:
+        return self.problem.evaluate(self.decode(X))
