@@ -18,7 +18,7 @@ from dataclasses import asdict, dataclass, field, fields, is_dataclass, replace
 from typing import Any, ClassVar, Protocol, TypeVar, runtime_checkable
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 FloatArray = NDArray[np.float64]
 
@@ -128,7 +128,11 @@ Callback = Callable[["Optimizer"], bool | None]
 
 class Optimizer(ABC):
     """Ask/tell population optimizer. Subclasses set ``name`` and ``Config`` and implement
-    ``_initialize``, ``_ask`` and ``_tell``; all randomness comes from ``self.rng``."""
+    ``_initialize``, ``_ask`` and ``_tell``; all randomness comes from ``self.rng``.
+
+    ``init`` (keyword): an optional first population (pop_size, dim) used instead of uniform
+    random points (e.g. paths seeded by RRT* or RGG), clipped to the box.
+    """
 
     name: ClassVar[str] = "optimizer"
     Config: ClassVar[type[OptimizerConfig]] = OptimizerConfig
@@ -138,6 +142,8 @@ class Optimizer(ABC):
         problem: Problem,
         config: OptimizerConfig | None = None,
         seed: int | np.random.SeedSequence | np.random.Generator | None = None,
+        *,
+        init: ArrayLike | None = None,
         **overrides: Any,
     ) -> None:
         cfg = config if config is not None else self.Config()
@@ -166,6 +172,29 @@ class Optimizer(ABC):
         self.evaluations_history: list[int] = []
         self._pending: FloatArray | None = None
         self._initialized = False
+        self.init = self._check_init(init)
+
+    def _check_init(self, init: ArrayLike | None) -> FloatArray | None:
+        """Validate a user-supplied first population (pop_size, dim); clip it to the box."""
+        if init is None:
+            return None
+        X = np.array(init, dtype=np.float64)  # a copy: later edits of the caller's are ignored
+        pop = self.config.pop_size
+        if X.ndim != 2 or X.shape != (pop, self.dim):
+            raise OptimizerError(
+                f"{self.name}: init must have shape (pop_size, dim) = {(pop, self.dim)}, "
+                f"got {X.shape}"
+            )
+        if not np.all(np.isfinite(X)):
+            raise OptimizerError(f"{self.name}: init must be finite")
+        return np.clip(X, self.lower, self.upper)
+
+    def initial_population(self, n: int | None = None) -> FloatArray:
+        """The ``init`` population if one was given, else ``n`` (default pop_size) uniform
+        points in the box. Algorithms call this from ``_initialize``."""
+        if self.init is not None:
+            return self.init.copy()
+        return self.uniform(self.config.pop_size if n is None else n)
 
     # ------------------------------------------------------------------ fixed public API
     def ask(self) -> FloatArray:

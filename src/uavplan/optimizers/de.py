@@ -61,23 +61,6 @@ class DEConfig(OptimizerConfig):
             raise OptimizerError(f"CR must be in [0, 1], got {self.CR}")
 
 
-def _initial_population(
-    init: ArrayLike | None, pop_size: int, lower: FloatArray, upper: FloatArray, name: str
-) -> FloatArray | None:
-    """Validate a user-supplied first population (pop_size, dim); clip it to the box."""
-    if init is None:
-        return None
-    X = np.array(init, dtype=np.float64)
-    if X.ndim != 2 or X.shape != (pop_size, lower.shape[0]):
-        raise OptimizerError(
-            f"{name}: init must have shape (pop_size, dim) = {(pop_size, lower.shape[0])}, "
-            f"got {X.shape}"
-        )
-    if not np.all(np.isfinite(X)):
-        raise OptimizerError(f"{name}: init must be finite")
-    return np.clip(X, lower, upper)
-
-
 @register
 class DE(Optimizer):
     """DE/rand/1/bin with bounce-back bound handling and greedy one-to-one selection.
@@ -100,10 +83,7 @@ class DE(Optimizer):
         init: ArrayLike | None = None,
         **overrides: Any,
     ) -> None:
-        super().__init__(problem, config, seed=seed, **overrides)
-        self.init = _initial_population(
-            init, self.config.pop_size, self.lower, self.upper, self.name
-        )
+        super().__init__(problem, config, seed=seed, init=init, **overrides)
         NP = self.config.pop_size
         self.x: FloatArray = np.empty((NP, self.dim))  # target vectors
         self.fx: FloatArray = np.full(NP, np.inf)  # their costs
@@ -111,8 +91,7 @@ class DE(Optimizer):
         self.j_rand = np.zeros(NP, dtype=np.int64)  # guaranteed mutant gene of the last trial
 
     def _initialize(self) -> FloatArray:
-        NP = self.config.pop_size
-        return self.init.copy() if self.init is not None else self.uniform(NP)
+        return self.initial_population()
 
     def _ask(self) -> FloatArray:
         cfg = self.config

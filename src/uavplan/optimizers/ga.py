@@ -75,23 +75,6 @@ class GAConfig(OptimizerConfig):
             raise OptimizerError(f"mutation_scale must be >= 0, got {self.mutation_scale}")
 
 
-def _initial_population(
-    init: ArrayLike | None, pop_size: int, lower: FloatArray, upper: FloatArray, name: str
-) -> FloatArray | None:
-    """Validate a user-supplied first population (pop_size, dim); clip it to the box."""
-    if init is None:
-        return None
-    X = np.array(init, dtype=np.float64)
-    if X.ndim != 2 or X.shape != (pop_size, lower.shape[0]):
-        raise OptimizerError(
-            f"{name}: init must have shape (pop_size, dim) = {(pop_size, lower.shape[0])}, "
-            f"got {X.shape}"
-        )
-    if not np.all(np.isfinite(X)):
-        raise OptimizerError(f"{name}: init must be finite")
-    return np.clip(X, lower, upper)
-
-
 @register
 class GA(Optimizer):
     """Elitist real-coded GA: tournament selection, waypoint crossover, Gaussian mutation.
@@ -117,10 +100,7 @@ class GA(Optimizer):
         init: ArrayLike | None = None,
         **overrides: Any,
     ) -> None:
-        super().__init__(problem, config, seed=seed, **overrides)
-        self.init = _initial_population(
-            init, self.config.pop_size, self.lower, self.upper, self.name
-        )
+        super().__init__(problem, config, seed=seed, init=init, **overrides)
         cfg = self.config
         self.p_m = cfg.mutation_rate if cfg.mutation_rate is not None else 1.0 / self.dim
         self.sigma = cfg.mutation_scale * (self.upper - self.lower)
@@ -133,8 +113,7 @@ class GA(Optimizer):
         self.elite_f: FloatArray = np.empty(0)
 
     def _initialize(self) -> FloatArray:
-        n = self.config.pop_size
-        return self.init.copy() if self.init is not None else self.uniform(n)
+        return self.initial_population()
 
     def _ask(self) -> FloatArray:
         cfg = self.config

@@ -68,23 +68,6 @@ class PSOConfig(OptimizerConfig):
             raise OptimizerError(f"velocity_fraction must be > 0, got {self.velocity_fraction}")
 
 
-def _initial_population(
-    init: ArrayLike | None, pop_size: int, lower: FloatArray, upper: FloatArray, name: str
-) -> FloatArray | None:
-    """Validate a user-supplied first population (pop_size, dim); clip it to the box."""
-    if init is None:
-        return None
-    X = np.array(init, dtype=np.float64)  # a copy: later edits of the caller's array are ignored
-    if X.ndim != 2 or X.shape != (pop_size, lower.shape[0]):
-        raise OptimizerError(
-            f"{name}: init must have shape (pop_size, dim) = {(pop_size, lower.shape[0])}, "
-            f"got {X.shape}"
-        )
-    if not np.all(np.isfinite(X)):
-        raise OptimizerError(f"{name}: init must be finite")
-    return np.clip(X, lower, upper)
-
-
 @register
 class PSO(Optimizer):
     """Global-best PSO with inertia damping, velocity clamping and mirrored walls.
@@ -107,10 +90,7 @@ class PSO(Optimizer):
         init: ArrayLike | None = None,
         **overrides: Any,
     ) -> None:
-        super().__init__(problem, config, seed=seed, **overrides)
-        self.init = _initial_population(
-            init, self.config.pop_size, self.lower, self.upper, self.name
-        )
+        super().__init__(problem, config, seed=seed, init=init, **overrides)
         n, d = self.config.pop_size, self.dim
         self.v_max = self.config.velocity_fraction * (self.upper - self.lower)
         self.w = float(self.config.w)
@@ -122,8 +102,7 @@ class PSO(Optimizer):
         self.gbest_f = np.inf
 
     def _initialize(self) -> FloatArray:
-        n = self.config.pop_size
-        self.x = self.init.copy() if self.init is not None else self.uniform(n)
+        self.x = self.initial_population()
         self.v = np.zeros_like(self.x)
         return self.x.copy()
 

@@ -40,6 +40,11 @@ class PlanResult:
         feasible: decided on continuous segments (see PathProblem).
         evaluations, iterations, wall_time (s), history: best-so-far cost per iteration.
         algorithm, config, seed, cost_model: what produced it.
+        feasible_history: best cost among feasible candidates so far, per iteration (inf
+            before the first feasible one); empty when the planner did not track it.
+        first_feasible_iteration: the 1-based iteration in which a feasible candidate was first
+            evaluated (RGG-PSO+'s F-Measure counts the iterations before it), None if never or
+            not tracked.
     """
 
     uav_id: str
@@ -57,6 +62,8 @@ class PlanResult:
     seed: int | None = None
     cost_model: str = ""
     violations: tuple[str, ...] = ()
+    feasible_history: FloatArray = field(default_factory=lambda: np.zeros(0))
+    first_feasible_iteration: int | None = None
 
     @property
     def length(self) -> float:
@@ -77,6 +84,7 @@ class PlanResult:
             "iterations": int(self.iterations),
             "wall_time": float(self.wall_time),
             "history": [_num(v) for v in np.asarray(self.history)],
+            "first_feasible_iteration": self.first_feasible_iteration,
         }
 
 

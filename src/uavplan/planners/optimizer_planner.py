@@ -9,6 +9,8 @@ from __future__ import annotations
 from dataclasses import fields
 from typing import Any
 
+import numpy as np
+
 from uavplan import optimizers
 from uavplan.optimizers.base import Budget, config_dict
 from uavplan.planners.base import (
@@ -45,6 +47,7 @@ class OptimizerPlanner(Planner):
         n_waypoints: int | None = None,
         cost: str | None = None,
         weights: dict[str, float] | None = None,
+        track_feasibility: bool = False,
         **params: Any,
     ) -> None:
         self.algorithm = algorithm.lower()
@@ -60,6 +63,7 @@ class OptimizerPlanner(Planner):
         self.n_waypoints = n_waypoints
         self.cost = cost
         self.weights = weights
+        self.track_feasibility = track_feasibility
 
     def describe(self) -> dict[str, Any]:
         return {
@@ -80,7 +84,7 @@ class OptimizerPlanner(Planner):
         callback: ProgressCallback | None,
     ) -> PlanResult:
         problem = PathProblem(scenario, task, cost=self.cost, weights=self.weights)
-        enc = CartesianEncoding(problem, self.n_waypoints)
+        enc = CartesianEncoding(problem, self.n_waypoints, self.track_feasibility)
         opt = self.optimizer_cls(enc, self.config, seed=seed)
 
         def cb(o: optimizers.Optimizer) -> bool:
@@ -106,7 +110,15 @@ class OptimizerPlanner(Planner):
             seed=seed,
             cost_model=problem.cost_name,
             violations=tuple(k for k, v in ev.violations.items() if v[0]),
+            feasible_history=np.asarray(enc.feasible_history),
+            first_feasible_iteration=_first_finite(enc.feasible_history),
         )
+
+
+def _first_finite(history: list[float]) -> int | None:
+    """1-based index of the first finite entry, or None."""
+    finite = np.flatnonzero(np.isfinite(np.asarray(history, dtype=np.float64)))
+    return int(finite[0]) + 1 if len(finite) else None
 
 
 def register_all() -> None:

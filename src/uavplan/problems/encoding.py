@@ -20,8 +20,13 @@ FloatArray = NDArray[np.float64]
 class CartesianEncoding:
     """An optimizer-facing problem (``dim``, ``lower``, ``upper``, ``block``, ``evaluate``)."""
 
-    def __init__(self, problem: PathProblem, n_waypoints: int | None = None) -> None:
+    def __init__(
+        self, problem: PathProblem, n_waypoints: int | None = None, track_feasibility: bool = False
+    ) -> None:
         self.problem = problem
+        self.track_feasibility = track_feasibility
+        #: with ``track_feasibility``: best cost among feasible paths so far, after each call
+        self.feasible_history: list[float] = []
         sc = problem.scenario
         self.n_waypoints = int(n_waypoints if n_waypoints is not None else sc.n_waypoints)
         if self.n_waypoints < 1:
@@ -70,9 +75,19 @@ class CartesianEncoding:
         return p.reshape(p.shape[0], -1)
 
     def evaluate(self, X: FloatArray) -> FloatArray:
-        """Total cost of each gene vector, (pop,)."""
+        """Total cost of each gene vector, (pop,).
+
+        With ``track_feasibility`` the feasibility of every path is decided too, and the best
+        feasible cost so far is appended to :attr:`feasible_history` (inf until one is found).
+        """
         self.evaluations += len(X)
-        return self.problem.cost(self.decode(X))
+        if not self.track_feasibility:
+            return self.problem.cost(self.decode(X))
+        ev = self.problem.evaluate(self.decode(X))
+        best = float(np.min(ev.cost[ev.feasible], initial=np.inf))
+        prev = self.feasible_history[-1] if self.feasible_history else np.inf
+        self.feasible_history.append(min(prev, best))
+        return ev.cost
 
     def evaluate_full(self, X: FloatArray) -> Evaluation:
         return self.problem.evaluate(self.decode(X))

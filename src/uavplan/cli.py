@@ -1,0 +1,189 @@
+"""Command line: ``uavplan plan | demo | scenario ...``."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from uavplan.cli_scenario import scenario_app
+
+app = typer.Typer(
+    name="uavplan",
+    help="Plan safe, flyable UAV paths and compare planners.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+app.add_typer(scenario_app, name="scenario")
+
+err = Console(stderr=True)
+out = Console()
+
+
+def fail(lines: list[str] | str, code: int = 2) -> typer.Exit:
+    """Print problem lines to stderr and return the Exit to raise (no traceback)."""
+    for line in [lines] if isinstance(lines, str) else lines:
+        err.print(line, markup=False, highlight=False)
+    return typer.Exit(code)
+
+
+def _parse_params(params: list[str]) -> dict[str, Any]:
+    parsed: dict[str, Any] = {}
+    for item in params:
+        if "=" not in item:
+            raise fail(f"--param {item!r}: expected NAME=VALUE")
+        k, v = item.split("=", 1)
+        value: Any = v
+        for conv in (int, float):
+            try:
+                value = conv(v)
+                break
+            except ValueError:
+                continue
+        if v.lower() in ("true", "false"):
+            value = v.lower() == "true"
+        parsed[k.strip()] = value
+    return parsed
+
+
+def _run_plan(
+    scenario_ref: str,
+    algorithm: str,
+    seed: int,
+    out_dir: Path,
+    iterations: int | None,
+    pop_size: int | None,
+    waypoints: int | None,
+    cost: str | None,
+    params: list[str],
+    figure: bool = True,
+) -> Any:
+    from uavplan.optimizers.base import Budget, OptimizerError
+    from uavplan.planners import PlannerError, get_planner
+    from uavplan.planning import plan_all, write_plan
+    from uavplan.scenarios import resolve
+
+    from uavplan.io.scenario_file import ScenarioFileError
+
+    try:
+        scenario = resolve(scenario_ref)
+    except ScenarioFileError as exc:
+        raise fail(getattr(exc, "problems", None) or [str(exc)]) from None
+    options: dict[str, Any] = _parse_params(params)
+    if pop_size is not None:
+        options["pop_size"] = pop_size
+    if waypoints is not None:
+        options["n_waypoints"] = waypoints
+    if cost is not None:
+        options["cost"] = cost
+    try:
+        planner = get_planner(algorithm, **options)
+    except (PlannerError, OptimizerError, TypeError, ValueError) as exc:
+        raise fail(f"--algorithm {algorithm}: {exc}") from None
+    budget = Budget(max_iterations=iterations) if iterations else None
+    n_iter = iterations or 200
+
+    with Progress(
+        TextColumn("[bold]{task.description}"),
+        BarColumn(),
+        TextColumn("{task.fields[best]}"),
+        TimeElapsedColumn(),
+        console=err,
+        transient=True,
+    ) as progress:
+
+        def make_cb(uav: str) -> Any:
+            tid = progress.add_task(f"{uav} {algorithm}", total=n_iter, best="")
+
+            def cb(it: int, best: float) -> bool:
+                progress.update(tid, completed=it, best=f"best {best:.6g}")
+                return False
+
+            return cb
+
+        t0 = time.perf_counter()
+        try:
+            plan = plan_all(scenario, planner, budget, seed, make_cb)
+        except ValueError as exc:
+            raise fail(f"{scenario_ref}: {exc}") from None
+        elapsed = time.perf_counter() - t0
+    try:
+        write_plan(plan, out_dir, figure=figure)
+    except OSError as exc:
+        raise fail(f"--out {out_dir}: cannot write: {exc}") from None
+    return plan, elapsed
+
+
+def _summary(plan: Any, elapsed: float, out_dir: Path) -> None:
+    table = Table(title=f"{plan.scenario.name} / {plan.algorithm} / seed {plan.seed}")
+    for col in (
+        "UAV",
+        "feasible",
+        "cost",
+        "length (m)",
+        "flight time (s)",
+        "evaluations",
+        "time (s)",
+    ):
+        table.add_column(col, justify="right")
+    for r in plan.results:
+        table.add_row(
+            r.uav_id,
+            "yes" if r.feasible else "NO: " + ",".join(r.violations),
+            f"{r.cost:.6g}",
+            f"{r.length:.1f}",
+            f"{r.times[-1] - r.times[0]:.1f}",
+            str(r.evaluations),
+            f"{r.wall_time:.2f}",
+        )
+    out.print(table)
+    out.print(f"wrote {out_dir / 'plan.json'} and {out_dir / 'plan.png'} ({elapsed:.1f} s)")
+
+
+@app.command()
+def plan(
+    scenario: Annotated[
+        str, typer.Argument(help="A scenario file (.yaml/.json) or built-in name.")
+    ],
+    algorithm: Annotated[str, typer.Option("--algorithm", "-a", help="Planner name.")] = "pso",
+    seed: Annotated[int, typer.Option(help="Root random seed.")] = 0,
+    out_dir: Annotated[Path, typer.Option("--out", "-o", help="Output folder.")] = Path("out"),
+    iterations: Annotated[int | None, typer.Option(help="Iteration budget (default 200).")] = None,
+    pop_size: Annotated[int | None, typer.Option(help="Population size.")] = None,
+    waypoints: Annotated[int | None, typer.Option(help="Free waypoints per path.")] = None,
+    cost: Annotated[str | None, typer.Option(help="Cost preset (default: the scenario's).")] = None,
+    param: Annotated[list[str] | None, typer.Option(help="Planner parameter NAME=VALUE.")] = None,
+) -> None:
+    """Plan every task of SCENARIO; write OUT/plan.json and OUT/plan.png."""
+    result, elapsed = _run_plan(
+        scenario, algorithm, seed, out_dir, iterations, pop_size, waypoints, cost, param or []
+    )
+    _summary(result, elapsed, out_dir)
+    if not result.feasible:
+        raise typer.Exit(1)
+
+
+@app.command()
+def demo(
+    out_dir: Annotated[Path, typer.Option("--out", "-o", help="Output folder.")] = Path(
+        "uavplan-demo"
+    ),
+    seed: Annotated[int, typer.Option(help="Root random seed.")] = 0,
+) -> None:
+    """Plan the built-in SPSO benchmark with PSO at SPSO's budget (500 x 200) and show it."""
+    result, elapsed = _run_plan("spso", "pso", seed, out_dir, 200, 500, None, None, [])
+    _summary(result, elapsed, out_dir)
+
+
+def main() -> None:
+    app()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()
