@@ -11,6 +11,8 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from uavplan.cli_bench import bench_app
+from uavplan.cli_bench import report as report_command
 from uavplan.cli_scenario import scenario_app
 
 app = typer.Typer(
@@ -21,6 +23,8 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 app.add_typer(scenario_app, name="scenario")
+app.add_typer(bench_app, name="bench")
+app.command("report")(report_command)
 
 err = Console(stderr=True)
 out = Console()
@@ -64,12 +68,11 @@ def _run_plan(
     params: list[str],
     figure: bool = True,
 ) -> Any:
+    from uavplan.io.scenario_file import ScenarioFileError
     from uavplan.optimizers.base import Budget, OptimizerError
     from uavplan.planners import PlannerError, get_planner
     from uavplan.planning import plan_all, write_plan
     from uavplan.scenarios import resolve
-
-    from uavplan.io.scenario_file import ScenarioFileError
 
     try:
         scenario = resolve(scenario_ref)

@@ -33,8 +33,11 @@ def _terrain_xy(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     return xs, ys, t.heights
 
 
-def draw_top(ax: Axes, scenario: Scenario, results: Sequence[PlanResult] = ()) -> None:
-    """Top view: terrain shading and contours, obstacles and areas, paths, starts and goals."""
+def draw_top(ax: Axes, scenario: Scenario, results: Sequence[Any] = ()) -> None:
+    """Top view: terrain shading and contours, obstacles and areas, paths, starts and goals.
+
+    ``results``: objects with ``waypoints`` (n, dim), ``uav_id`` and ``feasible`` (PlanResult).
+    """
     txy = _terrain_xy(scenario)
     if txy is not None:
         xs, ys, H = txy

@@ -1,0 +1,1 @@
+"""Experiments: the papers' plans, the runner, run tables and their statistics."""

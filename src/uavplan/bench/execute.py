@@ -1,0 +1,229 @@
+"""Execute one run (in whatever process or machine) and return its tidy row.
+
+A run that raises is recorded with ``status="error"`` and the exception's text, so that the sweep
+goes on. Everything a worker needs is rebuilt from the :class:`RunSpec`; scenarios are cached per
+process.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import platform
+import subprocess
+import time
+import traceback
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from uavplan import __version__
+from uavplan.bench.plans import RunSpec
+
+_single_thread_done = False
+
+
+def limit_threads() -> None:
+    """One thread per worker for Numba and BLAS, so two cores run two runs, not four halves."""
+    global _single_thread_done
+    if _single_thread_done:
+        return
+    _single_thread_done = True
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
+    try:
+        import numba
+
+        numba.set_num_threads(1)
+    except Exception:  # pragma: no cover - numba is a dependency; be defensive
+        pass
+    try:
+        from threadpoolctl import threadpool_limits
+
+        threadpool_limits(1)
+    except Exception:
+        pass
+
+
+@functools.cache
+def host_info() -> dict[str, str]:
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return {"host": platform.node(), "cpu": cpu, "python": platform.python_version()}
+
+
+@functools.cache
+def git_commit() -> str | None:
+    """The commit of the uavplan source tree, if it is a git checkout."""
+    src = Path(__file__).resolve().parents[3]
+    if not (src / ".git").exists():
+        return None
+    try:
+        out = subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=src, capture_output=True, text=True, timeout=5
+        )
+        return out.stdout.strip() or None
+    except Exception:
+        return None
+
+
+@functools.lru_cache(maxsize=16)
+def _scenario(ref: str) -> Any:
+    from uavplan.scenarios import resolve
+
+    return resolve(ref)
+
+
+def _run_planner(spec: RunSpec) -> dict[str, Any]:
+    from uavplan.planners import get_planner
+
+    p = spec.params
+    scenario = _scenario(spec.scenario)
+    planner = get_planner(p["planner"], track_feasibility=True, **dict(p["options"]))
+    r = planner.plan(scenario, None, int(p["iterations"]), spec.seed)
+    return {
+        "best_cost": r.cost,
+        "path_length": r.length,
+        "feasible": r.feasible,
+        "first_feasible_iteration": r.first_feasible_iteration,
+        "evaluations": r.evaluations,
+        "iterations": r.iterations,
+        "history": np.asarray(r.history),
+        "feasible_history": np.asarray(r.feasible_history),
+        "violations": ",".join(r.violations),
+        "waypoints": np.asarray(r.waypoints).ravel().tolist(),
+        "n_dim": int(np.asarray(r.waypoints).shape[1]),
+    }
+
+
+def _run_function(spec: RunSpec) -> dict[str, Any]:
+    from uavplan.optimizers import minimize
+    from uavplan.optimizers.functions import function_problem
+
+    p = spec.params
+    problem = function_problem(spec.scenario)
+    r = minimize(problem, p["planner"], int(p["iterations"]), spec.seed, **dict(p["options"]))
+    return {
+        "best_cost": r.f,
+        "path_length": None,
+        "feasible": True,
+        "first_feasible_iteration": 1,
+        "evaluations": r.evaluations,
+        "iterations": r.iterations,
+        "history": np.asarray(r.history),
+    }
+
+
+KINDS: dict[str, Callable[[RunSpec], dict[str, Any]]] = {
+    "planner": _run_planner,
+    "function": _run_function,
+}
+
+
+def execute_run(spec: RunSpec) -> dict[str, Any]:
+    """Run ``spec`` and return its row (never raises for errors inside the run)."""
+    start = time.time()
+    t0 = time.perf_counter()
+    row: dict[str, Any] = {
+        "run_id": spec.run_id,
+        "plan": spec.plan,
+        "scenario": spec.scenario,
+        "algorithm": spec.algorithm,
+        "run_index": spec.run_index,
+        "seed": str(spec.seed),
+        "root_seed": spec.root_seed,
+        "scale": spec.scale,
+    }
+    try:
+        metrics = KINDS[spec.kind](spec)
+        row.update(status="ok", error=None)
+        row.update(metrics)
+    except Exception as exc:  # recorded, the sweep goes on
+        tb = traceback.format_exception_only(type(exc), exc)[-1].strip()
+        row.update(
+            status="error",
+            error=tb,
+            best_cost=None,
+            path_length=None,
+            feasible=None,
+            first_feasible_iteration=None,
+            evaluations=None,
+            iterations=None,
+            history=None,
+        )
+    row["wall_time"] = time.perf_counter() - t0
+    row["start_time"] = start
+    row["end_time"] = time.time()
+    row.update(version=__version__, git_commit=git_commit(), **host_info())
+    return row
+
+
+_warm = False
+
+
+def warm_up() -> None:
+    """Compile (or load from Numba's cache) every batched kernel once per process, so that the
+    first run a worker executes is not charged for it."""
+    global _warm
+    if _warm:
+        return
+    _warm = True
+    from uavplan.problems.path_problem import PRESETS, PathProblem
+    from uavplan.world import (
+        AltitudeBand,
+        Bounds,
+        Circle,
+        Cylinder,
+        DangerArea,
+        MovingObstacle,
+        Polygon,
+        Scenario,
+        Task,
+        Terrain,
+    )
+
+    terrain = Terrain(np.arange(16.0).reshape(4, 4), 0.0, 0.0, 10.0, 10.0)
+    sc3 = Scenario(
+        "warm3",
+        Bounds((0, 0, 0), (30, 30, 100)),
+        (Task("a", (1, 1, 50), (29, 29, 50)),),
+        terrain=terrain,
+        cylinders=(Cylinder((15, 15), 2.0),),
+        danger_areas=(DangerArea((5, 5), 2),),
+        moving_obstacles=(MovingObstacle(1.0, np.array([0.0, 5.0]), np.zeros((2, 3))),),
+        altitude=AltitudeBand(10, 90, "ground"),
+    )
+    sc2 = Scenario(
+        "warm2",
+        Bounds((0, 0), (30, 30)),
+        (Task("a", (1, 1), (29, 29)),),
+        circles=(Circle((15, 15), 2.0),),
+        polygons=(Polygon(((5, 20), (8, 20), (8, 25))),),
+    )
+    rng = np.random.default_rng(0)
+    for sc in (sc3, sc2):
+        paths = rng.uniform(1, 29, (2, 4, sc.dim))
+        paths[:, 0], paths[:, -1] = sc.tasks[0].start, sc.tasks[0].goal
+        for preset in PRESETS:
+            if sc.dim == 2 and preset != "length2d":
+                continue
+            PathProblem(sc, cost=preset).evaluate(paths)
+    terrain.min_clearance(np.full((1, 2, 3), 5.0))
+    terrain.max_clearance(np.full((1, 2, 3), 5.0))
+
+
+def execute_chunk(specs: list[RunSpec], single_thread: bool = True) -> list[dict[str, Any]]:
+    """Run several specs in this process (the unit of work sent to a worker)."""
+    if single_thread:
+        limit_threads()
+    warm_up()
+    return [execute_run(s) for s in specs]

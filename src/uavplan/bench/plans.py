@@ -1,0 +1,212 @@
+"""Experiment plans as code: a plan yields runs (scenario x algorithm configuration x run index).
+
+Seeds derive from ``numpy.random.SeedSequence`` keyed on (root seed; plan, scenario, algorithm,
+run index), so a run's result is the same whichever executor runs it and in whatever order.
+A :class:`RunSpec` is plain picklable data: a worker process, or a Dask worker on another
+machine, rebuilds everything it needs from it (built-in scenarios and registered planners by
+name).
+"""
+
+from __future__ import annotations
+
+import zlib
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+SCALES = ("smoke", "paper")
+
+
+class PlanError(ValueError):
+    """An unknown plan or scale, or bad overrides."""
+
+
+def derive_seed(root_seed: int, plan: str, scenario: str, algorithm: str, run_index: int) -> int:
+    """A 63-bit seed for one run, independent of execution order and executor."""
+    key = [zlib.crc32(s.encode()) for s in (plan, scenario, algorithm)] + [int(run_index)]
+    ss = np.random.SeedSequence(entropy=int(root_seed), spawn_key=tuple(key))
+    return int(ss.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1))
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One run to execute: who, what, with which seed, and the kind-specific ``params``."""
+
+    plan: str
+    scale: str
+    scenario: str
+    algorithm: str
+    run_index: int
+    seed: int
+    root_seed: int
+    kind: str
+    params: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def run_id(self) -> str:
+        return f"{self.plan}/{self.scale}/{self.scenario}/{self.algorithm}/{self.run_index}"
+
+
+@dataclass(frozen=True)
+class Algorithm:
+    """An algorithm configuration in a plan: a label, a registered planner name, its options."""
+
+    label: str
+    planner: str
+    options: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Scale:
+    """How big a plan runs: runs per cell and the budget."""
+
+    runs: int
+    iterations: int
+    pop_size: int | None = None
+
+
+@dataclass(frozen=True)
+class ExperimentPlan:
+    """A grid of scenarios x algorithms x runs, run by the planner registry.
+
+    Args:
+        name, description: shown by ``uavplan bench list``.
+        scenarios: built-in scenario names or scenario file paths.
+        algorithms: the configurations compared.
+        scales: at least ``smoke`` (CI) and ``paper`` (the full experiment).
+        kind: how a run is executed (see :mod:`uavplan.bench.execute`).
+        reference: the algorithm label statistics compare against.
+    """
+
+    name: str
+    description: str
+    scenarios: tuple[str, ...]
+    algorithms: tuple[Algorithm, ...]
+    scales: Mapping[str, Scale]
+    kind: str = "planner"
+    reference: str | None = None
+    metric: str = "best_cost"
+
+    def runs(
+        self,
+        scale: str = "smoke",
+        runs: int | None = None,
+        root_seed: int = 0,
+        iterations: int | None = None,
+    ) -> list[RunSpec]:
+        """Every run of this plan at ``scale`` (``runs``/``iterations`` override the scale)."""
+        if scale not in self.scales:
+            raise PlanError(
+                f"plan {self.name!r} has no scale {scale!r}; choose {list(self.scales)}"
+            )
+        sc = self.scales[scale]
+        n_runs = sc.runs if runs is None else runs
+        if n_runs < 1:
+            raise PlanError(f"--runs must be >= 1, got {n_runs}")
+        n_iter = sc.iterations if iterations is None else iterations
+        out = []
+        for scenario in self.scenarios:
+            for alg in self.algorithms:
+                options = dict(alg.options)
+                if sc.pop_size is not None and "pop_size" not in options:
+                    options["pop_size"] = sc.pop_size
+                for i in range(n_runs):
+                    out.append(
+                        RunSpec(
+                            plan=self.name,
+                            scale=scale,
+                            scenario=scenario,
+                            algorithm=alg.label,
+                            run_index=i,
+                            seed=derive_seed(root_seed, self.name, scenario, alg.label, i),
+                            root_seed=root_seed,
+                            kind=self.kind,
+                            params={
+                                "planner": alg.planner,
+                                "options": options,
+                                "iterations": n_iter,
+                            },
+                        )
+                    )
+        return out
+
+
+_PLANS: dict[str, ExperimentPlan] = {}
+_FACTORIES: list[Callable[[], list[ExperimentPlan]]] = []
+
+
+def register_plan(plan: ExperimentPlan) -> ExperimentPlan:
+    if plan.name in _PLANS:
+        raise PlanError(f"plan {plan.name!r} is already registered")
+    for s in ("smoke", "paper"):
+        if s not in plan.scales:
+            raise PlanError(f"plan {plan.name!r} needs a {s!r} scale")
+    _PLANS[plan.name] = plan
+    return plan
+
+
+def available_plans() -> list[str]:
+    _load_builtins()
+    return sorted(_PLANS)
+
+
+def get_plan(name: str) -> ExperimentPlan:
+    _load_builtins()
+    try:
+        return _PLANS[name]
+    except KeyError:
+        raise PlanError(f"unknown plan {name!r}; available: {sorted(_PLANS)}") from None
+
+
+_loaded = False
+
+
+def _load_builtins() -> None:
+    global _loaded
+    if _loaded:
+        return
+    _loaded = True
+    for p in builtin_plans():
+        if p.name not in _PLANS:
+            register_plan(p)
+
+
+def builtin_plans() -> list[ExperimentPlan]:
+    """The plans shipped with uavplan."""
+    return [
+        ExperimentPlan(
+            name="spso-small",
+            description=(
+                "PSO, DE and GA on the SPSO benchmark scenario with SPSO's cost; paper scale uses "
+                "SPSO's budget (500 x 200) and 20 runs"
+            ),
+            scenarios=("spso",),
+            algorithms=(
+                Algorithm("pso", "pso"),
+                Algorithm("de", "de"),
+                Algorithm("ga", "ga"),
+            ),
+            scales={
+                "smoke": Scale(runs=3, iterations=15, pop_size=40),
+                "paper": Scale(runs=20, iterations=200, pop_size=500),
+            },
+            reference="pso",
+        ),
+        ExperimentPlan(
+            name="overhead",
+            description=(
+                "Runner overhead benchmark: many short PSO runs on the 10-D sphere function "
+                "(paper scale: 10,000 runs)"
+            ),
+            scenarios=("sphere10",),
+            algorithms=(Algorithm("pso", "pso"),),
+            scales={
+                "smoke": Scale(runs=40, iterations=20, pop_size=20),
+                "paper": Scale(runs=10_000, iterations=200, pop_size=40),
+            },
+            kind="function",
+            reference="pso",
+        ),
+    ]

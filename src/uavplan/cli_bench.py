@@ -1,0 +1,140 @@
+"""``uavplan bench list | run`` and ``uavplan report``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+bench_app = typer.Typer(help="Experiments: the papers' plans, run resumably.", no_args_is_help=True)
+err = Console(stderr=True)
+out = Console()
+
+
+def _fail(msg: str, code: int = 2) -> typer.Exit:
+    err.print(msg, markup=False, highlight=False)
+    return typer.Exit(code)
+
+
+@bench_app.command("list")
+def list_plans() -> None:
+    """The experiment plans and their scales."""
+    from uavplan.bench.plans import available_plans, get_plan
+
+    table = Table(title="experiment plans")
+    for col in ("plan", "scenarios x algorithms", "smoke runs", "paper runs", "description"):
+        table.add_column(col)
+    for name in available_plans():
+        p = get_plan(name)
+        cells = len(p.scenarios) * len(p.algorithms)
+        table.add_row(
+            name,
+            f"{len(p.scenarios)} x {len(p.algorithms)}",
+            str(cells * p.scales["smoke"].runs),
+            f"{cells * p.scales['paper'].runs:,}",
+            p.description,
+        )
+    out.print(table)
+
+
+@bench_app.command("run")
+def run(
+    plan: Annotated[str, typer.Argument(help="Plan name (see `uavplan bench list`).")],
+    scale: Annotated[str, typer.Option(help="smoke (CI) or paper (full).")] = "smoke",
+    runs: Annotated[int | None, typer.Option(help="Runs per cell (overrides the scale).")] = None,
+    iterations: Annotated[int | None, typer.Option(help="Iterations per run.")] = None,
+    out_dir: Annotated[Path | None, typer.Option("--out", help="Results folder.")] = None,
+    workers: Annotated[int | None, typer.Option(help="Worker processes [all cores].")] = None,
+    scheduler: Annotated[
+        str | None, typer.Option(help="Dask scheduler address, e.g. tcp://HOST:8786.")
+    ] = None,
+    executor: Annotated[str, typer.Option(help="process, serial or dask.")] = "process",
+    seed: Annotated[int, typer.Option(help="Root seed.")] = 0,
+    retry_failed: Annotated[bool, typer.Option(help="Run again runs that failed.")] = False,
+    report: Annotated[bool, typer.Option(help="Write the report when done.")] = True,
+) -> None:
+    """Run PLAN; finished runs in --out are skipped, so the same command resumes a sweep."""
+    from uavplan.bench.plans import PlanError, get_plan
+    from uavplan.bench.runner import Progress as SweepProgress
+    from uavplan.bench.runner import SweepInterrupted, run_sweep
+
+    try:
+        p = get_plan(plan)
+        p.runs(scale, runs, seed, iterations)  # validate before starting anything
+    except PlanError as exc:
+        raise _fail(str(exc)) from None
+    if scheduler:
+        executor = "dask"
+    folder = out_dir or Path("results") / f"{plan}-{scale}"
+    with Progress(
+        TextColumn(f"[bold]{plan}[/bold] {scale}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[info]}"),
+        TimeElapsedColumn(),
+        console=err,
+        transient=False,
+    ) as bar:
+        tid = bar.add_task("runs", total=None, info="starting")
+
+        def on_progress(pr: SweepProgress) -> None:
+            eta = f"{pr.eta:,.0f} s left" if pr.eta is not None else ""
+            bar.update(
+                tid,
+                total=pr.total,
+                completed=pr.skipped + pr.done,
+                info=f"{pr.failed} failed  {eta}",
+            )
+
+        try:
+            summary = run_sweep(
+                p,
+                folder,
+                scale,
+                runs,
+                iterations,
+                seed,
+                executor,
+                workers,
+                scheduler,
+                on_progress,
+                retry_failed,
+            )
+        except SweepInterrupted as exc:
+            raise _fail(str(exc), 130) from None
+        except (OSError, RuntimeError, ValueError) as exc:
+            raise _fail(f"bench run {plan}: {exc}", 1) from None
+    out.print(
+        f"{summary.executed} runs done, {summary.skipped} already finished, "
+        f"{summary.failed} failed, in {summary.wall_time:.1f} s on {summary.workers} "
+        f"{summary.executor} worker(s); results in {folder}"
+    )
+    if summary.overhead is not None and summary.executed:
+        out.print(f"runner overhead: {100 * summary.overhead:.1f} % of the runs' compute time")
+    for line in summary.failures[:20]:
+        err.print(f"failed: {line}", markup=False, highlight=False)
+    if len(summary.failures) > 20:
+        err.print(f"... and {len(summary.failures) - 20} more failures")
+    if report:
+        from uavplan.bench.report import write_report
+
+        paths = write_report(folder)
+        out.print(f"report: {paths[0]}")
+    if summary.failed:
+        raise typer.Exit(1)
+
+
+def report(
+    folder: Annotated[Path, typer.Argument(help="A results folder written by `bench run`.")],
+) -> None:
+    """Write FOLDER/report.html (self-contained) and FOLDER/report.md, figures as PNG."""
+    from uavplan.bench.report import write_report
+
+    if not (folder / "runs").is_dir():
+        raise _fail(f"{folder}: not a results folder (no runs/ inside)")
+    html_path, md_path = write_report(folder)
+    out.print(f"wrote {html_path} and {md_path}")

@@ -1,0 +1,170 @@
+"""``uavplan scenario ...`` commands (list, show, export, schema, check).
+
+Any problem with a scenario file is printed to stderr, one line per problem, and the command exits
+with code 2 (no traceback).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+from typing import Annotated, TypeVar
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.table import Table
+from rich.text import Text
+
+from uavplan.io.scenario_file import ScenarioFileError, save_scenario, schema
+from uavplan.world import Scenario
+
+scenario_app = typer.Typer(help="Built-in scenarios and scenario files.", no_args_is_help=True)
+
+T = TypeVar("T")
+
+
+def _fail(exc: ScenarioFileError) -> typer.Exit:
+    for line in exc.problems:
+        typer.echo(line, err=True)
+    return typer.Exit(code=2)
+
+
+def _run(fn: Callable[[], T]) -> T:
+    try:
+        return fn()
+    except ScenarioFileError as exc:
+        raise _fail(exc) from None
+
+
+def _console() -> Console:
+    return Console(highlight=False, soft_wrap=False)
+
+
+def _n(v: float) -> str:
+    """A number for people: at most 2 decimals, no trailing zeros."""
+    if not np.isfinite(v):
+        return "inf" if v > 0 else "-inf"
+    text = f"{v:.2f}".rstrip("0").rstrip(".")
+    return "0" if text == "-0" else text
+
+
+def _pt(p: tuple[float, ...] | list[float]) -> str:
+    return "[" + ", ".join(_n(float(v)) for v in p) + "]"
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}" + ("" if n == 1 else "s")
+
+
+def summary_lines(s: Scenario) -> list[str]:
+    """The ``scenario show`` summary of a scenario, as plain text lines."""
+    lines = [f"scenario: {s.name} ({s.dim}-D)"]
+    if s.description:
+        lines.append(f"description: {' '.join(s.description.split())}")
+    if "source" in s.metadata:
+        lines.append(f"source: {s.metadata['source']}")
+    lines.append(f"bounds: {_pt(s.bounds.lower)} .. {_pt(s.bounds.upper)} m")
+    if s.terrain is None:
+        lines.append("terrain: none" + (" (flat, z = 0)" if s.dim == 3 else ""))
+    else:
+        ter = s.terrain
+        ny, nx = ter.shape
+        xmin, xmax, ymin, ymax = ter.extent
+        hmin, hmax = float(ter.heights.min()), float(ter.heights.max())
+        lines.append(
+            f"terrain: {ter.name}, {ny} x {nx} nodes (rows x columns), "
+            f"cell {_n(ter.dx)} x {_n(ter.dy)} m, "
+            f"extent x {_n(xmin)}..{_n(xmax)} m, y {_n(ymin)}..{_n(ymax)} m, "
+            f"heights {_n(hmin)}..{_n(hmax)} m"
+        )
+    n_inf = sum(1 for c in s.cylinders if c.infinite)
+    n_rev = sum(1 for u in s.uncertain_areas if u.revealed)
+    lines.append(
+        "obstacles: "
+        + ", ".join(
+            [
+                _plural(len(s.cylinders), "cylinder")
+                + (f" ({n_inf} infinite)" if s.cylinders else ""),
+                _plural(len(s.circles), "circle"),
+                _plural(len(s.polygons), "polygon"),
+                _plural(len(s.danger_areas), "danger area"),
+                _plural(len(s.uncertain_areas), "uncertain area")
+                + (f" ({n_rev} revealed)" if s.uncertain_areas else ""),
+                _plural(len(s.moving_obstacles), "moving obstacle"),
+            ]
+        )
+    )
+    if s.altitude is None:
+        lines.append("altitude band: none")
+    else:
+        ref = "above ground" if s.altitude.reference == "ground" else "absolute"
+        lines.append(f"altitude band: [{_n(s.altitude.min)}, {_n(s.altitude.max)}] m {ref}")
+    u = s.uav
+    lines.append(
+        f"uav: speed {_n(u.speed)} m/s, turn radius {_n(u.turn_radius)} m, s1 {_n(u.s1)} m, "
+        f"s2 {_n(u.s2)} m, size {_n(u.size)} m"
+    )
+    lines.append(f"planning: cost {s.cost}, {s.n_waypoints} waypoints")
+    lines.append(f"tasks ({len(s.tasks)}, absolute metres):")
+    for t in s.tasks:
+        extra = f" (leaves at {_n(t.start_time)} s)" if t.start_time else ""
+        lines.append(f"  {t.id}: {_pt(t.start)} -> {_pt(t.goal)}{extra}")
+    return lines
+
+
+@scenario_app.command("list")
+def list_cmd() -> None:
+    """List the built-in scenarios."""
+    from uavplan.scenarios import list_builtin
+
+    table = Table(title="Built-in scenarios", show_lines=True)
+    table.add_column("name", style="bold", no_wrap=True)
+    table.add_column("description")
+    for name, description in _run(list_builtin):
+        table.add_row(Text(name), Text(description))
+    _console().print(table)
+
+
+@scenario_app.command("show")
+def show_cmd(
+    name_or_file: Annotated[str, typer.Argument(help="A built-in scenario name or a file.")],
+) -> None:
+    """Summarise a scenario: bounds, terrain, obstacles, altitude band, UAV, tasks."""
+    from uavplan.scenarios import resolve
+
+    scenario = _run(lambda: resolve(name_or_file))
+    console = Console(highlight=False, soft_wrap=True)
+    for line in summary_lines(scenario):
+        console.print(Text(line))
+
+
+@scenario_app.command("export")
+def export_cmd(
+    name: Annotated[str, typer.Argument(help="A built-in scenario name (or a scenario file).")],
+    file: Annotated[Path, typer.Argument(help="Output file: .yaml/.yml (YAML) or .json (JSON).")],
+) -> None:
+    """Write a scenario to a file, YAML or JSON by the file's suffix."""
+    from uavplan.scenarios import resolve
+
+    scenario = _run(lambda: resolve(name))
+    written = _run(lambda: save_scenario(scenario, file))
+    typer.echo(f"wrote {written}")
+
+
+@scenario_app.command("schema")
+def schema_cmd() -> None:
+    """Print the JSON Schema of scenario files."""
+    typer.echo(json.dumps(schema(), indent=2))
+
+
+@scenario_app.command("check")
+def check_cmd(
+    file: Annotated[str, typer.Argument(help="A scenario file (or a built-in name).")],
+) -> None:
+    """Validate a scenario file: prints "ok", or every problem (exit code 2)."""
+    from uavplan.scenarios import resolve
+
+    _run(lambda: resolve(file))
+    typer.echo("ok")

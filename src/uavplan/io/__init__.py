@@ -1,0 +1,1 @@
+"""Reading and writing uavplan files (scenario files: :mod:`uavplan.io.scenario_file`)."""

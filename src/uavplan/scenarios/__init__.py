@@ -1,0 +1,81 @@
+"""Built-in scenarios, shipped as scenario files (``<name>.yaml`` beside this module).
+
+* ``spso``: the SPSO benchmark (Phung & Ha 2021) on its ChrismasTerrain DEM.
+* ``simple2d``: a small 2-D scene with circles and a non-convex polygon.
+* ``jacksboro``: a 3-D scene on the Jacksboro fault DEM with finite cylinders and areas.
+* ``topobathy``: a long sea-to-mountains mission on the Pacific Northwest DEM.
+
+:func:`resolve` takes a built-in name or a scenario file path.
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+
+import yaml
+
+from uavplan.io.scenario_file import ScenarioFileError, load_scenario
+from uavplan.world import Scenario
+
+__all__ = ["builtin_names", "builtin_path", "list_builtin", "load_builtin", "resolve"]
+
+
+def _dir() -> Path:
+    return Path(str(resources.files(__name__)))
+
+
+def builtin_names() -> list[str]:
+    """Names of the built-in scenarios, sorted."""
+    return sorted(p.stem for p in _dir().glob("*.yaml"))
+
+
+def builtin_path(name: str) -> Path:
+    """The YAML file of a built-in scenario.
+
+    Raises:
+        ScenarioFileError: no built-in of that name.
+    """
+    names = builtin_names()
+    if name not in names:
+        raise ScenarioFileError(
+            [f"{name}: no such built-in scenario (choose from {', '.join(names)})"]
+        )
+    return _dir() / f"{name}.yaml"
+
+
+def list_builtin() -> list[tuple[str, str]]:
+    """``(name, description)`` of every built-in scenario, sorted by name."""
+    out: list[tuple[str, str]] = []
+    for name in builtin_names():
+        data = yaml.safe_load((_dir() / f"{name}.yaml").read_text(encoding="utf-8"))
+        description = data.get("description", "") if isinstance(data, dict) else ""
+        out.append((name, " ".join(str(description).split())))
+    return out
+
+
+def load_builtin(name: str) -> Scenario:
+    """Load a built-in scenario by name (``metadata["builtin"]`` holds the name)."""
+    scenario = load_scenario(builtin_path(name))
+    scenario.metadata["builtin"] = name
+    return scenario
+
+
+def resolve(name_or_path: str | Path) -> Scenario:
+    """A built-in scenario by name, or else a scenario file by path.
+
+    Raises:
+        ScenarioFileError: neither a built-in name nor an existing file, or an invalid file.
+    """
+    text = str(name_or_path)
+    if text in builtin_names():
+        return load_builtin(text)
+    path = Path(name_or_path)
+    if path.exists():
+        return load_scenario(path)
+    raise ScenarioFileError(
+        [
+            f"{text}: no such scenario file, and not a built-in scenario "
+            f"(built-ins: {', '.join(builtin_names())})"
+        ]
+    )
