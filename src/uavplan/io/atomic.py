@@ -4,13 +4,18 @@ from __future__ import annotations
 
 import json
 import os
+import stat
 import tempfile
 from pathlib import Path
 from typing import Any
 
 
 def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
-    """Write ``data`` to ``path`` so that readers see the old file or the new one, never half."""
+    """Write ``data`` to ``path`` so that readers see the old file or the new one, never half.
+
+    An existing file keeps its permission bits. Raises ``OSError`` (and removes the temporary
+    file) if anything fails; the old file is then untouched.
+    """
     p = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
     try:
@@ -18,6 +23,7 @@ def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
             f.write(data)
             f.flush()
             os.fsync(f.fileno())
+        os.chmod(tmp, stat.S_IMODE(p.stat().st_mode) if p.exists() else 0o644)
         os.replace(tmp, p)
     except BaseException:
         if os.path.exists(tmp):

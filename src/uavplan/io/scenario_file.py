@@ -22,8 +22,6 @@ import difflib
 import json
 import math
 import os
-import stat
-import tempfile
 import types
 from collections.abc import Hashable, Mapping, Sequence
 from functools import cache
@@ -41,6 +39,7 @@ from pydantic import (
     model_validator,
 )
 
+from uavplan.io.atomic import write_text_atomic
 from uavplan.world import (
     UAV,
     AltitudeBand,
@@ -1160,25 +1159,9 @@ def _atomic_write(path: Path, text: str) -> None:
     if path.is_dir():
         raise ScenarioFileError([f"{where}: cannot write: it is a directory"])
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=parent)
+        write_text_atomic(path, text)
     except OSError as exc:
         raise ScenarioFileError([f"{where}: cannot write: {exc.strerror or exc}"]) from None
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        mode = stat.S_IMODE(path.stat().st_mode) if path.exists() else 0o644
-        os.chmod(tmp, mode)
-        os.replace(tmp, path)
-    except OSError as exc:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise ScenarioFileError([f"{where}: cannot write: {exc.strerror or exc}"]) from None
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
 
 
 def save_scenario(

@@ -128,7 +128,8 @@ Callback = Callable[["Optimizer"], bool | None]
 
 class Optimizer(ABC):
     """Ask/tell population optimizer. Subclasses set ``name`` and ``Config`` and implement
-    ``_initialize``, ``_ask`` and ``_tell``; all randomness comes from ``self.rng``.
+    ``_initialize``, ``_ask`` and ``_tell`` (and ``_setup`` to allocate state); all randomness
+    comes from ``self.rng``.
 
     ``init`` (keyword): an optional first population (pop_size, dim) used instead of uniform
     random points (e.g. paths seeded by RRT* or RGG), clipped to the box.
@@ -173,6 +174,11 @@ class Optimizer(ABC):
         self._pending: FloatArray | None = None
         self._initialized = False
         self.init = self._check_init(init)
+        self._setup()
+
+    def _setup(self) -> None:
+        """Hook: allocate the algorithm's state (called at the end of ``__init__``)."""
+        return None
 
     def _check_init(self, init: ArrayLike | None) -> FloatArray | None:
         """Validate a user-supplied first population (pop_size, dim); clip it to the box."""

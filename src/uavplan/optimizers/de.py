@@ -28,17 +28,15 @@ population ``u``; the evaluated ``X`` handed to :meth:`tell` is taken as that po
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
-from numpy.typing import ArrayLike
 
 from uavplan.optimizers.base import (
     FloatArray,
     Optimizer,
     OptimizerConfig,
     OptimizerError,
-    Problem,
     register,
 )
 
@@ -74,16 +72,7 @@ class DE(Optimizer):
     Config: ClassVar[type[OptimizerConfig]] = DEConfig
     config: DEConfig
 
-    def __init__(
-        self,
-        problem: Problem,
-        config: OptimizerConfig | None = None,
-        seed: int | np.random.SeedSequence | np.random.Generator | None = None,
-        *,
-        init: ArrayLike | None = None,
-        **overrides: Any,
-    ) -> None:
-        super().__init__(problem, config, seed=seed, init=init, **overrides)
+    def _setup(self) -> None:
         NP = self.config.pop_size
         self.x: FloatArray = np.empty((NP, self.dim))  # target vectors
         self.fx: FloatArray = np.full(NP, np.inf)  # their costs

@@ -35,17 +35,15 @@ before evaluating them).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
-from numpy.typing import ArrayLike
 
 from uavplan.optimizers.base import (
     FloatArray,
     Optimizer,
     OptimizerConfig,
     OptimizerError,
-    Problem,
     register,
 )
 
@@ -91,16 +89,7 @@ class GA(Optimizer):
     Config: ClassVar[type[OptimizerConfig]] = GAConfig
     config: GAConfig
 
-    def __init__(
-        self,
-        problem: Problem,
-        config: OptimizerConfig | None = None,
-        seed: int | np.random.SeedSequence | np.random.Generator | None = None,
-        *,
-        init: ArrayLike | None = None,
-        **overrides: Any,
-    ) -> None:
-        super().__init__(problem, config, seed=seed, init=init, **overrides)
+    def _setup(self) -> None:
         cfg = self.config
         self.p_m = cfg.mutation_rate if cfg.mutation_rate is not None else 1.0 / self.dim
         self.sigma = cfg.mutation_scale * (self.upper - self.lower)

@@ -32,17 +32,15 @@ points before evaluating them).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
-from numpy.typing import ArrayLike
 
 from uavplan.optimizers.base import (
     FloatArray,
     Optimizer,
     OptimizerConfig,
     OptimizerError,
-    Problem,
     register,
 )
 
@@ -81,16 +79,7 @@ class PSO(Optimizer):
     Config: ClassVar[type[OptimizerConfig]] = PSOConfig
     config: PSOConfig
 
-    def __init__(
-        self,
-        problem: Problem,
-        config: OptimizerConfig | None = None,
-        seed: int | np.random.SeedSequence | np.random.Generator | None = None,
-        *,
-        init: ArrayLike | None = None,
-        **overrides: Any,
-    ) -> None:
-        super().__init__(problem, config, seed=seed, init=init, **overrides)
+    def _setup(self) -> None:
         n, d = self.config.pop_size, self.dim
         self.v_max = self.config.velocity_fraction * (self.upper - self.lower)
         self.w = float(self.config.w)
