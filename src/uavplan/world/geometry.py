@@ -47,12 +47,15 @@ def _seg_point_dist(ax, ay, bx, by, cx, cy):  # pragma: no cover - numba
     return np.sqrt(dx * dx + dy * dy)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, error_model="numpy")
 def segment_cylinder_distance(paths, centers, z_lo, z_hi):  # pragma: no cover - numba
     """Horizontal distance from each cylinder axis to the part of each segment inside the
     cylinder's vertical extent ``[z_lo, z_hi]``; ``inf`` where no part of the segment is at
     those heights. Exact for vertical cylinders, finite or infinite (``z_lo=-inf, z_hi=inf``
     gives SPSO's 2-D point-to-segment distance).
+
+    The segment is ``a + t e``, t in [0, 1]; the heights clip t to ``[t0, t1]``; the closest
+    point to the axis is the xy projection parameter clamped to ``[t0, t1]``.
 
     Args:
         paths: (P, N, 3) float64.
@@ -68,37 +71,30 @@ def segment_cylinder_distance(paths, centers, z_lo, z_hi):  # pragma: no cover -
             ax = paths[p, s, 0]
             ay = paths[p, s, 1]
             az = paths[p, s, 2]
-            bx = paths[p, s + 1, 0]
-            by = paths[p, s + 1, 1]
-            bz = paths[p, s + 1, 2]
-            dz = bz - az
+            ex = paths[p, s + 1, 0] - ax
+            ey = paths[p, s + 1, 1] - ay
+            dz = paths[p, s + 1, 2] - az
+            ee = ex * ex + ey * ey
+            inv_ee = 1.0 / ee if ee > 0.0 else 0.0
+            flat = dz == 0.0
+            inv_dz = 1.0 / dz if not flat else 0.0
             for j in range(J):
-                lo = z_lo[j]
-                hi = z_hi[j]
-                t0 = 0.0
-                t1 = 1.0
-                if dz != 0.0:
-                    ta = (lo - az) / dz
-                    tb = (hi - az) / dz
-                    if ta > tb:
-                        ta, tb = tb, ta
-                    t0 = max(t0, ta)
-                    t1 = min(t1, tb)
-                elif az < lo or az > hi:
-                    t1 = -1.0
-                if t0 > t1:
-                    out[p, s, j] = np.inf
-                    continue
-                ex = bx - ax
-                ey = by - ay
-                out[p, s, j] = _seg_point_dist(
-                    ax + t0 * ex,
-                    ay + t0 * ey,
-                    ax + t1 * ex,
-                    ay + t1 * ey,
-                    centers[j, 0],
-                    centers[j, 1],
-                )
+                if flat:
+                    t0 = 0.0
+                    t1 = 1.0 if z_lo[j] <= az <= z_hi[j] else -1.0
+                else:
+                    ta = (z_lo[j] - az) * inv_dz
+                    tb = (z_hi[j] - az) * inv_dz
+                    t0 = max(0.0, min(ta, tb))
+                    t1 = min(1.0, max(ta, tb))
+                qx = centers[j, 0] - ax
+                qy = centers[j, 1] - ay
+                t = (qx * ex + qy * ey) * inv_ee
+                t = min(max(t, t0), t1)
+                rx = qx - t * ex
+                ry = qy - t * ey
+                d = np.sqrt(rx * rx + ry * ry)
+                out[p, s, j] = d if t0 <= t1 else np.inf
     return out
 
 
