@@ -5,8 +5,7 @@ optimization over continuous spaces", J. Global Optimization 11, 341-359, 1997. 
 vectors ``x_i`` (``i = 1..NP``):
 
 * mutation (Eq. 2): ``v_i = x_r1 + F (x_r2 - x_r3)``, ``r1, r2, r3`` distinct and distinct from
-  ``i``; drawn for all rows at once as the first three columns of the argsort of random keys with
-  the key of ``i`` set to +inf;
+  ``i``; drawn for all rows at once by :func:`distinct_indices` (uniform, O(NP));
 * binomial crossover (Eq. 4): ``u_ij = v_ij`` if ``randb(j) <= CR`` or ``j = rnbr(i)``
   (``j_rand``, one guaranteed mutant gene per row), else ``x_ij``;
 * selection: ``u_i`` replaces ``x_i`` if ``f(u_i) <= f(x_i)`` (greedy, one-to-one; ``<=`` lets
@@ -39,6 +38,23 @@ from uavplan.optimizers.base import (
     OptimizerError,
     register,
 )
+
+
+def distinct_indices(rng: np.random.Generator, n: int, k: int) -> np.ndarray:
+    """For every row ``i`` of ``n``, ``k`` distinct indices in ``[0, n)`` all different from ``i``,
+    uniformly, as an (n, k) int64 array (sequential sampling without replacement: draw from the
+    ``n - 1 - m`` indices left and step over the ones already taken, in increasing order)."""
+    if k > n - 1:
+        raise OptimizerError(f"need at least {k + 1} individuals, got {n}")
+    taken = np.arange(n, dtype=np.int64)[:, None]  # (n, 1): i itself
+    out = np.empty((n, k), dtype=np.int64)
+    for m in range(k):
+        r = rng.integers(0, n - 1 - m, size=n)
+        for c in np.sort(taken, axis=1).T:  # step over taken indices, smallest first
+            r = r + (r >= c)
+        out[:, m] = r
+        taken = np.concatenate([taken, r[:, None]], axis=1)
+    return out
 
 
 @dataclass(frozen=True)
@@ -89,10 +105,7 @@ class DE(Optimizer):
         NP, D = x.shape
         rows = np.arange(NP)
 
-        # r1, r2, r3: distinct, and distinct from i
-        keys = rng.random((NP, NP))
-        keys[rows, rows] = np.inf
-        r = self.r = np.argsort(keys, axis=1)[:, :3]
+        r = self.r = distinct_indices(rng, NP, 3)
         x_r1 = x[r[:, 0]]
         v = x_r1 + cfg.F * (x[r[:, 1]] - x[r[:, 2]])
 
