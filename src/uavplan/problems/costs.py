@@ -81,10 +81,14 @@ def threat_cost(dist: FloatArray, radius: FloatArray, s1: float) -> FloatArray:
     return np.asarray(tr.sum(axis=(1, 2)))
 
 
-def threat_cost_spso(dist: FloatArray, radius: FloatArray, drone_size: float = 1.0) -> FloatArray:
+def threat_cost_spso(
+    dist: FloatArray, radius: FloatArray, drone_size: float | FloatArray = 1.0
+) -> FloatArray:
     """SPSO's threat cost J2 (``MyCost.m``): d is the 2-D point-to-segment distance to the
     threat's centre (threats infinitely tall); collision (inf) if ``d < R + drone_size``; a linear
-    penalty ``(R + drone_size + danger) - d`` inside the danger band ``danger = 10 drone_size``."""
+    penalty ``(R + drone_size + danger) - d`` inside the danger band ``danger = 10 drone_size``.
+    ``drone_size`` may be given per threat, (J,)."""
+    drone_size = np.asarray(drone_size, dtype=np.float64)
     R = np.asarray(radius, dtype=np.float64) + drone_size
     danger = 10.0 * drone_size
     cost = np.where(dist > R + danger, 0.0, (R + danger) - dist)

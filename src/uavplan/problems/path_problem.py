@@ -130,10 +130,9 @@ def _t_threat(ctx: Context) -> FloatArray:
 
 
 def _t_threat_spso(ctx: Context) -> FloatArray:
-    # SPSO adds drone_size itself: use the bare radii; the cylinder margin is the drone size.
+    # SPSO adds drone_size itself: use the bare radii; each cylinder's margin is the drone size.
     p = ctx.problem
-    size = float(p._cyl_margin.max()) if len(p._cyl_margin) else ctx.scenario.uav.size
-    return C.threat_cost_spso(ctx.cyl_dist, p._cyl_radii - p._cyl_margin, size)
+    return C.threat_cost_spso(ctx.cyl_dist, p._cyl_radii - p._cyl_margin, p._cyl_margin)
 
 
 def _band_heights(ctx: Context) -> FloatArray:

@@ -77,23 +77,26 @@ def _clip_to_grid(u0, v0, du, dv, ncx, ncy):  # pragma: no cover - numba
     """Parameter interval [ta, tb] of the segment inside the grid rectangle [0,ncx] x [0,ncy]."""
     ta = 0.0
     tb = 1.0
+    edge_lo = 0.0
+    hx = float(ncx)
+    hy = float(ncy)
     if du != 0.0:
-        t1 = (0.0 - u0) / du
-        t2 = (ncx - u0) / du
+        t1 = (edge_lo - u0) / du
+        t2 = (hx - u0) / du
         lo = min(t1, t2)
         hi = max(t1, t2)
         ta = max(ta, lo)
         tb = min(tb, hi)
-    elif u0 < 0.0 or u0 > ncx:
+    elif u0 < edge_lo or u0 > hx:
         return 1.0, 0.0
     if dv != 0.0:
-        t1 = (0.0 - v0) / dv
-        t2 = (ncy - v0) / dv
+        t1 = (edge_lo - v0) / dv
+        t2 = (hy - v0) / dv
         lo = min(t1, t2)
         hi = max(t1, t2)
         ta = max(ta, lo)
         tb = min(tb, hi)
-    elif v0 < 0.0 or v0 > ncy:
+    elif v0 < edge_lo or v0 > hy:
         return 1.0, 0.0
     return ta, tb
 
@@ -250,7 +253,8 @@ def mean_height_batch(H, u, v):  # pragma: no cover - numba
     """Exact mean of the bilinear terrain along the xy projection of each segment, (P, N - 1).
 
     The mean is over the segment parameter (uniform in xy arc length); a vertical segment gives
-    the height at its point. Parts outside the grid use the nearest edge cell's interpolant.
+    the height at its point. Off the grid the terrain is the nearest edge point's height, as in
+    :meth:`Terrain.height`.
     """
     P, N = u.shape
     ncy = H.shape[0] - 1
@@ -293,21 +297,35 @@ def mean_height_batch(H, u, v):  # pragma: no cover - numba
                 a = tsorted[q]
                 b = tsorted[q + 1]
                 tm = 0.5 * (a + b)
-                ci = min(max(int(np.floor(u0 + du * tm)), 0), ncx - 1)
-                cj = min(max(int(np.floor(v0 + dv * tm)), 0), ncy - 1)
+                um = u0 + du * tm
+                vm = v0 + dv * tm
+                ci = min(max(int(np.floor(um)), 0), ncx - 1)
+                cj = min(max(int(np.floor(vm)), 0), ncy - 1)
                 h00 = H[cj, ci]
                 bx = H[cj, ci + 1] - h00
                 by = H[cj + 1, ci] - h00
                 cc = h00 - H[cj, ci + 1] - H[cj + 1, ci] + H[cj + 1, ci + 1]
+                # local coordinates s(t) = s0 + su t, r(t) = r0 + rv t; off the grid the
+                # terrain is clamped to the edge (as Terrain.height), so s or r is constant
                 s0 = u0 - ci
+                su = du
+                if um < 0.0 or um > ncx:
+                    s0 = 0.0 if um < 0.0 else 1.0
+                    su = 0.0
                 r0 = v0 - cj
+                rv = dv
+                if vm < 0.0 or vm > ncy:
+                    r0 = 0.0 if vm < 0.0 else 1.0
+                    rv = 0.0
                 qa = h00 + bx * s0 + by * r0 + cc * s0 * r0
-                qb = bx * du + by * dv + cc * (s0 * dv + r0 * du)
-                qc = cc * du * dv
+                qb = bx * su + by * rv + cc * (s0 * rv + r0 * su)
+                qc = cc * su * rv
                 total += qa * (b - a) + qb * (b * b - a * a) / 2.0 + qc * (b**3 - a**3) / 3.0
             if du == 0.0 and dv == 0.0:
-                ci = min(max(int(np.floor(u0)), 0), ncx - 1)
-                cj = min(max(int(np.floor(v0)), 0), ncy - 1)
-                total = _bilinear_cell(H, ci, cj, u0 - ci, v0 - cj)
+                uc = min(max(u0, 0.0), float(ncx))
+                vc = min(max(v0, 0.0), float(ncy))
+                ci = min(int(np.floor(uc)), ncx - 1)
+                cj = min(int(np.floor(vc)), ncy - 1)
+                total = _bilinear_cell(H, ci, cj, uc - ci, vc - cj)
             out[p, s] = total
     return out

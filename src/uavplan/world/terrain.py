@@ -84,6 +84,13 @@ class Terrain:
         v = (np.asarray(y, dtype=np.float64) - self.y0) / self.dy
         return u, v
 
+    def _uv_snapped(self, x: ArrayLike, y: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Cell coordinates with points on the grid's edge, up to rounding, put exactly on it
+        (``(ymax - y0) / dy`` can come out as ``ny - 1 + 4e-15``: still on the edge)."""
+        u, v = self._uv(x, y)
+        ny, nx = self.heights.shape
+        return _snap_edges(u, nx - 1), _snap_edges(v, ny - 1)
+
     def height(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
         """Bilinear terrain height at any array of points (broadcast ``x`` with ``y``).
 
@@ -111,8 +118,8 @@ class Terrain:
         u, v = self._uv(x, y)
         u, v = np.broadcast_arrays(u, v)
         ny, nx = self.heights.shape
-        i = np.clip(np.floor(u + 0.5).astype(np.intp), 0, nx - 1)
-        j = np.clip(np.floor(v + 0.5).astype(np.intp), 0, ny - 1)
+        i = np.clip(_round_half_up(u), 0, nx - 1)
+        j = np.clip(_round_half_up(v), 0, ny - 1)
         return np.asarray(self.heights[j, i])
 
     def lookup(self, x: ArrayLike, y: ArrayLike, method: str = "bilinear") -> FloatArray:
@@ -156,7 +163,7 @@ class Terrain:
 
     def _min_clearance(self, paths: ArrayLike, cap: float, stop_below: bool) -> FloatArray:
         p = np.asarray(paths, dtype=np.float64)
-        u, v = self._uv(p[..., 0], p[..., 1])
+        u, v = self._uv_snapped(p[..., 0], p[..., 1])
         flat, off, shp = self._pyramid
         return np.asarray(
             tk.min_clearance_batch(
@@ -175,7 +182,7 @@ class Terrain:
     def max_clearance(self, paths: ArrayLike) -> FloatArray:
         """Exact maximum of ``z - h(x, y)`` along every segment, (pop, n_points - 1) metres."""
         p = np.asarray(paths, dtype=np.float64)
-        u, v = self._uv(p[..., 0], p[..., 1])
+        u, v = self._uv_snapped(p[..., 0], p[..., 1])
         neg, (flat, off, shp) = self._neg
         out = tk.min_clearance_batch(
             neg,
@@ -271,6 +278,19 @@ class Terrain:
         except Exception as exc:  # a corrupt or foreign file: say which and why
             raise TerrainError(f"cannot read DEM file {str(p)!r}: {exc}") from exc
         raise TerrainError(f"DEM file {str(p)!r}: unsupported type {suffix!r} (.tif, .npy, .npz)")
+
+
+def _snap_edges(u: FloatArray, n: int) -> FloatArray:
+    tol = 64.0 * np.finfo(np.float64).eps * max(1.0, float(n))
+    u = np.where(np.abs(u) <= tol, 0.0, u)
+    return np.asarray(np.where(np.abs(u - n) <= tol, float(n), u))
+
+
+def _round_half_up(u: FloatArray) -> NDArray[np.intp]:
+    """Round halves away from zero for u >= 0 (MATLAB ``round``), exact for every float
+    (``floor(u + 0.5)`` is not: 0.49999999999999994 + 0.5 rounds to 1.0)."""
+    f = np.floor(u)
+    return np.asarray((f + (u - f >= 0.5)).astype(np.intp))
 
 
 def _read_tiff(path: Path) -> tuple[np.ndarray, dict[int, Any]]:

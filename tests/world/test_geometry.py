@@ -1,0 +1,435 @@
+"""Geometry kernels against their NumPy references and against brute-force dense sampling."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from matplotlib.path import Path as MplPath
+
+from uavplan.world import Circle, MovingObstacle, Polygon
+from uavplan.world.geometry import (
+    pack_polygons,
+    point_in_polygon,
+    point_segment_distance_2d,
+    segment_circle_inside_fraction,
+    segment_cylinder_distance,
+    segment_cylinder_distance_reference,
+    segment_polygon_distance,
+    segment_polygon_inside_fraction,
+    timed_path_min_distance,
+)
+
+SEEDS = st.integers(0, 2**32 - 1)
+FAST = settings(max_examples=40, deadline=None)
+N_SAMPLES = 4000
+
+
+# ----------------------------------------------------------------------------- helpers
+def random_paths(rng: np.random.Generator, P: int, N: int, box: float = 10.0) -> np.ndarray:
+    """(P, N, 3) polylines with some horizontal, vertical, zero-length and axis-aligned segments."""
+    p = rng.uniform(-box, box, (P, N, 3))
+    for q in range(P):
+        for s in range(N - 1):
+            mode = rng.integers(8)
+            if mode == 0:  # horizontal
+                p[q, s + 1, 2] = p[q, s, 2]
+            elif mode == 1:  # vertical
+                p[q, s + 1, :2] = p[q, s, :2]
+            elif mode == 2:  # zero length
+                p[q, s + 1] = p[q, s]
+            elif mode == 3:  # at an integer height (the cylinders' z ranges are integers)
+                p[q, s, 2] = p[q, s + 1, 2] = float(rng.integers(-5, 6))
+    return p
+
+
+def random_cylinders(rng: np.random.Generator, J: int, box: float = 10.0):
+    centers = rng.uniform(-box, box, (J, 2))
+    lo = np.full(J, -np.inf)
+    hi = np.full(J, np.inf)
+    for j in range(J):
+        kind = rng.integers(4)
+        a, b = sorted(rng.integers(-6, 7, 2).astype(float))
+        b = b + 1.0
+        if kind == 1:
+            lo[j], hi[j] = a, b
+        elif kind == 2:
+            lo[j] = a
+        elif kind == 3:
+            hi[j] = b
+    return centers, lo, hi
+
+
+def sampled_cylinder_distance(a, b, c, lo, hi, n=N_SAMPLES):
+    """Min horizontal distance from c over sampled points of a->b whose z is in [lo, hi]."""
+    t = np.linspace(0.0, 1.0, n)
+    p = a + t[:, None] * (b - a)
+    keep = (p[:, 2] >= lo) & (p[:, 2] <= hi)
+    if not keep.any():
+        return math.inf
+    return float(np.hypot(p[keep, 0] - c[0], p[keep, 1] - c[1]).min())
+
+
+def z_interval(a, b, lo, hi) -> tuple[float, float] | None:
+    """Parameter interval of a->b whose z lies in [lo, hi] (written from scratch)."""
+    za, zb = a[2], b[2]
+    if za == zb:
+        return (0.0, 1.0) if lo <= za <= hi else None
+    ts = sorted(((lo - za) / (zb - za), (hi - za) / (zb - za)))
+    t0, t1 = max(0.0, ts[0]), min(1.0, ts[1])
+    return (t0, t1) if t0 <= t1 else None
+
+
+def convex_polygon(rng: np.random.Generator) -> np.ndarray:
+    k = int(rng.integers(3, 9))
+    ang = np.sort(rng.uniform(0, 2 * np.pi, k))
+    r = rng.uniform(1.0, 5.0)
+    c = rng.uniform(-6, 6, 2)
+    v = c + r * np.stack([np.cos(ang), np.sin(ang)], -1)
+    if rng.integers(2):
+        v = v[::-1]  # either orientation
+    return v
+
+
+def star_polygon(rng: np.random.Generator) -> np.ndarray:
+    """A simple, non-convex star: angles sorted, radii alternating big and small."""
+    k = int(rng.integers(3, 8))
+    ang = np.sort(rng.uniform(0, 2 * np.pi, 2 * k))
+    r = np.where(
+        np.arange(2 * k) % 2 == 0, rng.uniform(3.0, 6.0, 2 * k), rng.uniform(0.5, 2.0, 2 * k)
+    )
+    c = rng.uniform(-5, 5, 2)
+    return c + r[:, None] * np.stack([np.cos(ang), np.sin(ang)], -1)
+
+
+def random_polygon(rng: np.random.Generator) -> np.ndarray:
+    return convex_polygon(rng) if rng.integers(2) else star_polygon(rng)
+
+
+def dist_to_polygon(points: np.ndarray, verts: np.ndarray) -> np.ndarray:
+    """Brute force: 0 inside (matplotlib's test), else the distance to the nearest edge."""
+    a = verts
+    b = np.roll(verts, -1, axis=0)
+    d = point_segment_distance_2d(a, b, points).min(axis=0)
+    inside = MplPath(verts).contains_points(points)
+    return np.where(inside, 0.0, d)
+
+
+# ----------------------------------------------------------------------------- cylinders
+@FAST
+@given(seed=SEEDS, P=st.integers(1, 4), N=st.integers(2, 6), J=st.integers(1, 6))
+def test_cylinder_distance_numba_equals_reference(seed: int, P: int, N: int, J: int) -> None:
+    rng = np.random.default_rng(seed)
+    paths = random_paths(rng, P, N)
+    centers, lo, hi = random_cylinders(rng, J)
+    got = segment_cylinder_distance(paths, centers, lo, hi)
+    ref = segment_cylinder_distance_reference(paths, centers, lo, hi)
+    assert got.shape == ref.shape == (P, N - 1, J)
+    np.testing.assert_array_equal(np.isinf(got), np.isinf(ref))
+    np.testing.assert_allclose(got, ref, rtol=1e-12, atol=1e-12)
+
+
+@FAST
+@given(seed=SEEDS)
+def test_cylinder_distance_vs_dense_sampling(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    paths = random_paths(rng, 3, 5)
+    centers, lo, hi = random_cylinders(rng, 5)
+    got = segment_cylinder_distance(paths, centers, lo, hi)
+    step = 1.0 / (N_SAMPLES - 1)
+    for q in range(3):
+        for s in range(4):
+            a, b = paths[q, s], paths[q, s + 1]
+            lxy = math.hypot(*(b[:2] - a[:2]))
+            for j in range(5):
+                d = float(got[q, s, j])
+                sampled = sampled_cylinder_distance(a, b, centers[j], lo[j], hi[j])
+                iv = z_interval(a, b, lo[j], hi[j])
+                if iv is None:
+                    assert d == math.inf
+                    assert sampled == math.inf
+                    continue
+                assert math.isfinite(d)
+                if sampled == math.inf:  # the in-range part is shorter than a sample step
+                    assert iv[1] - iv[0] < step
+                    continue
+                assert sampled >= d - 1e-12
+                assert sampled - d <= lxy * step + 1e-12
+
+
+@FAST
+@given(seed=SEEDS, P=st.integers(1, 4), N=st.integers(2, 6), J=st.integers(1, 5))
+def test_infinite_cylinders_equal_spso_point_segment_distance(
+    seed: int, P: int, N: int, J: int
+) -> None:
+    rng = np.random.default_rng(seed)
+    paths = random_paths(rng, P, N)
+    centers = rng.uniform(-10, 10, (J, 2))
+    inf = np.full(J, np.inf)
+    got = segment_cylinder_distance(paths, centers, -inf, inf)
+    want = point_segment_distance_2d(paths[:, :-1, :2], paths[:, 1:, :2], centers)
+    assert want.shape == (P, N - 1, J)
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
+    # and the 2-D distance is SPSO's DistP2S, computed the MATLAB way
+    for q in range(P):
+        for s in range(N - 1):
+            for j in range(J):
+                assert got[q, s, j] == pytest.approx(
+                    dist_p2s(centers[j], paths[q, s, :2], paths[q, s + 1, :2]), rel=1e-9, abs=1e-9
+                )
+
+
+def dist_p2s(x, a, b) -> float:
+    """SPSO's DistP2S.m, line by line."""
+    d_ab = float(np.linalg.norm(a - b))
+    d_ax = float(np.linalg.norm(a - x))
+    d_bx = float(np.linalg.norm(b - x))
+    if d_ab != 0:
+        if np.dot(a - b, x - b) * np.dot(b - a, x - a) >= 0:
+            A = np.array([b - a, x - a])
+            return abs(float(np.linalg.det(A))) / d_ab
+        return min(d_ax, d_bx)
+    return d_ax
+
+
+def test_cylinder_distance_vertical_clipping_cases() -> None:
+    c = np.array([[0.0, 0.0]])
+    lo, hi = np.array([0.0]), np.array([10.0])
+    # climbs through the cylinder's top: only the part below z = 10 counts (x from -10 to 0)
+    p = np.array([[[-10.0, 3.0, 0.0], [10.0, 3.0, 20.0]]])
+    assert segment_cylinder_distance(p, c, lo, hi)[0, 0, 0] == pytest.approx(3.0)
+    p = np.array([[[-10.0, 3.0, 5.0], [-2.0, 3.0, 15.0]]])  # leaves the range at x = -6
+    assert segment_cylinder_distance(p, c, lo, hi)[0, 0, 0] == pytest.approx(math.hypot(6.0, 3.0))
+    # entirely above / below
+    p = np.array([[[-10.0, 0.0, 11.0], [10.0, 0.0, 30.0]], [[-1.0, 0.0, -1.0], [1.0, 0.0, -0.5]]])
+    np.testing.assert_array_equal(segment_cylinder_distance(p, c, lo, hi)[:, 0, 0], np.inf)
+    # horizontal, exactly at the top and bottom faces: inside the closed range
+    p = np.array([[[-10.0, 2.0, 10.0], [10.0, 2.0, 10.0]], [[-10.0, 2.0, 0.0], [10.0, 2.0, 0.0]]])
+    np.testing.assert_allclose(segment_cylinder_distance(p, c, lo, hi)[:, 0, 0], 2.0)
+    np.testing.assert_allclose(segment_cylinder_distance_reference(p, c, lo, hi)[:, 0, 0], 2.0)
+    # touching the top at one end only
+    p = np.array([[[5.0, 0.0, 10.0], [-5.0, 0.0, 20.0]]])
+    assert segment_cylinder_distance(p, c, lo, hi)[0, 0, 0] == pytest.approx(5.0)
+    # vertical segment through the range; zero-length inside and outside the range
+    p = np.array([[[1.0, 1.0, -5.0], [1.0, 1.0, 50.0]], [[1.0, 1.0, 5.0], [1.0, 1.0, 5.0]]])
+    np.testing.assert_allclose(segment_cylinder_distance(p, c, lo, hi)[:, 0, 0], math.sqrt(2))
+    p = np.array([[[1.0, 1.0, 50.0], [1.0, 1.0, 50.0]]])
+    assert segment_cylinder_distance(p, c, lo, hi)[0, 0, 0] == math.inf
+
+
+# ----------------------------------------------------------------------------- circles
+@FAST
+@given(seed=SEEDS)
+def test_circle_inside_fraction_vs_dense_sampling(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    P, N, J = 3, 5, 4
+    paths = random_paths(rng, P, N)
+    centers = rng.uniform(-8, 8, (J, 2))
+    radii = rng.uniform(0.5, 6.0, J)
+    got = segment_circle_inside_fraction(paths, centers, radii)
+    assert got.shape == (P, N - 1, J)
+    assert np.all((got >= 0.0) & (got <= 1.0))
+    t = (np.arange(N_SAMPLES) + 0.5) / N_SAMPLES
+    for q in range(P):
+        for s in range(N - 1):
+            a, b = paths[q, s], paths[q, s + 1]
+            pts = a[:2] + t[:, None] * (b[:2] - a[:2])
+            for j in range(J):
+                inside = np.hypot(*(pts - centers[j]).T) < radii[j]
+                assert got[q, s, j] == pytest.approx(inside.mean(), abs=2.0 / N_SAMPLES + 1e-12)
+
+
+def test_circle_inside_fraction_exact_cases() -> None:
+    c, r = np.array([[0.0, 0.0]]), np.array([1.0])
+    p = np.array(
+        [
+            [[-2.0, 0.0, 0.0], [2.0, 0.0, 9.0]],  # diameter: half of the segment
+            [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0]],  # from the centre out
+            [[-0.5, 0.0, 0.0], [0.5, 0.0, 0.0]],  # fully inside
+            [[-2.0, 1.0, 0.0], [2.0, 1.0, 0.0]],  # tangent
+            [[-2.0, 3.0, 0.0], [2.0, 3.0, 0.0]],  # outside
+            [[0.2, 0.2, 0.0], [0.2, 0.2, 5.0]],  # vertical, inside: point-like ground track
+            [[3.0, 0.2, 0.0], [3.0, 0.2, 5.0]],  # vertical, outside
+        ]
+    )
+    got = segment_circle_inside_fraction(p, c, r)[:, 0, 0]
+    np.testing.assert_allclose(got, [0.5, 0.5, 1.0, 0.0, 0.0, 1.0, 0.0], atol=1e-15)
+
+
+# ----------------------------------------------------------------------------- polygons
+@FAST
+@given(seed=SEEDS)
+def test_point_in_polygon_vs_matplotlib(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    verts = random_polygon(rng)
+    pts = rng.uniform(-12, 12, (500, 2))
+    # points on (or within rounding of) the boundary may go either way
+    d_edge = point_segment_distance_2d(verts, np.roll(verts, -1, axis=0), pts).min(axis=0)
+    ok = d_edge > 1e-9
+    got = point_in_polygon(pts, verts)
+    want = MplPath(verts).contains_points(pts)
+    np.testing.assert_array_equal(got[ok], want[ok])
+    np.testing.assert_array_equal(Polygon(tuple(map(tuple, verts))).contains(pts)[ok], want[ok])
+    # broadcasting over leading axes
+    assert point_in_polygon(pts.reshape(20, 25, 2), verts).shape == (20, 25)
+
+
+@FAST
+@given(seed=SEEDS)
+def test_segment_polygon_distance_vs_brute_force(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    polys = [random_polygon(rng) for _ in range(3)]
+    verts, starts = pack_polygons(polys)
+    paths = random_paths(rng, 3, 4)
+    got = segment_polygon_distance(paths, verts, starts)
+    assert got.shape == (3, 3, 3)
+    t = np.linspace(0.0, 1.0, N_SAMPLES)
+    for q in range(3):
+        for s in range(3):
+            a, b = paths[q, s, :2], paths[q, s + 1, :2]
+            pts = a + t[:, None] * (b - a)
+            lxy = float(np.hypot(*(b - a)))
+            for k, poly in enumerate(polys):
+                d = float(got[q, s, k])
+                sampled = dist_to_polygon(pts, poly)
+                assert d >= 0.0
+                assert sampled.min() >= d - 1e-9
+                assert sampled.min() - d <= lxy / (N_SAMPLES - 1) + 1e-9
+                if (sampled == 0.0).any():  # some sampled point is inside: it crosses
+                    assert d == 0.0
+
+
+def test_segment_polygon_distance_zero_exactly_when_crossing() -> None:
+    # an L-shaped (non-convex) polygon; a segment in its notch misses it
+    L = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 1.0], [1.0, 1.0], [1.0, 4.0], [0.0, 4.0]])
+    verts, starts = pack_polygons([L])
+    p = np.array(
+        [
+            [[2.0, 2.0, 0.0], [3.0, 3.0, 0.0]],  # in the notch, outside
+            [[2.0, 2.0, 0.0], [2.0, -1.0, 0.0]],  # crosses the lower arm
+            [[0.5, 0.5, 0.0], [0.6, 0.6, 0.0]],  # entirely inside
+            [[-1.0, 5.0, 0.0], [5.0, 5.0, 0.0]],  # above, 1 away
+            [[2.0, 1.0 + 1e-9, 0.0], [3.0, 1.0 + 1e-9, 0.0]],  # just outside an inner edge
+            [[3.0, 2.0, 0.0], [5.0, 0.0, 0.0]],  # touches the outer corner (4, 1) only
+        ]
+    )
+    got = segment_polygon_distance(p, verts, starts)[:, 0, 0]
+    assert got[0] == pytest.approx(1.0)  # to the inner edge x = 1
+    assert got[1] == 0.0
+    assert got[2] == 0.0
+    assert got[3] == pytest.approx(1.0)
+    assert 0.0 < got[4] <= 1.1e-9
+    assert got[5] == 0.0
+
+
+@FAST
+@given(seed=SEEDS)
+def test_segment_polygon_inside_fraction_vs_dense_sampling(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    polys = [random_polygon(rng) for _ in range(3)]
+    verts, starts = pack_polygons(polys)
+    paths = random_paths(rng, 3, 4)
+    got = segment_polygon_inside_fraction(paths, verts, starts)
+    assert got.shape == (3, 3, 3)
+    assert np.all((got >= 0.0) & (got <= 1.0 + 1e-12))
+    t = (np.arange(N_SAMPLES) + 0.5) / N_SAMPLES
+    for q in range(3):
+        for s in range(3):
+            a, b = paths[q, s, :2], paths[q, s + 1, :2]
+            pts = a + t[:, None] * (b - a)
+            for k, poly in enumerate(polys):
+                inside = MplPath(poly).contains_points(pts).mean()
+                tol = (len(poly) + 1) / N_SAMPLES + 1e-12  # each edge crossing costs a sample
+                assert got[q, s, k] == pytest.approx(inside, abs=tol)
+
+
+def test_segment_polygon_inside_fraction_exact_cases() -> None:
+    square = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]])
+    verts, starts = pack_polygons([square, square + 10.0])
+    p = np.array(
+        [
+            [[-1.0, 1.0], [3.0, 1.0]],  # half inside the first
+            [[1.0, 1.0], [1.5, 1.5]],  # inside the first
+            [[1.0, 1.0], [11.0, 11.0]],  # from the first into the second
+        ]
+    )
+    got = segment_polygon_inside_fraction(p, verts, starts)[:, 0]
+    np.testing.assert_allclose(got, [[0.5, 0.0], [1.0, 0.0], [0.1, 0.1]], atol=1e-12)
+
+
+# ----------------------------------------------------------------------------- moving obstacles
+def sampled_timed_distance(a, b, ta, tb, obs: MovingObstacle, n=2000) -> float:
+    t = np.linspace(ta, tb, n)
+    w = (t - ta) / (tb - ta) if tb > ta else np.zeros(n)
+    p = a + w[:, None] * (b - a)
+    q = obs.position_at(t)
+    return float(np.linalg.norm(p - q, axis=1).min())
+
+
+@FAST
+@given(seed=SEEDS, K=st.integers(1, 6), N=st.integers(2, 7))
+def test_timed_path_min_distance_vs_dense_time_sampling(seed: int, K: int, N: int) -> None:
+    rng = np.random.default_rng(seed)
+    P = 3
+    obs_t = np.cumsum(rng.uniform(0.2, 3.0, K)) + rng.uniform(-2.0, 2.0)
+    obs_xyz = rng.uniform(-10, 10, (K, 3))
+    obs = MovingObstacle(1.0, obs_t, obs_xyz)
+    paths = rng.uniform(-10, 10, (P, N, 3))
+    # times from well before the obstacle's first knot to well after its last, some repeated
+    # (zero-duration segments), segments spanning several obstacle knots
+    dts = rng.choice([0.0, 0.3, 1.0, 4.0], (P, N - 1))
+    times = np.concatenate([np.zeros((P, 1)), np.cumsum(dts, axis=1)], axis=1)
+    times += rng.uniform(obs_t[0] - 5.0, obs_t[-1] + 1.0, (P, 1))
+    got = timed_path_min_distance(paths, times, obs_t, obs_xyz)
+    assert got.shape == (P, N - 1)
+    np.testing.assert_array_equal(obs.min_distance(paths, times), got)
+    vmax = float(
+        np.max(np.linalg.norm(np.diff(obs_xyz, axis=0), axis=1) / np.diff(obs_t), initial=0.0)
+    )
+    for q in range(P):
+        for s in range(N - 1):
+            a, b = paths[q, s], paths[q, s + 1]
+            ta, tb = times[q, s], times[q, s + 1]
+            sampled = sampled_timed_distance(a, b, ta, tb, obs)
+            d = float(got[q, s])
+            assert sampled >= d - 1e-9
+            vpath = float(np.linalg.norm(b - a)) / (tb - ta) if tb > ta else 0.0
+            assert sampled - d <= (vpath + vmax) * (tb - ta) / 1999 + 1e-9
+
+
+def test_moving_obstacle_exact_cases() -> None:
+    # the obstacle crosses the path's line at t = 5 where the path is; held before/after its knots
+    obs = MovingObstacle(0.5, np.array([4.0, 6.0]), np.array([[5.0, -1.0, 0.0], [5.0, 1.0, 0.0]]))
+    path = np.array([[[0.0, 0.0, 0.0], [10.0, 0.0, 0.0]]])
+    assert obs.min_distance(path, np.array([[0.0, 10.0]]))[0, 0] == pytest.approx(0.0, abs=1e-12)
+    # the same path one second late: x = t - 1, the obstacle at (5, t - 5) for t in [4, 6]:
+    # d^2 = (t - 6)^2 + (t - 5)^2, least at t = 5.5
+    late = obs.min_distance(path, np.array([[1.0, 11.0]]))[0, 0]
+    assert late == pytest.approx(math.sqrt(0.5), abs=1e-12)
+    # entirely before the obstacle's first knot: it sits at its first position
+    assert obs.min_distance(path, np.array([[-20.0, -10.0]]))[0, 0] == pytest.approx(1.0)
+    # entirely after its last knot
+    assert obs.min_distance(path, np.array([[20.0, 30.0]]))[0, 0] == pytest.approx(1.0)
+    # 2-D positions and paths; times broadcast over the population
+    obs2 = MovingObstacle(1.0, np.array([0.0]), np.array([[3.0, 4.0]]))
+    p2 = np.zeros((2, 3, 2))
+    p2[1, :, 0] = [0.0, 3.0, 6.0]
+    got = obs2.min_distance(p2, np.array([0.0, 1.0, 2.0]))
+    np.testing.assert_allclose(got, [[5.0, 5.0], [4.0, 4.0]])
+    np.testing.assert_allclose(obs2.position_at([-1.0, 5.0]), [[3.0, 4.0, 0.0]] * 2)
+
+
+def test_moving_obstacle_validation() -> None:
+    with pytest.raises(ValueError):
+        MovingObstacle(1.0, np.array([0.0, 0.0]), np.zeros((2, 3)))
+    with pytest.raises(ValueError):
+        MovingObstacle(0.0, np.array([0.0]), np.zeros((1, 3)))
+    with pytest.raises(ValueError):
+        MovingObstacle(1.0, np.array([0.0, 1.0]), np.zeros((3, 3)))
+    with pytest.raises(ValueError):
+        Circle((0.0, 0.0), -1.0)
+    with pytest.raises(ValueError):
+        Polygon(((0.0, 0.0), (1.0, 1.0), (2.0, 2.0)))  # zero area
