@@ -23,9 +23,9 @@ import time
 from collections.abc import Callable
 
 import numpy as np
-from uavplan.scenarios import load_builtin
 
 from uavplan.problems import CartesianEncoding, PathProblem
+from uavplan.scenarios import load_builtin
 from uavplan.world.geometry import (
     segment_cylinder_distance,
     segment_cylinder_distance_reference,

@@ -15,9 +15,9 @@ import argparse
 import os
 
 import numpy as np
-from uavplan.scenarios import load_builtin
 
 from uavplan.planners import get_planner
+from uavplan.scenarios import load_builtin
 
 
 def main() -> None:

@@ -92,7 +92,7 @@ def build_sections(df: pd.DataFrame, manifest: dict[str, Any]) -> list[tuple[str
         feasible=("feasible", lambda s: float(np.mean(s.astype(bool)))),
         first_feasible_iteration=(
             "first_feasible_iteration",
-            lambda s: float(pd.to_numeric(s).mean()),
+            lambda s: float(np.nanmean(np.asarray(s, dtype=np.float64))) if len(s) else np.nan,
         ),
         evaluations=("evaluations", "mean"),
         wall_time_s=("wall_time", "mean"),

@@ -19,6 +19,7 @@ __all__ = [
     "DE",
     "GA",
     "PSO",
+    "SPSO",
     "Budget",
     "DEConfig",
     "FunctionProblem",
@@ -29,6 +30,7 @@ __all__ = [
     "OptimizerError",
     "PSOConfig",
     "Problem",
+    "SPSOConfig",
     "available",
     "get",
     "minimize",
@@ -40,3 +42,5 @@ __all__ = [
 from uavplan.optimizers.de import DE, DEConfig
 from uavplan.optimizers.ga import GA, GAConfig
 from uavplan.optimizers.pso import PSO, PSOConfig
+from uavplan.optimizers.rscdwoa import RSCDWOA, RSCDWOAConfig
+from uavplan.optimizers.spso import SPSO, SPSOConfig

@@ -21,7 +21,7 @@ from uavplan.planners.base import (
     ProgressCallback,
     register_planner,
 )
-from uavplan.problems.encoding import CartesianEncoding
+from uavplan.problems.encoding import ENCODINGS
 from uavplan.problems.path_problem import PathProblem
 from uavplan.world.scenario import Scenario, Task
 
@@ -30,14 +30,15 @@ DEFAULT_ITERATIONS = 200
 
 
 class OptimizerPlanner(Planner):
-    """Plan with optimizer ``algorithm`` over Cartesian waypoints.
+    """Plan with optimizer ``algorithm`` over encoded waypoints.
 
     Args:
         algorithm: a registered optimizer name.
         n_waypoints: free waypoints (default: the scenario's).
         cost: cost preset (default: the scenario's).
         weights: term weight overrides.
-        init: optional initial population of paths (pop, n_waypoints + 2, dim) to seed from.
+        encoding: ``cartesian`` or ``spherical`` (default: the optimizer's ``encoding``
+            attribute, else cartesian; SPSO uses the spherical one).
         **params: optimizer hyperparameters (e.g. ``pop_size=500``).
     """
 
@@ -48,6 +49,7 @@ class OptimizerPlanner(Planner):
         cost: str | None = None,
         weights: dict[str, float] | None = None,
         track_feasibility: bool = False,
+        encoding: str | None = None,
         **params: Any,
     ) -> None:
         self.algorithm = algorithm.lower()
@@ -64,11 +66,16 @@ class OptimizerPlanner(Planner):
         self.cost = cost
         self.weights = weights
         self.track_feasibility = track_feasibility
+        self.encoding = str(encoding or getattr(self.optimizer_cls, "encoding", "cartesian"))
+        if self.encoding not in ENCODINGS:
+            raise PlannerError(
+                f"unknown encoding {self.encoding!r}; choose from {sorted(ENCODINGS)}"
+            )
 
     def describe(self) -> dict[str, Any]:
         return {
             "name": self.algorithm,
-            "encoding": "cartesian",
+            "encoding": self.encoding,
             "n_waypoints": self.n_waypoints,
             "cost": self.cost,
             "weights": self.weights,
@@ -84,7 +91,7 @@ class OptimizerPlanner(Planner):
         callback: ProgressCallback | None,
     ) -> PlanResult:
         problem = PathProblem(scenario, task, cost=self.cost, weights=self.weights)
-        enc = CartesianEncoding(problem, self.n_waypoints, self.track_feasibility)
+        enc = ENCODINGS[self.encoding](problem, self.n_waypoints, self.track_feasibility)
         opt = self.optimizer_cls(enc, self.config, seed=seed)
 
         def cb(o: optimizers.Optimizer) -> bool:

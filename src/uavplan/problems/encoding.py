@@ -91,3 +91,106 @@ class CartesianEncoding:
 
     def evaluate_full(self, X: FloatArray) -> Evaluation:
         return self.problem.evaluate(self.decode(X))
+
+
+class SphericalEncoding:
+    """SPSO's spherical-vector encoding (Phung & Ha 2021); a polar form in 2-D.
+
+    Each free waypoint is reached from the previous node by a segment of length ``r``, elevation
+    ``psi`` and azimuth ``phi`` (3-D genes ``(r, psi, phi)``; 2-D genes ``(r, phi)``):
+    ``x_i = x_{i-1} + r cos(psi) cos(phi)``, ``y_i = y_{i-1} + r cos(psi) sin(phi)``,
+    ``z_i = z_{i-1} + r sin(psi)``, each coordinate clipped to its range after every step as
+    the reference code does. Ranges, as in SPSO's ``main.m``: ``r`` in
+    ``[0, 2 |goal - start| / n]``, ``psi`` in ``[-pi/4, pi/4]``, ``phi`` within ``pi/4`` of the
+    start-goal heading. As in :class:`CartesianEncoding`, with an altitude band above ground z is
+    accumulated and clipped as height above the terrain (SPSO's relative z) and made absolute at
+    the end.
+    """
+
+    angle_range = np.pi / 4
+
+    def __init__(
+        self, problem: PathProblem, n_waypoints: int | None = None, track_feasibility: bool = False
+    ) -> None:
+        self.cart = CartesianEncoding(problem, n_waypoints, track_feasibility)
+        self.problem = problem
+        self.n_waypoints = self.cart.n_waypoints
+        self.track_feasibility = track_feasibility
+        self.feasible_history = self.cart.feasible_history
+        d = problem.dim
+        self.block = d
+        start = self._zspace(problem.start[None, None])[0, 0]
+        goal = self._zspace(problem.goal[None, None])[0, 0]
+        self._start = start
+        heading = goal - start
+        phi0 = float(np.arctan2(heading[1], heading[0]))
+        r_max = 2.0 * float(np.linalg.norm(heading)) / self.n_waypoints
+        if r_max <= 0:
+            raise ValueError("spherical encoding needs distinct start and goal")
+        a = self.angle_range
+        if d == 3:
+            lo = np.array([0.0, -a, phi0 - a])
+            hi = np.array([r_max, a, phi0 + a])
+        else:
+            lo = np.array([0.0, phi0 - a])
+            hi = np.array([r_max, phi0 + a])
+        self.lower = np.tile(lo, self.n_waypoints)
+        self.upper = np.tile(hi, self.n_waypoints)
+        self.evaluations = 0
+
+    @property
+    def dim(self) -> int:
+        return int(self.lower.shape[0])
+
+    def _zspace(self, paths: FloatArray) -> FloatArray:
+        """Absolute paths -> the space the genes live in (z above ground if the band says so)."""
+        p = np.array(paths, dtype=np.float64)
+        if self.cart.z_mode == "ground":
+            terrain = self.problem.scenario.terrain
+            assert terrain is not None
+            p[..., 2] -= terrain.lookup(p[..., 0], p[..., 1], self.problem.lookup)
+        return p
+
+    def to_cartesian_genes(self, X: FloatArray) -> FloatArray:
+        """(pop, dim) spherical genes -> (pop, dim) Cartesian genes of :class:`CartesianEncoding`
+        (waypoints in the gene space, clipped step by step)."""
+        X = np.asarray(X, dtype=np.float64)
+        d = self.problem.dim
+        n = self.n_waypoints
+        g = X.reshape(X.shape[0], n, d)
+        lo, hi = self.cart.point_lower, self.cart.point_upper
+        pts = np.empty((X.shape[0], n, d))
+        prev = np.broadcast_to(self._start, (X.shape[0], d)).copy()
+        for i in range(n):
+            r = g[:, i, 0]
+            if d == 3:
+                psi, phi = g[:, i, 1], g[:, i, 2]
+                step = np.stack(
+                    [r * np.cos(psi) * np.cos(phi), r * np.cos(psi) * np.sin(phi), r * np.sin(psi)],
+                    axis=1,
+                )
+            else:
+                phi = g[:, i, 1]
+                step = np.stack([r * np.cos(phi), r * np.sin(phi)], axis=1)
+            prev = np.clip(prev + step, lo, hi)
+            pts[:, i] = prev
+        return pts.reshape(X.shape[0], -1)
+
+    def decode(self, X: FloatArray) -> FloatArray:
+        """(pop, dim) genes -> (pop, n_waypoints + 2, scenario dim) absolute paths."""
+        return self.cart.decode(self.to_cartesian_genes(X))
+
+    def evaluate(self, X: FloatArray) -> FloatArray:
+        self.evaluations += len(X)
+        return self.cart.evaluate(self.to_cartesian_genes(X))
+
+    def evaluate_full(self, X: FloatArray) -> Evaluation:
+        return self.problem.evaluate(self.decode(X))
+
+
+Encoding = CartesianEncoding | SphericalEncoding
+
+ENCODINGS: dict[str, type[CartesianEncoding] | type[SphericalEncoding]] = {
+    "cartesian": CartesianEncoding,
+    "spherical": SphericalEncoding,
+}
