@@ -1,4 +1,4 @@
-"""PSO, DE (and GA) at SPSO's budget on the SPSO benchmark scenario, over 10 seeds.
+"""PSO, DE, GA and SPSO at SPSO's budget on the SPSO benchmark scenario, over 10 seeds.
 
 Run: ``python benchmarks/spso_budget.py [--seeds 10] [--algorithms pso de ga]``
 
@@ -23,7 +23,7 @@ from uavplan.scenarios import load_builtin
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=10)
-    ap.add_argument("--algorithms", nargs="+", default=["pso", "de", "ga"])
+    ap.add_argument("--algorithms", nargs="+", default=["pso", "de", "ga", "spso"])
     ap.add_argument("--pop-size", type=int, default=500)
     ap.add_argument("--iterations", type=int, default=200)
     args = ap.parse_args()
