@@ -42,5 +42,4 @@ __all__ = [
 from uavplan.optimizers.de import DE, DEConfig
 from uavplan.optimizers.ga import GA, GAConfig
 from uavplan.optimizers.pso import PSO, PSOConfig
-from uavplan.optimizers.rscdwoa import RSCDWOA, RSCDWOAConfig
 from uavplan.optimizers.spso import SPSO, SPSOConfig
