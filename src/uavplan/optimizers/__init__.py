@@ -29,6 +29,8 @@ __all__ = [
     "OptimizerConfig",
     "OptimizerError",
     "PSOConfig",
+    "RSCDWOA",
+    "RSCDWOAConfig",
     "Problem",
     "SPSOConfig",
     "available",
@@ -42,4 +44,5 @@ __all__ = [
 from uavplan.optimizers.de import DE, DEConfig
 from uavplan.optimizers.ga import GA, GAConfig
 from uavplan.optimizers.pso import PSO, PSOConfig
+from uavplan.optimizers.rscdwoa import RSCDWOA, RSCDWOAConfig
 from uavplan.optimizers.spso import SPSO, SPSOConfig
