@@ -176,3 +176,40 @@ def test_builtin_plans_have_both_scales() -> None:
         p = get_plan(name)
         assert {"smoke", "paper"} <= set(p.scales)
         assert len(p.runs("smoke")) >= 1
+
+
+def test_shards_share_one_schema(tmp_path: Path) -> None:
+    """A column that is all null in one shard and set in another must still read as one
+    dataset (pandas on the folder, as the docs say)."""
+    store = ResultStore(tmp_path)
+    base = {"plan": "p", "scenario": "s", "algorithm": "a", "status": "error", "error": "boom"}
+    store.add(
+        {
+            **base,
+            "run_id": "1",
+            "run_index": 1,
+            "first_feasible_iteration": None,
+            "best_cost": None,
+            "feasible": None,
+            "history": None,
+        }
+    )
+    store.flush()
+    store.add(
+        {
+            **base,
+            "run_id": "2",
+            "run_index": 2,
+            "status": "ok",
+            "error": None,
+            "first_feasible_iteration": 7,
+            "best_cost": 1.5,
+            "feasible": True,
+            "history": [3.0, 1.5],
+        }
+    )
+    store.flush()
+    assert len(store.shards()) == 2
+    df = pd.read_parquet(tmp_path / "runs").sort_values("run_id")
+    assert df.first_feasible_iteration.tolist()[1] == 7
+    assert np.isnan(df.best_cost.tolist()[0]) and df.best_cost.tolist()[1] == 1.5

@@ -134,8 +134,51 @@ class ResultStore:
         return df
 
 
+#: Arrow types of the known columns, so that every shard has the same schema (a column that is
+#: all null in one shard must not become the null type there) and the folder reads as one
+#: dataset in pandas, pyarrow and DuckDB.
+TYPES: dict[str, pa.DataType] = {
+    **{
+        c: pa.string()
+        for c in (
+            "run_id",
+            "plan",
+            "scenario",
+            "algorithm",
+            "seed",
+            "scale",
+            "status",
+            "error",
+            "version",
+            "git_commit",
+            "host",
+            "cpu",
+            "python",
+            "violations",
+        )
+    },
+    **{
+        c: pa.int64()
+        for c in (
+            "run_index",
+            "root_seed",
+            "first_feasible_iteration",
+            "evaluations",
+            "iterations",
+            "n_dim",
+        )
+    },
+    **{
+        c: pa.float64() for c in ("best_cost", "path_length", "wall_time", "start_time", "end_time")
+    },
+    "feasible": pa.bool_(),
+    "waypoints": pa.list_(pa.float64()),
+}
+
+
 def rows_to_table(rows: list[dict[str, Any]]) -> pa.Table:
-    """Build an Arrow table from run rows; ``history``-like columns become list<float32>."""
+    """Build an Arrow table from run rows; ``history``-like columns become list<float32>, known
+    columns get their :data:`TYPES`."""
     cols: dict[str, list[Any]] = {}
     keys: list[str] = []
     for r in rows:
@@ -154,6 +197,8 @@ def rows_to_table(rows: list[dict[str, Any]]) -> pa.Table:
                 [None if v is None else np.asarray(v, dtype=np.float32) for v in values],
                 type=pa.list_(pa.float32()),
             )
+        elif k in TYPES:
+            arrays[k] = pa.array(values, type=TYPES[k], from_pandas=True)
         else:
             arrays[k] = pa.array(values, from_pandas=True)
     return pa.table(arrays)
