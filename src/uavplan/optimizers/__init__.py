@@ -16,23 +16,29 @@ from uavplan.optimizers.base import (
 )
 
 __all__ = [
+    "ABC",
     "DE",
     "GA",
+    "GWO",
     "PSO",
+    "RSCDWOA",
     "SPSO",
+    "WOA",
+    "ABCConfig",
     "Budget",
     "DEConfig",
     "FunctionProblem",
     "GAConfig",
+    "GWOConfig",
     "OptimizeResult",
     "Optimizer",
     "OptimizerConfig",
     "OptimizerError",
     "PSOConfig",
-    "RSCDWOA",
-    "RSCDWOAConfig",
     "Problem",
+    "RSCDWOAConfig",
     "SPSOConfig",
+    "WOAConfig",
     "available",
     "get",
     "minimize",
@@ -41,8 +47,11 @@ __all__ = [
 ]
 
 # Built-in optimizers: importing their modules registers them.
+from uavplan.optimizers.abc import ABC, ABCConfig
 from uavplan.optimizers.de import DE, DEConfig
 from uavplan.optimizers.ga import GA, GAConfig
+from uavplan.optimizers.gwo import GWO, GWOConfig
 from uavplan.optimizers.pso import PSO, PSOConfig
 from uavplan.optimizers.rscdwoa import RSCDWOA, RSCDWOAConfig
 from uavplan.optimizers.spso import SPSO, SPSOConfig
+from uavplan.optimizers.woa import WOA, WOAConfig
