@@ -181,7 +181,10 @@ def test_init_population_used(name: str) -> None:
 def test_config_defaults_and_records(name: str) -> None:
     res = minimize(sphere_problem(), name, 2, seed=0)
     assert res.algorithm == name
-    assert res.config == dataclasses.asdict(get(name).Config())  # the defaults are recorded
+    expected = dataclasses.asdict(get(name).Config())  # the defaults are recorded ...
+    if "max_iterations" in expected:  # ... but an a-schedule spans the budget
+        expected["max_iterations"] = 2
+    assert res.config == expected
 
 
 # ---------------------------------------------------------------------- PSO
@@ -352,3 +355,16 @@ def test_ga_mutation_off_and_no_crossover_copies_parents() -> None:
     children = opt.ask()
     for child in children:
         assert np.any(np.all(child == P, axis=1))
+
+
+def test_schedule_follows_the_budget() -> None:
+    """GWO/WOA/RSCDWOA's a-schedule spans the budget unless set explicitly."""
+    from uavplan.optimizers.base import Budget, fit_schedule
+    from uavplan.optimizers.gwo import GWOConfig
+    from uavplan.optimizers.pso import PSOConfig
+
+    assert fit_schedule(GWOConfig(), 250).max_iterations == 250  # type: ignore[attr-defined]
+    assert fit_schedule(GWOConfig(max_iterations=7), 250).max_iterations == 7  # type: ignore[attr-defined]
+    assert fit_schedule(GWOConfig(), 250, {"max_iterations": 100}).max_iterations == 100  # type: ignore[attr-defined]
+    assert fit_schedule(GWOConfig(), Budget(max_evaluations=500)) == GWOConfig()
+    assert fit_schedule(PSOConfig(), 250) == PSOConfig()

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import time
 from abc import ABC, abstractmethod
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field, fields, is_dataclass, replace
 from typing import Any, ClassVar, Protocol, TypeVar, runtime_checkable
 
@@ -321,10 +321,32 @@ def minimize(
         seed: root seed; the same seed gives the same bits.
         config: hyperparameters (the algorithm's defaults otherwise); ``overrides`` replace fields.
         callback: called after each iteration; returning True stops the run.
+
+    Optimizers whose config has a ``max_iterations`` schedule (GWO, WOA, RSCDWOA: ``a`` falls
+    from 2 to 0 over the run) get the budget's iteration count there unless it is set
+    explicitly (in ``config`` or ``overrides``).
     """
     cls = get(algorithm) if isinstance(algorithm, str) else algorithm
-    opt = cls(problem, config, seed=seed, **overrides)
+    cfg = fit_schedule(config if config is not None else cls.Config(), budget, overrides)
+    opt = cls(problem, cfg, seed=seed, **overrides)
     return run(opt, budget, seed=seed, callback=callback)
+
+
+def fit_schedule(
+    config: OptimizerConfig,
+    budget: Budget | int | None,
+    explicit: Mapping[str, Any] | None = None,
+) -> OptimizerConfig:
+    """``config`` with ``max_iterations`` set to the budget's iterations, if the config has that
+    field still at its default, the budget counts iterations and the caller did not set it in
+    ``explicit``."""
+    defaults = {f.name: f.default for f in fields(config)}
+    if "max_iterations" not in defaults or "max_iterations" in (explicit or {}) or budget is None:
+        return config
+    b = Budget.of(budget)
+    if b.max_iterations is None or config.max_iterations != defaults["max_iterations"]:  # type: ignore[attr-defined]
+        return config
+    return replace(config, max_iterations=b.max_iterations)  # type: ignore[call-arg]
 
 
 def run(

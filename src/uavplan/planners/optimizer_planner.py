@@ -62,6 +62,7 @@ class OptimizerPlanner(Planner):
                 f"{self.algorithm}: unknown parameter(s) {sorted(unknown)}; known: {sorted(known)}"
             )
         self.config = self.optimizer_cls.Config(**params)
+        self.explicit = dict(params)
         self.n_waypoints = n_waypoints
         self.cost = cost
         self.weights = weights
@@ -92,7 +93,10 @@ class OptimizerPlanner(Planner):
     ) -> PlanResult:
         problem = PathProblem(scenario, task, cost=self.cost, weights=self.weights)
         enc = ENCODINGS[self.encoding](problem, self.n_waypoints, self.track_feasibility)
-        opt = self.optimizer_cls(enc, self.config, seed=seed)
+        config = optimizers.base.fit_schedule(
+            self.config, budget or DEFAULT_ITERATIONS, self.explicit
+        )
+        opt = self.optimizer_cls(enc, config, seed=seed)
 
         def cb(o: optimizers.Optimizer) -> bool:
             return bool(callback(o.iterations, o.best_f)) if callback else False
