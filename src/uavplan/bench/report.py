@@ -46,6 +46,13 @@ def _fmt(v: Any) -> str:
     return str(v)
 
 
+def _nanmean(s: pd.Series) -> float:
+    """Mean of the non-missing values (NaN when there are none), without a warning."""
+    v = np.asarray(s, dtype=np.float64)
+    v = v[~np.isnan(v)]
+    return float(v.mean()) if len(v) else math.nan
+
+
 def _html_table(df: pd.DataFrame) -> str:
     d = df.reset_index() if not isinstance(df.index, pd.RangeIndex) else df
     head = "".join(f"<th>{html.escape(str(c))}</th>" for c in d.columns)
@@ -92,7 +99,7 @@ def build_sections(df: pd.DataFrame, manifest: dict[str, Any]) -> list[tuple[str
         feasible=("feasible", lambda s: float(np.mean(s.astype(bool)))),
         first_feasible_iteration=(
             "first_feasible_iteration",
-            lambda s: float(np.nanmean(np.asarray(s, dtype=np.float64))) if len(s) else np.nan,
+            _nanmean,
         ),
         evaluations=("evaluations", "mean"),
         wall_time_s=("wall_time", "mean"),
