@@ -83,13 +83,21 @@ def _scenario(ref: str) -> Any:
     return resolve(ref)
 
 
+def _budget(params: Any) -> Any:
+    from uavplan.optimizers import Budget
+
+    if params.get("evaluations"):
+        return Budget(max_evaluations=int(params["evaluations"]))
+    return Budget(max_iterations=int(params["iterations"]))
+
+
 def _run_planner(spec: RunSpec) -> dict[str, Any]:
     from uavplan.planners import get_planner
 
     p = spec.params
     scenario = _scenario(spec.scenario)
     planner = get_planner(p["planner"], track_feasibility=True, **dict(p["options"]))
-    r = planner.plan(scenario, None, int(p["iterations"]), spec.seed)
+    r = planner.plan(scenario, None, _budget(p), spec.seed)
     return {
         "best_cost": r.cost,
         "path_length": r.length,
@@ -98,6 +106,7 @@ def _run_planner(spec: RunSpec) -> dict[str, Any]:
         "evaluations": r.evaluations,
         "iterations": r.iterations,
         "history": np.asarray(r.history),
+        "evaluations_history": np.asarray(r.evaluations_history, dtype=np.float64),
         "feasible_history": np.asarray(r.feasible_history),
         "violations": ",".join(r.violations),
         "waypoints": np.asarray(r.waypoints).ravel().tolist(),
@@ -111,7 +120,7 @@ def _run_function(spec: RunSpec) -> dict[str, Any]:
 
     p = spec.params
     problem = function_problem(spec.scenario)
-    r = minimize(problem, p["planner"], int(p["iterations"]), spec.seed, **dict(p["options"]))
+    r = minimize(problem, p["planner"], _budget(p), spec.seed, **dict(p["options"]))
     return {
         "best_cost": r.f,
         "path_length": None,
@@ -120,6 +129,7 @@ def _run_function(spec: RunSpec) -> dict[str, Any]:
         "evaluations": r.evaluations,
         "iterations": r.iterations,
         "history": np.asarray(r.history),
+        "evaluations_history": np.asarray(r.evaluations_history, dtype=np.float64),
     }
 
 

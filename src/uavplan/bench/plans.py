@@ -60,11 +60,14 @@ class Algorithm:
 
 @dataclass(frozen=True)
 class Scale:
-    """How big a plan runs: runs per cell and the budget."""
+    """How big a plan runs: runs per cell and the budget (iterations, or, when ``evaluations``
+    is set, function evaluations: the fair budget between algorithms whose iterations cost
+    different numbers of evaluations)."""
 
     runs: int
     iterations: int
     pop_size: int | None = None
+    evaluations: int | None = None
 
 
 @dataclass(frozen=True)
@@ -127,6 +130,7 @@ class ExperimentPlan:
                                 "planner": alg.planner,
                                 "options": options,
                                 "iterations": n_iter,
+                                "evaluations": None if iterations is not None else sc.evaluations,
                             },
                         )
                     )
@@ -193,6 +197,56 @@ def builtin_plans() -> list[ExperimentPlan]:
                 "paper": Scale(runs=20, iterations=200, pop_size=500),
             },
             reference="pso",
+        ),
+        ExperimentPlan(
+            name="functions",
+            description=(
+                "RSCDWOA (tent map; and the logistic map) vs WOA, PSO, GA, DE, GWO, ABC on f1-f9 "
+                "of RSCDWOA Table 4, 30-D, 30 agents, the evaluations of 100 iterations"
+            ),
+            scenarios=tuple(f"f{i}" for i in range(1, 10)),
+            algorithms=(
+                Algorithm("rscdwoa", "rscdwoa", {"max_iterations": 100}),
+                Algorithm(
+                    "rscdwoa-logistic", "rscdwoa", {"max_iterations": 100, "chaos": "logistic"}
+                ),
+                Algorithm("woa", "woa", {"max_iterations": 100}),
+                Algorithm("pso", "pso"),
+                Algorithm("ga", "ga"),
+                Algorithm("de", "de"),
+                Algorithm("gwo", "gwo", {"max_iterations": 100}),
+                Algorithm("abc", "abc"),
+            ),
+            scales={
+                "smoke": Scale(runs=2, iterations=10, pop_size=30, evaluations=330),
+                "paper": Scale(runs=30, iterations=100, pop_size=30, evaluations=3030),
+            },
+            kind="function",
+            reference="rscdwoa",
+        ),
+        ExperimentPlan(
+            name="spso-scenario",
+            description=(
+                "PSO, SPSO, GA, DE, ABC, GWO, WOA, RSCDWOA and MAGA on the SPSO benchmark with "
+                "SPSO's cost and budget (500 x 200 evaluations' worth), 20 runs"
+            ),
+            scenarios=("spso",),
+            algorithms=(
+                Algorithm("spso", "spso"),
+                Algorithm("pso", "pso"),
+                Algorithm("ga", "ga"),
+                Algorithm("de", "de"),
+                Algorithm("abc", "abc"),
+                Algorithm("gwo", "gwo", {"max_iterations": 200}),
+                Algorithm("woa", "woa", {"max_iterations": 200}),
+                Algorithm("rscdwoa", "rscdwoa", {"max_iterations": 200}),
+                Algorithm("maga", "maga", {"pop_size": 49}),  # its 7 x 7 lattice (Table I)
+            ),
+            scales={
+                "smoke": Scale(runs=2, iterations=10, pop_size=50, evaluations=550),
+                "paper": Scale(runs=20, iterations=200, pop_size=500, evaluations=100_500),
+            },
+            reference="spso",
         ),
         ExperimentPlan(
             name="overhead",

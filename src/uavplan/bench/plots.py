@@ -57,6 +57,7 @@ def convergence_figure(
     ok = _ok(df)
     if ok.empty or history not in ok:
         return None
+    by_evals = "evaluations_history" in ok and ok["evaluations_history"].notna().all()
     scenarios = sorted(ok["scenario"].unique())
     fig, axes = _grid(len(scenarios))
     for ax, sc in zip(axes, scenarios, strict=True):
@@ -72,7 +73,11 @@ def convergence_figure(
                 if np.isnan(lo):
                     continue
                 H = normalized_history(H, lo, hi, 5.0)
-            x = np.arange(1, H.shape[1] + 1)
+            x = np.arange(1, H.shape[1] + 1, dtype=np.float64)
+            if by_evals:
+                E = _stack(g["evaluations_history"])
+                if E.shape == H.shape:
+                    x = E.mean(axis=0)
             with np.errstate(invalid="ignore"), warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
                 med = np.nanmedian(np.where(np.isfinite(H), H, np.nan), axis=0)
@@ -81,7 +86,7 @@ def convergence_figure(
             line = ax.plot(x, med, lw=1.6, label=f"{alg} (n={len(H)})")[0]
             ax.fill_between(x, q1, q3, color=line.get_color(), alpha=0.2, lw=0)
         ax.set_title(str(sc))
-        ax.set_xlabel("iteration")
+        ax.set_xlabel("evaluations" if by_evals else "iteration")
         ax.set_ylabel("normalized best value" if normalized else "best cost so far")
         if not normalized:
             ax.set_yscale("log")

@@ -20,6 +20,7 @@ __all__ = [
     "DE",
     "GA",
     "GWO",
+    "MAGA",
     "PSO",
     "RSCDWOA",
     "SPSO",
@@ -30,6 +31,7 @@ __all__ = [
     "FunctionProblem",
     "GAConfig",
     "GWOConfig",
+    "MAGAConfig",
     "OptimizeResult",
     "Optimizer",
     "OptimizerConfig",
@@ -51,6 +53,7 @@ from uavplan.optimizers.abc import ABC, ABCConfig
 from uavplan.optimizers.de import DE, DEConfig
 from uavplan.optimizers.ga import GA, GAConfig
 from uavplan.optimizers.gwo import GWO, GWOConfig
+from uavplan.optimizers.maga import MAGA, MAGAConfig
 from uavplan.optimizers.pso import PSO, PSOConfig
 from uavplan.optimizers.rscdwoa import RSCDWOA, RSCDWOAConfig
 from uavplan.optimizers.spso import SPSO, SPSOConfig

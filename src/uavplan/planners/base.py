@@ -42,6 +42,8 @@ class PlanResult:
         algorithm, config, seed, cost_model: what produced it.
         feasible_history: best cost among feasible candidates so far, per iteration (inf
             before the first feasible one); empty when the planner did not track it.
+        evaluations_history: evaluations used after each iteration (for plots against
+            evaluations, the fair axis between algorithms).
         first_feasible_iteration: the 1-based iteration in which a feasible candidate was first
             evaluated (RGG-PSO+'s F-Measure counts the iterations before it), None if never or
             not tracked.
@@ -64,6 +66,9 @@ class PlanResult:
     violations: tuple[str, ...] = ()
     feasible_history: FloatArray = field(default_factory=lambda: np.zeros(0))
     first_feasible_iteration: int | None = None
+    evaluations_history: NDArray[np.int64] = field(
+        default_factory=lambda: np.zeros(0, dtype=np.int64)
+    )
 
     @property
     def length(self) -> float:

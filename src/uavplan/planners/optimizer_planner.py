@@ -116,6 +116,7 @@ class OptimizerPlanner(Planner):
             iterations=res.iterations,
             wall_time=res.wall_time,
             history=res.history,
+            evaluations_history=res.evaluations_history,
             algorithm=self.algorithm,
             config=self.describe(),
             seed=seed,
