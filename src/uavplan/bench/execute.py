@@ -119,7 +119,7 @@ def _run_function(spec: RunSpec) -> dict[str, Any]:
     from uavplan.optimizers.functions import function_problem
 
     p = spec.params
-    problem = function_problem(spec.scenario)
+    problem = function_problem(spec.scenario, noise_seed=spec.seed)
     r = minimize(problem, p["planner"], _budget(p), spec.seed, **dict(p["options"]))
     return {
         "best_cost": r.f,
