@@ -1,0 +1,32 @@
+"""Every built-in plan runs end to end at smoke scale (what CI runs), with its report."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from uavplan.bench.plans import available_plans, get_plan
+from uavplan.bench.report import write_report
+from uavplan.bench.runner import run_sweep
+
+
+@pytest.mark.parametrize("name", available_plans())
+def test_plan_runs_at_smoke_scale(name: str, tmp_path: Path) -> None:
+    plan = get_plan(name)
+    summary = run_sweep(plan, tmp_path, scale="smoke", executor="serial")
+    assert summary.failed == 0, summary.failures
+    assert summary.executed == len(plan.runs("smoke"))
+    df = pd.read_parquet(tmp_path / "runs")
+    assert set(df["algorithm"]) == {a.label for a in plan.algorithms}
+    assert set(df["scenario"]) == set(plan.scenarios)
+    assert (df["evaluations"] > 0).all()
+    scale = plan.scales["smoke"]
+    if scale.evaluations:  # an evaluation budget is respected up to one batch
+        assert (df["evaluations"] >= scale.evaluations).all()
+    html, md = write_report(tmp_path)
+    text = html.read_text()
+    assert "<table>" in text and "data:image/png;base64," in text
+    if plan.reference and len(plan.algorithms) > 1:
+        assert "rank-sum" in md.read_text()
