@@ -140,7 +140,7 @@ def _iter_dask(
     chunks: list[list[RunSpec]], scheduler: str | None, workers: int
 ) -> Iterator[list[dict[str, Any]]]:
     try:
-        from distributed import Client, as_completed
+        from distributed import Client
     except ImportError as exc:  # pragma: no cover - depends on the install
         raise RuntimeError(
             "the Dask executor needs dask.distributed: pip install 'uavplan[cluster]'"
@@ -151,12 +151,7 @@ def _iter_dask(
         else Client(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
     )
     try:
-        futures = client.map(execute_chunk, chunks, pure=False)
-        try:
-            for fut in as_completed(futures):
-                yield fut.result()
-        finally:
-            client.cancel(futures)
+        yield from _iter_dask_client(chunks, client)
     finally:
         client.close()
 
