@@ -631,3 +631,17 @@ def test_invalid_dict_is_not_written(tmp_path: Path) -> None:
     with pytest.raises(ScenarioFileError, match="required field missing"):
         save_scenario({"name": "x"}, tmp_path / "x.yaml")
     assert not (tmp_path / "x.yaml").exists()
+
+
+def test_resolve_generates_rgg_family_scenes() -> None:
+    from uavplan.scenarios import resolve
+    from uavplan.world.generators import rgg_scenario
+
+    s = resolve("rgg-n07-i042")
+    t = rgg_scenario(7, 42)
+    assert s.name == t.name == "rgg-n07-i042"
+    assert s.metadata["reference_length"] == t.metadata["reference_length"]
+    assert (
+        resolve("rgg-n07-i042-s3").metadata["reference_length"]
+        == rgg_scenario(7, 42, 3).metadata["reference_length"]
+    )

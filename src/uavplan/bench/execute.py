@@ -110,6 +110,7 @@ def _run_planner(spec: RunSpec) -> dict[str, Any]:
         "feasible_history": np.asarray(r.feasible_history),
         "violations": ",".join(r.violations),
         "waypoints": np.asarray(r.waypoints).ravel().tolist(),
+        "reference_length": scenario.metadata.get("reference_length"),
         "n_dim": int(np.asarray(r.waypoints).shape[1]),
     }
 

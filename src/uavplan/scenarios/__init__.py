@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+import re
 from importlib import resources
 from pathlib import Path
 
@@ -62,7 +63,8 @@ def load_builtin(name: str) -> Scenario:
 
 
 def resolve(name_or_path: str | Path) -> Scenario:
-    """A built-in scenario by name, or else a scenario file by path.
+    """A built-in scenario by name, a scene of the RGG-PSO+ family by its name
+    (``rgg-n07-i042``, optionally ``-s<root seed>``), or else a scenario file by path.
 
     Raises:
         ScenarioFileError: neither a built-in name nor an existing file, or an invalid file.
@@ -70,6 +72,11 @@ def resolve(name_or_path: str | Path) -> Scenario:
     text = str(name_or_path)
     if text in builtin_names():
         return load_builtin(text)
+    m = re.fullmatch(r"rgg-n(\d+)-i(\d+)(?:-s(\d+))?", text)
+    if m:  # a scene of the RGG-PSO+ family, generated deterministically
+        from uavplan.world.generators import rgg_scenario
+
+        return rgg_scenario(int(m.group(1)), int(m.group(2)), int(m.group(3) or 0))
     path = Path(name_or_path)
     if path.exists():
         return load_scenario(path)
