@@ -160,6 +160,7 @@ def get_planner(name: str, **options: Any) -> Planner:
 
 
 def _load_builtins() -> None:
-    from uavplan.planners import optimizer_planner
+    from uavplan.planners import optimizer_planner, rgg_pso
 
     optimizer_planner.register_all()
+    rgg_pso.register_all()
