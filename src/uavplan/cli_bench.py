@@ -30,13 +30,10 @@ def list_plans() -> None:
         table.add_column(col)
     for name in available_plans():
         p = get_plan(name)
-        cells = len(p.scenarios) * len(p.algorithms)
+        smoke, paper = len(p.runs("smoke")), len(p.runs("paper"))
+        n_sc = len(p.scales["paper"].scenarios or p.scenarios)
         table.add_row(
-            name,
-            f"{len(p.scenarios)} x {len(p.algorithms)}",
-            str(cells * p.scales["smoke"].runs),
-            f"{cells * p.scales['paper'].runs:,}",
-            p.description,
+            name, f"{n_sc} x {len(p.algorithms)}", str(smoke), f"{paper:,}", p.description
         )
     out.print(table)
 

@@ -68,6 +68,7 @@ class Scale:
     iterations: int
     pop_size: int | None = None
     evaluations: int | None = None
+    scenarios: tuple[str, ...] | None = None  # this scale's scenarios (default: the plan's)
 
 
 @dataclass(frozen=True)
@@ -110,7 +111,7 @@ class ExperimentPlan:
             raise PlanError(f"--runs must be >= 1, got {n_runs}")
         n_iter = sc.iterations if iterations is None else iterations
         out = []
-        for scenario in self.scenarios:
+        for scenario in sc.scenarios or self.scenarios:
             for alg in self.algorithms:
                 options = dict(alg.options)
                 if sc.pop_size is not None and "pop_size" not in options:
@@ -248,6 +249,7 @@ def builtin_plans() -> list[ExperimentPlan]:
             },
             reference="spso",
         ),
+        *_rggpso_plans(),
         ExperimentPlan(
             name="overhead",
             description=(
@@ -262,5 +264,57 @@ def builtin_plans() -> list[ExperimentPlan]:
             },
             kind="function",
             reference="pso",
+        ),
+    ]
+
+
+def _rggpso_plans() -> list[ExperimentPlan]:
+    """RGG-PSO+ (Liu et al. 2024) Sect. 5: 1000 scenes x 10 runs, 100 particles, 200 iterations,
+    N = 20 waypoints (the scenes' default); smoke scale: two scenes, one run, a small budget."""
+    from uavplan.world.generators import family_names
+
+    paper_scenes = tuple(family_names())
+    smoke_scenes = ("rgg-n05-i000", "rgg-n14-i000")
+    scales = {
+        "smoke": Scale(runs=1, iterations=15, pop_size=20, scenarios=smoke_scenes),
+        "paper": Scale(runs=10, iterations=200, pop_size=100, scenarios=paper_scenes),
+    }
+
+    def alg(label: str) -> Algorithm:
+        return Algorithm(label, label)
+
+    return [
+        ExperimentPlan(
+            name="rggpso-rq1",
+            description=(
+                "RGG-PSO+ vs RGG-PSO, PSO, SPSO, GA, DE on the 1000-scene family, 10 runs: best "
+                "normalized path length over iterations (Fig. 5)"
+            ),
+            scenarios=smoke_scenes,
+            algorithms=tuple(alg(a) for a in ("rgg-pso+", "rgg-pso", "pso", "spso", "ga", "de")),
+            scales=scales,
+            reference="rgg-pso+",
+            metric="path_length",
+        ),
+        ExperimentPlan(
+            name="rggpso-rq2",
+            description=(
+                "RGG-PSO vs PSO: F-Measure (iterations before the first feasible particle) and "
+                "the first feasible path's normalized length (Table 1)"
+            ),
+            scenarios=smoke_scenes,
+            algorithms=(alg("rgg-pso"), alg("pso")),
+            scales=scales,
+            reference="rgg-pso",
+            metric="path_length",
+        ),
+        ExperimentPlan(
+            name="rggpso-rq3",
+            description="RGG-PSO+ vs RGG-PSO vs PSO final normalized lengths (Table 2)",
+            scenarios=smoke_scenes,
+            algorithms=(alg("rgg-pso+"), alg("rgg-pso"), alg("pso")),
+            scales=scales,
+            reference="rgg-pso+",
+            metric="path_length",
         ),
     ]
