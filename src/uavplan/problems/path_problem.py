@@ -316,7 +316,10 @@ class PathProblem:
             out["circles"] = np.any(d < self._circ_radii, axis=(1, 2))
         verts, starts = self._polys
         if len(starts) > 1:
-            d = segment_polygon_distance(np.ascontiguousarray(p), verts, starts)
+            # exact where it matters: pairs whose boxes are farther apart than every margin
+            # only need "clear", so the kernel may stop at the box distance
+            cap = max(float(self._poly_margin.max()), float(np.finfo(np.float64).tiny))
+            d = segment_polygon_distance(np.ascontiguousarray(p), verts, starts, cap)
             out["polygons"] = np.any((d <= 0.0) | (d < self._poly_margin), axis=(1, 2))
         if sc.dim == 3 and sc.terrain is not None:
             band = sc.altitude

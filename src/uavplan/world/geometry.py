@@ -136,7 +136,21 @@ def segment_circle_inside_fraction(
 
     Exact (solves the quadratic |a + t (b - a) - c|^2 = r^2 in the xy plane). Multiply by the
     segment's length to get the length inside (HR-MAGA Eq. 9). Returns (P, N - 1, J).
+    A point-like segment counts as fully inside when its point is inside.
     """
+    return np.asarray(
+        _circle_fraction_kernel(
+            np.ascontiguousarray(paths, dtype=np.float64),
+            np.ascontiguousarray(np.asarray(centers, dtype=np.float64)[:, :2]),
+            np.ascontiguousarray(radii, dtype=np.float64),
+        )
+    )
+
+
+def segment_circle_inside_fraction_reference(
+    paths: FloatArray, centers: FloatArray, radii: FloatArray
+) -> FloatArray:
+    """NumPy reference for :func:`segment_circle_inside_fraction`."""
     p = np.asarray(paths, dtype=np.float64)
     a = p[:, :-1, None, :2]
     d = p[:, 1:, None, :2] - a
@@ -150,9 +164,38 @@ def segment_circle_inside_fraction(
     t0 = np.clip((-B - sq) / (2.0 * safe_a), 0.0, 1.0)
     t1 = np.clip((-B + sq) / (2.0 * safe_a), 0.0, 1.0)
     frac = np.where((A > 0) & (disc > 0), t1 - t0, 0.0)
-    # a point-like segment counts as fully inside when its point is inside
     frac = np.where(A > 0, frac, (C < 0).astype(np.float64))
     return np.asarray(frac)
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def _circle_fraction_kernel(paths, centers, radii):  # pragma: no cover - numba
+    P, N, _ = paths.shape
+    J = centers.shape[0]
+    out = np.zeros((P, N - 1, J))
+    for p in prange(P):
+        for s in range(N - 1):
+            ax = paths[p, s, 0]
+            ay = paths[p, s, 1]
+            dx = paths[p, s + 1, 0] - ax
+            dy = paths[p, s + 1, 1] - ay
+            A = dx * dx + dy * dy
+            for j in range(J):
+                fx = ax - centers[j, 0]
+                fy = ay - centers[j, 1]
+                C = fx * fx + fy * fy - radii[j] * radii[j]
+                if A == 0.0:
+                    out[p, s, j] = 1.0 if C < 0.0 else 0.0
+                    continue
+                B = 2.0 * (fx * dx + fy * dy)
+                disc = B * B - 4.0 * A * C
+                if disc <= 0.0:
+                    continue
+                sq = np.sqrt(disc)
+                t0 = min(max((-B - sq) / (2.0 * A), 0.0), 1.0)
+                t1 = min(max((-B + sq) / (2.0 * A), 0.0), 1.0)
+                out[p, s, j] = t1 - t0
+    return out
 
 
 # ---------------------------------------------------------------------------- polygons
@@ -220,15 +263,45 @@ def _seg_seg_distance(ax, ay, bx, by, cx, cy, dx, dy):  # pragma: no cover - num
     return min(min(d1, d2), min(d3, d4))
 
 
+@njit(cache=True)
+def _polygon_boxes(verts, starts):  # pragma: no cover - numba
+    """(K, 4) bounding boxes xmin, ymin, xmax, ymax of the packed polygons."""
+    K = starts.shape[0] - 1
+    box = np.empty((K, 4))
+    for k in range(K):
+        box[k, 0] = np.inf
+        box[k, 1] = np.inf
+        box[k, 2] = -np.inf
+        box[k, 3] = -np.inf
+        for i in range(starts[k], starts[k + 1]):
+            box[k, 0] = min(box[k, 0], verts[i, 0])
+            box[k, 1] = min(box[k, 1], verts[i, 1])
+            box[k, 2] = max(box[k, 2], verts[i, 0])
+            box[k, 3] = max(box[k, 3], verts[i, 1])
+    return box
+
+
+@njit(cache=True, inline="always")
+def _box_gap(ax, ay, bx, by, box, k):  # pragma: no cover - numba
+    """Distance between the segment's bounding box and polygon k's (a lower bound of the
+    segment-polygon distance; 0 when the boxes overlap)."""
+    gx = max(0.0, max(min(ax, bx) - box[k, 2], box[k, 0] - max(ax, bx)))
+    gy = max(0.0, max(min(ay, by) - box[k, 3], box[k, 1] - max(ay, by)))
+    return np.sqrt(gx * gx + gy * gy)
+
+
 @njit(cache=True, parallel=True)
-def segment_polygon_distance(paths, verts, starts):  # pragma: no cover - numba
+def segment_polygon_distance(paths, verts, starts, cap=np.inf):  # pragma: no cover - numba
     """Distance between each 2-D segment and each polygon (0 when they touch or overlap).
 
-    Exact for convex and non-convex simple polygons. Returns (P, N - 1, K).
+    Exact for convex and non-convex simple polygons. Returns (P, N - 1, K). With a finite
+    ``cap``, a pair whose bounding boxes are at least ``cap`` apart reports that box distance (a
+    lower bound, ``>= cap``) instead of the exact distance: enough for a clearance test.
     """
     P, N, _ = paths.shape
     K = starts.shape[0] - 1
     out = np.empty((P, N - 1, K))
+    box = _polygon_boxes(verts, starts)
     for p in prange(P):
         for s in range(N - 1):
             ax = paths[p, s, 0]
@@ -236,6 +309,10 @@ def segment_polygon_distance(paths, verts, starts):  # pragma: no cover - numba
             bx = paths[p, s + 1, 0]
             by = paths[p, s + 1, 1]
             for k in range(K):
+                gap = _box_gap(ax, ay, bx, by, box, k)
+                if gap >= cap:
+                    out[p, s, k] = gap
+                    continue
                 v0 = starts[k]
                 v1 = starts[k + 1]
                 if _point_in_polygon(ax, ay, verts, v0, v1):
@@ -265,6 +342,7 @@ def segment_polygon_inside_fraction(paths, verts, starts):  # pragma: no cover -
     maxv = 0
     for k in range(K):
         maxv = max(maxv, starts[k + 1] - starts[k])
+    box = _polygon_boxes(verts, starts)
     for p in prange(P):
         ts = np.empty(maxv + 2)
         for s in range(N - 1):
@@ -273,6 +351,8 @@ def segment_polygon_inside_fraction(paths, verts, starts):  # pragma: no cover -
             bx = paths[p, s + 1, 0]
             by = paths[p, s + 1, 1]
             for k in range(K):
+                if _box_gap(ax, ay, bx, by, box, k) > 0.0:
+                    continue  # boxes apart: nothing inside (out is zero-filled)
                 v0 = starts[k]
                 v1 = starts[k + 1]
                 n = 0
@@ -289,11 +369,17 @@ def segment_polygon_inside_fraction(paths, verts, starts):  # pragma: no cover -
                     j = i
                 ts[n] = 1.0
                 n += 1
-                tt = np.sort(ts[:n])
+                for q in range(1, n):  # insertion sort in place (few crossings)
+                    key = ts[q]
+                    r = q - 1
+                    while r >= 0 and ts[r] > key:
+                        ts[r + 1] = ts[r]
+                        r -= 1
+                    ts[r + 1] = key
                 frac = 0.0
                 for q in range(n - 1):
-                    a = tt[q]
-                    b = tt[q + 1]
+                    a = ts[q]
+                    b = ts[q + 1]
                     if b <= a:
                         continue
                     m = 0.5 * (a + b)
