@@ -263,3 +263,23 @@ def test_parameters() -> None:
     d = p.describe()
     assert (d["pop_size"], d["w"], d["w_damp"], d["c1"], d["c2"]) == (100, 1.0, 0.98, 1.5, 1.5)
     assert get_planner("rgg-pso+").describe()["whole_fraction"] == 0.5
+
+
+def test_duplicate_invariant_presets_score_particles_like_decoded_paths() -> None:
+    """The one-batch shortcut for length2d gives exactly the grouped Alg. 2 result."""
+    from uavplan.planners.rgg_pso import DUPLICATE_INVARIANT, evaluate_decoded
+    from uavplan.problems import PathProblem
+    from uavplan.scenarios import load_builtin
+
+    problem = PathProblem(load_builtin("simple2d"))
+    assert problem.cost_name in DUPLICATE_INVARIANT
+    rng = np.random.default_rng(3)
+    full = rng.uniform(0, 100, (40, 12, 2))
+    full[:, 0], full[:, -1] = problem.start, problem.goal
+    full[::3, 4] = full[::3, 3]  # consecutive duplicates
+    full[1::4, 7:10] = full[1::4, 6:7]
+    fast_cost, fast_feas = evaluate_decoded(problem, full)
+    problem.cost_name = "custom"  # force the grouped Alg. 2 path
+    slow_cost, slow_feas = evaluate_decoded(problem, full)
+    assert np.allclose(fast_cost, slow_cost, rtol=1e-12, atol=1e-9)
+    assert np.array_equal(fast_feas, slow_feas)
