@@ -433,3 +433,41 @@ def test_moving_obstacle_validation() -> None:
         Circle((0.0, 0.0), -1.0)
     with pytest.raises(ValueError):
         Polygon(((0.0, 0.0), (1.0, 1.0), (2.0, 2.0)))  # zero area
+
+
+def test_fused_scene_kernel_matches_the_separate_kernels() -> None:
+    """scene2d_batch = inside lengths + circle and polygon clearance of the separate kernels."""
+    from uavplan.problems import PathProblem
+    from uavplan.problems import costs as C
+    from uavplan.scenarios import resolve
+    from uavplan.world.geometry import (
+        scene2d_batch,
+        segment_cylinder_distance,
+        segment_polygon_distance,
+    )
+
+    for name in ("simple2d", "rgg-n14-i003", "rgg-n07-i010"):
+        pp = PathProblem(resolve(name))
+        rng = np.random.default_rng(1)
+        P = rng.uniform(0, 100, (300, 8, 2))
+        P[:, 0], P[:, -1] = pp.start, pp.goal
+        P[::5, 3] = P[::5, 2]  # zero-length segments
+        verts, starts = pp._polys
+        inside, circle_hit, polygon_hit = scene2d_batch(
+            np.ascontiguousarray(P),
+            pp._circ_centers,
+            pp._circ_radii,
+            verts,
+            starts,
+            pp._poly_margin,
+        )
+        ref = C.inside_length_2d(P, pp._circ_centers, pp._circ_radii, verts, starts)
+        np.testing.assert_allclose(inside, ref, rtol=1e-12, atol=1e-9)
+        P3 = np.concatenate([P, np.zeros((*P.shape[:2], 1))], axis=-1)
+        J = len(pp._circ_radii)
+        d = segment_cylinder_distance(P3, pp._circ_centers, np.full(J, -np.inf), np.full(J, np.inf))
+        assert np.array_equal(circle_hit, np.any(d < pp._circ_radii, axis=(1, 2)))
+        dp = segment_polygon_distance(P3, verts, starts)
+        assert np.array_equal(
+            polygon_hit, np.any((dp <= 0.0) | (dp < pp._poly_margin), axis=(1, 2))
+        )

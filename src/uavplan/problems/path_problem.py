@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.problems import costs as C
-from uavplan.world.geometry import segment_polygon_distance
+from uavplan.world.geometry import scene2d_batch
 from uavplan.world.scenario import Scenario, Task
 
 FloatArray = NDArray[np.float64]
@@ -97,10 +97,19 @@ class Context:
         return np.stack([o.min_distance(self.paths, self.times) for o in obs], axis=-1)
 
     @cached_property
-    def inside_2d(self) -> FloatArray:
+    def scene2d(self) -> tuple[FloatArray, BoolArray, BoolArray]:
+        """Length inside circles and polygons, circle hit, polygon hit: (pop,) each, from one
+        fused pass (:func:`uavplan.world.geometry.scene2d_batch`)."""
         p = self.problem
         verts, starts = p._polys
-        return C.inside_length_2d(self.paths, p._circ_centers, p._circ_radii, verts, starts)
+        inside, circle_hit, polygon_hit = scene2d_batch(
+            self.paths, p._circ_centers, p._circ_radii, verts, starts, p._poly_margin
+        )
+        return np.asarray(inside), np.asarray(circle_hit), np.asarray(polygon_hit)
+
+    @cached_property
+    def inside_2d(self) -> FloatArray:
+        return self.scene2d[0]
 
 
 TermFn = Callable[[Context], FloatArray]
@@ -307,20 +316,9 @@ class PathProblem:
         if len(self._cyl_radii):
             out["cylinders"] = np.any(ctx.cyl_dist < self._cyl_radii, axis=(1, 2))
         if len(self._circ_radii):
-            d = C.cylinder_distances(
-                p[..., :2],
-                self._circ_centers,
-                np.full(len(self._circ_radii), -np.inf),
-                np.full(len(self._circ_radii), np.inf),
-            )
-            out["circles"] = np.any(d < self._circ_radii, axis=(1, 2))
-        verts, starts = self._polys
-        if len(starts) > 1:
-            # exact where it matters: pairs whose boxes are farther apart than every margin
-            # only need "clear", so the kernel may stop at the box distance
-            cap = max(float(self._poly_margin.max()), float(np.finfo(np.float64).tiny))
-            d = segment_polygon_distance(np.ascontiguousarray(p), verts, starts, cap)
-            out["polygons"] = np.any((d <= 0.0) | (d < self._poly_margin), axis=(1, 2))
+            out["circles"] = ctx.scene2d[1]
+        if len(self._polys[1]) > 1:
+            out["polygons"] = ctx.scene2d[2]
         if sc.dim == 3 and sc.terrain is not None:
             band = sc.altitude
             need = 0.0

@@ -500,3 +500,130 @@ def timed_path_min_distance(paths, times, obs_t, obs_xyz):  # pragma: no cover -
                     best = d
             out[p, s] = best
     return out
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def scene2d_batch(paths, centers, radii, verts, starts, margins):  # pragma: no cover - numba
+    """One pass over every (path, segment, obstacle) of a scene of circles and polygons.
+
+    The fused form of :func:`segment_circle_inside_fraction`,
+    :func:`segment_polygon_inside_fraction`, :func:`segment_cylinder_distance` (infinite, for
+    circles) and :func:`segment_polygon_distance` that the 2-D cost and feasibility need,
+    without the (P, N - 1, J) intermediates. Only the xy coordinates of ``paths`` (P, N, >= 2)
+    are used.
+
+    Returns:
+        inside: (P,) length of path (xy segment length) inside circles and polygons;
+        circle_hit: (P,) bool, some segment closer than ``radii`` to a circle's centre;
+        polygon_hit: (P,) bool, some segment touching a polygon or closer than its margin.
+    """
+    P, N, _ = paths.shape
+    J = centers.shape[0]
+    K = starts.shape[0] - 1
+    inside = np.zeros(P)
+    circle_hit = np.zeros(P, dtype=np.bool_)
+    polygon_hit = np.zeros(P, dtype=np.bool_)
+    maxv = 0
+    for k in range(K):
+        maxv = max(maxv, starts[k + 1] - starts[k])
+    box = _polygon_boxes(verts, starts)
+    for p in prange(P):
+        ts = np.empty(maxv + 2)
+        total = 0.0
+        chit = False
+        phit = False
+        for s in range(N - 1):
+            ax = paths[p, s, 0]
+            ay = paths[p, s, 1]
+            bx = paths[p, s + 1, 0]
+            by = paths[p, s + 1, 1]
+            dx = bx - ax
+            dy = by - ay
+            A = dx * dx + dy * dy
+            L = np.sqrt(A)
+            for j in range(J):
+                fx = ax - centers[j, 0]
+                fy = ay - centers[j, 1]
+                r = radii[j]
+                # distance from the centre to the segment
+                t = 0.0
+                if A > 0.0:
+                    t = min(max(-(fx * dx + fy * dy) / A, 0.0), 1.0)
+                qx = fx + t * dx
+                qy = fy + t * dy
+                if np.sqrt(qx * qx + qy * qy) < r:
+                    chit = True
+                if A == 0.0:
+                    continue
+                C = fx * fx + fy * fy - r * r
+                B = 2.0 * (fx * dx + fy * dy)
+                disc = B * B - 4.0 * A * C
+                if disc > 0.0:
+                    sq = np.sqrt(disc)
+                    t0 = min(max((-B - sq) / (2.0 * A), 0.0), 1.0)
+                    t1 = min(max((-B + sq) / (2.0 * A), 0.0), 1.0)
+                    total += (t1 - t0) * L
+            for k in range(K):
+                gap = _box_gap(ax, ay, bx, by, box, k)
+                cap = max(margins[k], 0.0)
+                if gap > 0.0 and gap >= cap:
+                    continue  # clear of polygon k, and nothing inside it
+                v0 = starts[k]
+                v1 = starts[k + 1]
+                # clearance: touching or closer than the margin
+                if not phit:
+                    if _point_in_polygon(ax, ay, verts, v0, v1):
+                        phit = True
+                    else:
+                        jj = v1 - 1
+                        for i in range(v0, v1):
+                            d = _seg_seg_distance(
+                                ax,
+                                ay,
+                                bx,
+                                by,
+                                verts[jj, 0],
+                                verts[jj, 1],
+                                verts[i, 0],
+                                verts[i, 1],
+                            )
+                            if d <= 0.0 or d < margins[k]:
+                                phit = True
+                                break
+                            jj = i
+                if gap > 0.0 or A == 0.0:
+                    continue
+                # length inside: crossings with the edges, midpoints tested
+                n = 0
+                ts[n] = 0.0
+                n += 1
+                jj = v1 - 1
+                for i in range(v0, v1):
+                    tc = _seg_seg_param(
+                        ax, ay, bx, by, verts[jj, 0], verts[jj, 1], verts[i, 0], verts[i, 1]
+                    )
+                    if tc > 0.0 and tc < 1.0:
+                        ts[n] = tc
+                        n += 1
+                    jj = i
+                ts[n] = 1.0
+                n += 1
+                for q in range(1, n):
+                    key = ts[q]
+                    rr = q - 1
+                    while rr >= 0 and ts[rr] > key:
+                        ts[rr + 1] = ts[rr]
+                        rr -= 1
+                    ts[rr + 1] = key
+                for q in range(n - 1):
+                    a = ts[q]
+                    b = ts[q + 1]
+                    if b <= a:
+                        continue
+                    m = 0.5 * (a + b)
+                    if _point_in_polygon(ax + m * dx, ay + m * dy, verts, v0, v1):
+                        total += (b - a) * L
+        inside[p] = total
+        circle_hit[p] = chit
+        polygon_hit[p] = phit
+    return inside, circle_hit, polygon_hit
