@@ -333,6 +333,41 @@ def segment_polygon_distance(paths, verts, starts, cap=np.inf):  # pragma: no co
     return out
 
 
+@njit(cache=True)
+def _inside_fraction_one(ax, ay, bx, by, verts, v0, v1, ts):  # pragma: no cover - numba
+    """Exact fraction of segment a->b inside the polygon verts[v0:v1]: split at the edge
+    crossings, test each piece's midpoint. ``ts``: scratch of length >= v1 - v0 + 2."""
+    n = 0
+    ts[n] = 0.0
+    n += 1
+    j = v1 - 1
+    for i in range(v0, v1):
+        t = _seg_seg_param(ax, ay, bx, by, verts[j, 0], verts[j, 1], verts[i, 0], verts[i, 1])
+        if t > 0.0 and t < 1.0:
+            ts[n] = t
+            n += 1
+        j = i
+    ts[n] = 1.0
+    n += 1
+    for q in range(1, n):  # insertion sort in place (few crossings)
+        key = ts[q]
+        r = q - 1
+        while r >= 0 and ts[r] > key:
+            ts[r + 1] = ts[r]
+            r -= 1
+        ts[r + 1] = key
+    frac = 0.0
+    for q in range(n - 1):
+        a = ts[q]
+        b = ts[q + 1]
+        if b <= a:
+            continue
+        m = 0.5 * (a + b)
+        if _point_in_polygon(ax + m * (bx - ax), ay + m * (by - ay), verts, v0, v1):
+            frac += b - a
+    return frac
+
+
 @njit(cache=True, parallel=True)
 def segment_polygon_inside_fraction(paths, verts, starts):  # pragma: no cover - numba
     """Fraction of each segment's parameter range inside each polygon, exact. (P, N - 1, K)."""
@@ -353,39 +388,9 @@ def segment_polygon_inside_fraction(paths, verts, starts):  # pragma: no cover -
             for k in range(K):
                 if _box_gap(ax, ay, bx, by, box, k) > 0.0:
                     continue  # boxes apart: nothing inside (out is zero-filled)
-                v0 = starts[k]
-                v1 = starts[k + 1]
-                n = 0
-                ts[n] = 0.0
-                n += 1
-                j = v1 - 1
-                for i in range(v0, v1):
-                    t = _seg_seg_param(
-                        ax, ay, bx, by, verts[j, 0], verts[j, 1], verts[i, 0], verts[i, 1]
-                    )
-                    if t > 0.0 and t < 1.0:
-                        ts[n] = t
-                        n += 1
-                    j = i
-                ts[n] = 1.0
-                n += 1
-                for q in range(1, n):  # insertion sort in place (few crossings)
-                    key = ts[q]
-                    r = q - 1
-                    while r >= 0 and ts[r] > key:
-                        ts[r + 1] = ts[r]
-                        r -= 1
-                    ts[r + 1] = key
-                frac = 0.0
-                for q in range(n - 1):
-                    a = ts[q]
-                    b = ts[q + 1]
-                    if b <= a:
-                        continue
-                    m = 0.5 * (a + b)
-                    if _point_in_polygon(ax + m * (bx - ax), ay + m * (by - ay), verts, v0, v1):
-                        frac += b - a
-                out[p, s, k] = frac
+                out[p, s, k] = _inside_fraction_one(
+                    ax, ay, bx, by, verts, starts[k], starts[k + 1], ts
+                )
     return out
 
 
@@ -593,36 +598,7 @@ def scene2d_batch(paths, centers, radii, verts, starts, margins):  # pragma: no 
                             jj = i
                 if gap > 0.0 or A == 0.0:
                     continue
-                # length inside: crossings with the edges, midpoints tested
-                n = 0
-                ts[n] = 0.0
-                n += 1
-                jj = v1 - 1
-                for i in range(v0, v1):
-                    tc = _seg_seg_param(
-                        ax, ay, bx, by, verts[jj, 0], verts[jj, 1], verts[i, 0], verts[i, 1]
-                    )
-                    if tc > 0.0 and tc < 1.0:
-                        ts[n] = tc
-                        n += 1
-                    jj = i
-                ts[n] = 1.0
-                n += 1
-                for q in range(1, n):
-                    key = ts[q]
-                    rr = q - 1
-                    while rr >= 0 and ts[rr] > key:
-                        ts[rr + 1] = ts[rr]
-                        rr -= 1
-                    ts[rr + 1] = key
-                for q in range(n - 1):
-                    a = ts[q]
-                    b = ts[q + 1]
-                    if b <= a:
-                        continue
-                    m = 0.5 * (a + b)
-                    if _point_in_polygon(ax + m * dx, ay + m * dy, verts, v0, v1):
-                        total += (b - a) * L
+                total += _inside_fraction_one(ax, ay, bx, by, verts, v0, v1, ts) * L
         inside[p] = total
         circle_hit[p] = chit
         polygon_hit[p] = phit
