@@ -453,14 +453,20 @@ def test_fused_scene_kernel_matches_the_separate_kernels() -> None:
         P[:, 0], P[:, -1] = pp.start, pp.goal
         P[::5, 3] = P[::5, 2]  # zero-length segments
         verts, starts = pp._polys
-        inside, circle_hit, polygon_hit = scene2d_batch(
+        P[::7, 4] = -1.0  # some nodes out of the box
+        length, inside, circle_hit, polygon_hit, outside = scene2d_batch(
             np.ascontiguousarray(P),
             pp._circ_centers,
             pp._circ_radii,
             verts,
             starts,
             pp._poly_margin,
+            pp._lo2,
+            pp._hi2,
         )
+        np.testing.assert_allclose(length, C.segment_lengths(P).sum(axis=1), rtol=1e-12)
+        assert np.array_equal(outside, ~np.all(pp.scenario.bounds.contains(P), axis=1))
+        assert outside.any() and not outside.all()
         ref = C.inside_length_2d(P, pp._circ_centers, pp._circ_radii, verts, starts)
         np.testing.assert_allclose(inside, ref, rtol=1e-12, atol=1e-9)
         P3 = np.concatenate([P, np.zeros((*P.shape[:2], 1))], axis=-1)
@@ -471,3 +477,45 @@ def test_fused_scene_kernel_matches_the_separate_kernels() -> None:
         assert np.array_equal(
             polygon_hit, np.any((dp <= 0.0) | (dp < pp._poly_margin), axis=(1, 2))
         )
+
+
+def test_fused_kernel_convex_fast_path_agrees_with_the_general_method() -> None:
+    """Convex polygons (both orientations, a collinear vertex) go through Cyrus-Beck clipping in
+    scene2d_batch; non-convex ones (and a pentagram, whose turns share a sign) through the
+    crossing-and-midpoint method. Both must agree with the separate kernels."""
+    from uavplan.problems import costs as C
+    from uavplan.world.geometry import (
+        _polygon_convexity,
+        pack_polygons,
+        scene2d_batch,
+        segment_polygon_distance,
+    )
+
+    square_ccw = np.array([[10, 10], [30, 10], [30, 20], [30, 30], [10, 30]], float)
+    tri_cw = np.array([[50, 10], [60, 40], [70, 10]], float)
+    ell = np.array([[10, 50], [40, 50], [40, 60], [20, 60], [20, 80], [10, 80]], float)
+    ang = 2 * np.pi * np.arange(5) / 5
+    star = np.c_[75 + 15 * np.cos(ang * 2), 70 + 15 * np.sin(ang * 2)]  # pentagram order
+    verts, starts = pack_polygons([square_ccw, tri_cw, ell, star])
+    assert list(_polygon_convexity(verts, starts)) == [1, -1, 0, 0]
+    rng = np.random.default_rng(7)
+    P = rng.uniform(0, 100, (400, 6, 2))
+    P[:50, 1] = [10.0, 10.0]  # segments from a vertex
+    P[50:60, 2:4] = [[5.0, 20.0], [35.0, 20.0]]  # through the collinear vertex's edge line
+    K = len(starts) - 1
+    _, inside, _, polygon_hit, _ = scene2d_batch(
+        np.ascontiguousarray(P),
+        np.zeros((0, 2)),
+        np.zeros(0),
+        verts,
+        starts,
+        np.zeros(K),
+        np.zeros(2),
+        np.full(2, 100.0),
+    )
+    ref = C.inside_length_2d(P, np.zeros((0, 2)), np.zeros(0), verts, starts)
+    np.testing.assert_allclose(inside, ref, rtol=1e-12, atol=1e-9)
+    P3 = np.concatenate([P, np.zeros((*P.shape[:2], 1))], axis=-1)
+    dp = segment_polygon_distance(P3, verts, starts)
+    assert np.array_equal(polygon_hit, np.any(dp <= 0.0, axis=(1, 2)))
+    assert polygon_hit.any() and not polygon_hit.all()

@@ -253,10 +253,12 @@ def penalized_length_cost(
     length: FloatArray, inside: FloatArray, beta: float = 100.0
 ) -> FloatArray:
     """Length with a collision penalty, L (1 + beta V), V = inside length / L (the classic PSO
-    path-planning form, e.g. Yarpiz's; RGG-PSO+ leaves the penalty unspecified)."""
-    with np.errstate(invalid="ignore", divide="ignore"):
-        v = np.where(length > 0, inside / np.where(length > 0, length, 1.0), 0.0)
-    return np.asarray(length * (1.0 + beta * v))
+    path-planning form, e.g. Yarpiz's; RGG-PSO+ leaves the penalty unspecified).
+
+    Computed as ``L + beta * inside``, the same value: the inside length is part of the length,
+    so ``inside = 0`` whenever ``L = 0``, and no division is needed.
+    """
+    return np.asarray(length + beta * np.asarray(inside))
 
 
 # ---------------------------------------------------------------------------- timing

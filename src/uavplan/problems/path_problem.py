@@ -70,6 +70,8 @@ class Context:
 
     @cached_property
     def length(self) -> FloatArray:
+        if self.problem.dim == 2:  # the fused 2-D pass measures it anyway
+            return self.scene2d[0]
         return np.asarray(self.seg_len.sum(axis=1))
 
     @cached_property
@@ -97,19 +99,27 @@ class Context:
         return np.stack([o.min_distance(self.paths, self.times) for o in obs], axis=-1)
 
     @cached_property
-    def scene2d(self) -> tuple[FloatArray, BoolArray, BoolArray]:
-        """Length inside circles and polygons, circle hit, polygon hit: (pop,) each, from one
-        fused pass (:func:`uavplan.world.geometry.scene2d_batch`)."""
+    def scene2d(self) -> tuple[FloatArray, FloatArray, BoolArray, BoolArray, BoolArray]:
+        """xy length, length inside circles and polygons, circle hit, polygon hit, node out of
+        the box: (pop,) each, from one fused pass (:func:`uavplan.world.geometry.scene2d_batch`).
+        """
         p = self.problem
         verts, starts = p._polys
-        inside, circle_hit, polygon_hit = scene2d_batch(
-            self.paths, p._circ_centers, p._circ_radii, verts, starts, p._poly_margin
+        length, inside, circle_hit, polygon_hit, outside = scene2d_batch(
+            self.paths,
+            p._circ_centers,
+            p._circ_radii,
+            verts,
+            starts,
+            p._poly_margin,
+            p._lo2,
+            p._hi2,
         )
-        return np.asarray(inside), np.asarray(circle_hit), np.asarray(polygon_hit)
+        return length, inside, circle_hit, polygon_hit, outside
 
     @cached_property
     def inside_2d(self) -> FloatArray:
-        return self.scene2d[0]
+        return self.scene2d[1]
 
 
 TermFn = Callable[[Context], FloatArray]
@@ -271,6 +281,8 @@ class PathProblem:
         self._circ_radii = np.array([c.effective_radius for c in circ], dtype=np.float64)
         self._polys = scenario.packed_polygons()
         self._poly_margin = np.array([p.margin for p in scenario.no_fly_polygons], dtype=np.float64)
+        self._lo2 = np.ascontiguousarray(scenario.bounds.lo[:2], dtype=np.float64)
+        self._hi2 = np.ascontiguousarray(scenario.bounds.hi[:2], dtype=np.float64)
 
     # ------------------------------------------------------------------ evaluation
     def _check(self, paths: FloatArray) -> FloatArray:
@@ -312,13 +324,15 @@ class PathProblem:
     def _violations(self, ctx: Context) -> dict[str, BoolArray]:
         sc = self.scenario
         p = ctx.paths
-        out: dict[str, BoolArray] = {"bounds": ~np.all(sc.bounds.contains(p), axis=1)}
+        # in 2-D the fused scene pass tests the box too
+        inbox = ~ctx.scene2d[4] if self.dim == 2 else np.all(sc.bounds.contains(p), axis=1)
+        out: dict[str, BoolArray] = {"bounds": ~inbox}
         if len(self._cyl_radii):
             out["cylinders"] = np.any(ctx.cyl_dist < self._cyl_radii, axis=(1, 2))
         if len(self._circ_radii):
-            out["circles"] = ctx.scene2d[1]
+            out["circles"] = ctx.scene2d[2]
         if len(self._polys[1]) > 1:
-            out["polygons"] = ctx.scene2d[2]
+            out["polygons"] = ctx.scene2d[3]
         if sc.dim == 3 and sc.terrain is not None:
             band = sc.altitude
             need = 0.0
@@ -341,10 +355,11 @@ class PathProblem:
     def with_endpoints(self, free: FloatArray) -> FloatArray:
         """Insert the task's start and goal around free waypoints (pop, n_free, dim)."""
         f = np.asarray(free, dtype=np.float64)
-        pop = f.shape[0]
-        s = np.broadcast_to(self.start, (pop, 1, self.dim))
-        g = np.broadcast_to(self.goal, (pop, 1, self.dim))
-        return np.concatenate([s, f, g], axis=1)
+        out = np.empty((f.shape[0], f.shape[1] + 2, self.dim))
+        out[:, 0] = self.start
+        out[:, 1:-1] = f
+        out[:, -1] = self.goal
+        return out
 
     def times(self, paths: FloatArray) -> FloatArray:
         """Arrival times at the UAV's speed, (pop, n) seconds."""

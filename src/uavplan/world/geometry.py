@@ -290,6 +290,14 @@ def _box_gap(ax, ay, bx, by, box, k):  # pragma: no cover - numba
     return np.sqrt(gx * gx + gy * gy)
 
 
+@njit(cache=True, inline="always")
+def _box_gap2(ax, ay, bx, by, box, k):  # pragma: no cover - numba
+    """The square of :func:`_box_gap` (no square root: the hot rejection test)."""
+    gx = max(0.0, max(min(ax, bx) - box[k, 2], box[k, 0] - max(ax, bx)))
+    gy = max(0.0, max(min(ay, by) - box[k, 3], box[k, 1] - max(ay, by)))
+    return gx * gx + gy * gy
+
+
 @njit(cache=True, parallel=True)
 def segment_polygon_distance(paths, verts, starts, cap=np.inf):  # pragma: no cover - numba
     """Distance between each 2-D segment and each polygon (0 when they touch or overlap).
@@ -334,19 +342,10 @@ def segment_polygon_distance(paths, verts, starts, cap=np.inf):  # pragma: no co
 
 
 @njit(cache=True)
-def _inside_fraction_one(ax, ay, bx, by, verts, v0, v1, ts):  # pragma: no cover - numba
-    """Exact fraction of segment a->b inside the polygon verts[v0:v1]: split at the edge
-    crossings, test each piece's midpoint. ``ts``: scratch of length >= v1 - v0 + 2."""
-    n = 0
-    ts[n] = 0.0
-    n += 1
-    j = v1 - 1
-    for i in range(v0, v1):
-        t = _seg_seg_param(ax, ay, bx, by, verts[j, 0], verts[j, 1], verts[i, 0], verts[i, 1])
-        if t > 0.0 and t < 1.0:
-            ts[n] = t
-            n += 1
-        j = i
+def _inside_pieces(ax, ay, rx, ry, verts, v0, v1, ts, n):  # pragma: no cover - numba
+    """Fraction of segment a -> a + r inside polygon verts[v0:v1], given ``ts[:n]``: 0 and the
+    crossing parameters in (0, 1) in any order. Appends 1, sorts, and sums the pieces whose
+    midpoint is inside."""
     ts[n] = 1.0
     n += 1
     for q in range(1, n):  # insertion sort in place (few crossings)
@@ -363,9 +362,26 @@ def _inside_fraction_one(ax, ay, bx, by, verts, v0, v1, ts):  # pragma: no cover
         if b <= a:
             continue
         m = 0.5 * (a + b)
-        if _point_in_polygon(ax + m * (bx - ax), ay + m * (by - ay), verts, v0, v1):
+        if _point_in_polygon(ax + m * rx, ay + m * ry, verts, v0, v1):
             frac += b - a
     return frac
+
+
+@njit(cache=True)
+def _inside_fraction_one(ax, ay, bx, by, verts, v0, v1, ts):  # pragma: no cover - numba
+    """Exact fraction of segment a->b inside the polygon verts[v0:v1]: split at the edge
+    crossings, test each piece's midpoint. ``ts``: scratch of length >= v1 - v0 + 2."""
+    n = 0
+    ts[n] = 0.0
+    n += 1
+    j = v1 - 1
+    for i in range(v0, v1):
+        t = _seg_seg_param(ax, ay, bx, by, verts[j, 0], verts[j, 1], verts[i, 0], verts[i, 1])
+        if t > 0.0 and t < 1.0:
+            ts[n] = t
+            n += 1
+        j = i
+    return _inside_pieces(ax, ay, bx - ax, by - ay, verts, v0, v1, ts, n)
 
 
 @njit(cache=True, parallel=True)
@@ -507,36 +523,173 @@ def timed_path_min_distance(paths, times, obs_t, obs_xyz):  # pragma: no cover -
     return out
 
 
+@njit(cache=True)
+def _inside_fraction_and_touch(ax, ay, bx, by, verts, v0, v1, ts):  # pragma: no cover - numba
+    """For a segment of positive length and the closed polygon verts[v0:v1]: the exact fraction
+    of the segment inside (as :func:`_inside_fraction_one`) and whether the two touch (distance
+    0, as :func:`_seg_seg_distance` <= 0 on some edge or the segment inside), from one pass over
+    the edges: a crossing (``_seg_seg_param`` >= 0, end points included) touches; a parallel edge
+    is measured; otherwise the segment touches iff some piece between crossings is inside."""
+    n = 0
+    ts[n] = 0.0
+    n += 1
+    touch = False
+    rx = bx - ax
+    ry = by - ay
+    j = v1 - 1
+    for i in range(v0, v1):
+        cx = verts[j, 0]
+        cy = verts[j, 1]
+        sx = verts[i, 0] - cx
+        sy = verts[i, 1] - cy
+        den = _cross(rx, ry, sx, sy)
+        if den == 0.0:
+            if not touch and (
+                _seg_seg_distance(ax, ay, bx, by, cx, cy, verts[i, 0], verts[i, 1]) <= 0.0
+            ):
+                touch = True
+        else:
+            qx = cx - ax
+            qy = cy - ay
+            tn = _cross(qx, qy, sx, sy)
+            un = _cross(qx, qy, rx, ry)
+            # t = tn / den, u = un / den: reject by signs and a 2x bound without dividing
+            # (never rejects what the tests below accept after rounding)
+            if den > 0.0:
+                if tn < 0.0 or un < 0.0 or tn > 2.0 * den or un > 2.0 * den:
+                    j = i
+                    continue
+            elif tn > 0.0 or un > 0.0 or tn < 2.0 * den or un < 2.0 * den:
+                j = i
+                continue
+            t = tn / den
+            u = un / den
+            if 0.0 <= t <= 1.0 and 0.0 <= u <= 1.0:
+                touch = True
+                if t > 0.0 and t < 1.0:
+                    ts[n] = t
+                    n += 1
+        j = i
+    frac = _inside_pieces(ax, ay, rx, ry, verts, v0, v1, ts, n)
+    if frac > 0.0:
+        touch = True
+    return frac, touch
+
+
+@njit(cache=True)
+def _polygon_convexity(verts, starts):  # pragma: no cover - numba
+    """(K,) +1 for a convex counter-clockwise polygon, -1 for a convex clockwise one, 0 for a
+    non-convex one: every turn between consecutive edges of one sign and the turns summing to
+    one full turn (a pentagram's turns share a sign but sum to two)."""
+    K = starts.shape[0] - 1
+    out = np.zeros(K, dtype=np.int64)
+    for k in range(K):
+        v0 = starts[k]
+        v1 = starts[k + 1]
+        n = v1 - v0
+        pos = False
+        neg = False
+        turn = 0.0
+        for q in range(n):
+            i = v0 + q
+            j = v0 + (q + 1) % n
+            m = v0 + (q + 2) % n
+            ex = verts[j, 0] - verts[i, 0]
+            ey = verts[j, 1] - verts[i, 1]
+            fx = verts[m, 0] - verts[j, 0]
+            fy = verts[m, 1] - verts[j, 1]
+            c = _cross(ex, ey, fx, fy)
+            turn += np.arctan2(c, ex * fx + ey * fy)
+            if c > 0.0:
+                pos = True
+            elif c < 0.0:
+                neg = True
+        if abs(abs(turn) - 2.0 * np.pi) > 1e-6:
+            continue
+        if pos and not neg:
+            out[k] = 1
+        elif neg and not pos:
+            out[k] = -1
+    return out
+
+
+@njit(cache=True)
+def _convex_clip(ax, ay, bx, by, verts, v0, v1, orient):  # pragma: no cover - numba
+    """Cyrus-Beck: the parameter interval [t_in, t_out] of segment a->b inside the closed
+    convex polygon verts[v0:v1] (``orient`` +1 counter-clockwise, -1 clockwise); empty when
+    t_in > t_out. Its length is the exact inside fraction; non-empty means the two touch."""
+    rx = bx - ax
+    ry = by - ay
+    t_in = 0.0
+    t_out = 1.0
+    j = v1 - 1
+    for i in range(v0, v1):
+        # outward normal of edge j -> i: (ey, -ex) for a counter-clockwise polygon
+        ex = verts[i, 0] - verts[j, 0]
+        ey = verts[i, 1] - verts[j, 1]
+        nx = orient * ey
+        ny = -orient * ex
+        num = nx * (ax - verts[j, 0]) + ny * (ay - verts[j, 1])  # > 0: a outside this edge
+        den = nx * rx + ny * ry
+        if den == 0.0:
+            if num > 0.0:
+                return 1.0, 0.0
+        elif den < 0.0:
+            t_in = max(t_in, -num / den)
+        else:
+            t_out = min(t_out, -num / den)
+        if t_in > t_out:
+            return t_in, t_out
+        j = i
+    return t_in, t_out
+
+
 @njit(cache=True, parallel=True, error_model="numpy")
-def scene2d_batch(paths, centers, radii, verts, starts, margins):  # pragma: no cover - numba
+def scene2d_batch(paths, centers, radii, verts, starts, margins, lo, hi):  # pragma: no cover
     """One pass over every (path, segment, obstacle) of a scene of circles and polygons.
 
     The fused form of :func:`segment_circle_inside_fraction`,
     :func:`segment_polygon_inside_fraction`, :func:`segment_cylinder_distance` (infinite, for
-    circles) and :func:`segment_polygon_distance` that the 2-D cost and feasibility need,
-    without the (P, N - 1, J) intermediates. Only the xy coordinates of ``paths`` (P, N, >= 2)
-    are used.
+    circles), :func:`segment_polygon_distance` and the bounds test that the 2-D cost and
+    feasibility need, without the (P, N - 1, J) intermediates. Only the xy coordinates of
+    ``paths`` (P, N, >= 2) are used; ``lo``, ``hi``: the (2,) box, with a 1e-9 tolerance.
 
     Returns:
-        inside: (P,) length of path (xy segment length) inside circles and polygons;
+        length: (P,) xy path length;
+        inside: (P,) length of path inside circles and polygons;
         circle_hit: (P,) bool, some segment closer than ``radii`` to a circle's centre;
-        polygon_hit: (P,) bool, some segment touching a polygon or closer than its margin.
+        polygon_hit: (P,) bool, some segment touching a polygon or closer than its margin;
+        outside: (P,) bool, some node outside the box.
     """
     P, N, _ = paths.shape
     J = centers.shape[0]
     K = starts.shape[0] - 1
+    length = np.zeros(P)
     inside = np.zeros(P)
     circle_hit = np.zeros(P, dtype=np.bool_)
     polygon_hit = np.zeros(P, dtype=np.bool_)
+    outside = np.zeros(P, dtype=np.bool_)
     maxv = 0
     for k in range(K):
         maxv = max(maxv, starts[k + 1] - starts[k])
     box = _polygon_boxes(verts, starts)
+    convex = _polygon_convexity(verts, starts)
+    cap2 = np.empty(K)
+    for k in range(K):
+        cap2[k] = max(margins[k], 0.0) ** 2
+    tol = 1e-9
     for p in prange(P):
         ts = np.empty(maxv + 2)
         total = 0.0
+        plen = 0.0
         chit = False
         phit = False
+        out = False
+        for s in range(N):
+            x = paths[p, s, 0]
+            y = paths[p, s, 1]
+            if x < lo[0] - tol or x > hi[0] + tol or y < lo[1] - tol or y > hi[1] + tol:
+                out = True
         for s in range(N - 1):
             ax = paths[p, s, 0]
             ay = paths[p, s, 1]
@@ -545,19 +698,22 @@ def scene2d_batch(paths, centers, radii, verts, starts, margins):  # pragma: no 
             dx = bx - ax
             dy = by - ay
             A = dx * dx + dy * dy
+            if A == 0.0 and s > 0:
+                continue  # a repeated node: the point was tested as the previous segment's end
             L = np.sqrt(A)
+            plen += L
+            inv_a = 1.0 / A if A > 0.0 else 0.0
             for j in range(J):
                 fx = ax - centers[j, 0]
                 fy = ay - centers[j, 1]
                 r = radii[j]
-                # distance from the centre to the segment
-                t = 0.0
-                if A > 0.0:
-                    t = min(max(-(fx * dx + fy * dy) / A, 0.0), 1.0)
+                # squared distance from the centre to the segment
+                t = min(max(-(fx * dx + fy * dy) * inv_a, 0.0), 1.0)
                 qx = fx + t * dx
                 qy = fy + t * dy
-                if np.sqrt(qx * qx + qy * qy) < r:
-                    chit = True
+                if qx * qx + qy * qy >= r * r:
+                    continue  # the segment stays out of the open disc: no hit, no chord
+                chit = True
                 if A == 0.0:
                     continue
                 C = fx * fx + fy * fy - r * r
@@ -569,12 +725,23 @@ def scene2d_batch(paths, centers, radii, verts, starts, margins):  # pragma: no 
                     t1 = min(max((-B + sq) / (2.0 * A), 0.0), 1.0)
                     total += (t1 - t0) * L
             for k in range(K):
-                gap = _box_gap(ax, ay, bx, by, box, k)
-                cap = max(margins[k], 0.0)
-                if gap > 0.0 and gap >= cap:
+                gap2 = _box_gap2(ax, ay, bx, by, box, k)
+                if gap2 > 0.0 and gap2 >= cap2[k]:
                     continue  # clear of polygon k, and nothing inside it
+                gap = np.sqrt(gap2)
                 v0 = starts[k]
                 v1 = starts[k + 1]
+                if margins[k] <= 0.0 and A > 0.0 and convex[k] != 0:
+                    t_in, t_out = _convex_clip(ax, ay, bx, by, verts, v0, v1, convex[k])
+                    if t_in <= t_out:
+                        phit = True
+                        total += (t_out - t_in) * L
+                    continue
+                if margins[k] <= 0.0 and A > 0.0:  # no margin: one pass gives both answers
+                    frac, touch = _inside_fraction_and_touch(ax, ay, bx, by, verts, v0, v1, ts)
+                    total += frac * L
+                    phit = phit or touch
+                    continue
                 # clearance: touching or closer than the margin
                 if not phit:
                     if _point_in_polygon(ax, ay, verts, v0, v1):
@@ -599,7 +766,9 @@ def scene2d_batch(paths, centers, radii, verts, starts, margins):  # pragma: no 
                 if gap > 0.0 or A == 0.0:
                     continue
                 total += _inside_fraction_one(ax, ay, bx, by, verts, v0, v1, ts) * L
+        length[p] = plen
         inside[p] = total
         circle_hit[p] = chit
         polygon_hit[p] = phit
-    return inside, circle_hit, polygon_hit
+        outside[p] = out
+    return length, inside, circle_hit, polygon_hit, outside
