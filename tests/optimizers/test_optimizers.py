@@ -368,3 +368,22 @@ def test_schedule_follows_the_budget() -> None:
     assert fit_schedule(GWOConfig(), 250, {"max_iterations": 100}).max_iterations == 100  # type: ignore[attr-defined]
     assert fit_schedule(GWOConfig(), Budget(max_evaluations=500)) == GWOConfig()
     assert fit_schedule(PSOConfig(), 250) == PSOConfig()
+
+
+def test_fused_pso_move_matches_its_numpy_reference() -> None:
+    from uavplan.optimizers.pso import move, move_reference
+
+    rng = np.random.default_rng(5)
+    n, d = 30, 7
+    lower, upper = np.full(d, -1.0), np.linspace(1.0, 3.0, d)
+    x = rng.uniform(lower, upper, (n, d))
+    v = rng.normal(0.0, 2.0, (n, d))
+    pbest, gbest = rng.uniform(lower, upper, (n, d)), rng.uniform(lower, upper)
+    r1, r2 = rng.random((n, d)), rng.random((n, d))
+    v_max = 0.5 * (upper - lower)
+    args = (x, v, pbest, gbest, r1, r2, 0.9, 1.5, 1.5, v_max, lower, upper)
+    got_x, got_v = move(*args)
+    want_x, want_v = move_reference(*args)
+    np.testing.assert_allclose(got_x, want_x, rtol=1e-14, atol=1e-14)
+    np.testing.assert_allclose(got_v, want_v, rtol=1e-14, atol=1e-14)
+    assert np.any(got_x == upper) and np.any(got_v == -v_max)  # clamp and walls exercised

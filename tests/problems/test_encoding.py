@@ -65,3 +65,17 @@ def test_polar_form_in_2d() -> None:
     paths = enc.decode(X)
     assert paths.shape == (10, sc.n_waypoints + 2, 2)
     assert np.all(sc.bounds.contains(paths))
+
+
+def test_clipped_cumsum_matches_its_numpy_reference() -> None:
+    from uavplan.problems.encoding import clipped_cumsum, clipped_cumsum_reference
+
+    rng = np.random.default_rng(3)
+    for d in (2, 3):
+        steps = rng.normal(0.0, 30.0, (50, 12, d))
+        start = rng.uniform(0, 100, d)
+        lo, hi = np.zeros(d), np.full(d, 100.0)
+        got = clipped_cumsum(steps, start, lo, hi)
+        want = clipped_cumsum_reference(steps, start, lo, hi)
+        np.testing.assert_array_equal(got, want)
+        assert (got == 0.0).any() and (got == 100.0).any()  # the clip was exercised

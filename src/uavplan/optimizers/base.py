@@ -262,7 +262,8 @@ class Optimizer(ABC):
         return self.lower + self.rng.random((n, self.dim)) * (self.upper - self.lower)
 
     def clip(self, X: FloatArray) -> FloatArray:
-        return np.clip(X, self.lower, self.upper)
+        # minimum/maximum: the same as np.clip, without its dispatch overhead (hot path)
+        return np.minimum(np.maximum(X, self.lower), self.upper)
 
 
 # ---------------------------------------------------------------------- registry

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
+from numba import njit
 
 from uavplan.optimizers.base import (
     FloatArray,
@@ -43,6 +44,49 @@ from uavplan.optimizers.base import (
     OptimizerError,
     register,
 )
+
+
+def move_reference(
+    x: FloatArray,
+    v: FloatArray,
+    pbest: FloatArray,
+    gbest: FloatArray,
+    r1: FloatArray,
+    r2: FloatArray,
+    w: float,
+    c1: float,
+    c2: float,
+    v_max: FloatArray,
+    lower: FloatArray,
+    upper: FloatArray,
+) -> tuple[FloatArray, FloatArray]:
+    """One swarm move, Eq. (1), with the velocity clamp and mirrored walls: the NumPy form that
+    :func:`move` computes in one pass (tests compare the two)."""
+    v = w * v + c1 * r1 * (pbest - x) + c2 * r2 * (gbest - x)
+    v = np.minimum(np.maximum(v, -v_max), v_max)
+    x = x + v
+    outside = (x < lower) | (x > upper)
+    v = np.where(outside, -v, v)
+    return np.minimum(np.maximum(x, lower), upper), v
+
+
+@njit(cache=True)
+def move(x, v, pbest, gbest, r1, r2, w, c1, c2, v_max, lower, upper):  # pragma: no cover
+    """:func:`move_reference` fused into one loop (the hot path of every PSO variant)."""
+    n, d = x.shape
+    x_new = np.empty((n, d))
+    v_new = np.empty((n, d))
+    for i in range(n):
+        for j in range(d):
+            xj = x[i, j]
+            vj = w * v[i, j] + c1 * r1[i, j] * (pbest[i, j] - xj) + c2 * r2[i, j] * (gbest[j] - xj)
+            vj = min(max(vj, -v_max[j]), v_max[j])
+            xj = xj + vj
+            if xj < lower[j] or xj > upper[j]:
+                vj = -vj
+            x_new[i, j] = min(max(xj, lower[j]), upper[j])
+            v_new[i, j] = vj
+    return x_new, v_new
 
 
 @dataclass(frozen=True)
@@ -100,12 +144,20 @@ class PSO(Optimizer):
         x, v = self.x, self.v
         r1 = self.rng.random(x.shape)
         r2 = self.rng.random(x.shape)
-        v = self.w * v + cfg.c1 * r1 * (self.pbest_x - x) + cfg.c2 * r2 * (self.gbest_x - x)
-        v = np.clip(v, -self.v_max, self.v_max)
-        x = x + v
-        outside = (x < self.lower) | (x > self.upper)
-        v = np.where(outside, -v, v)
-        x = self.clip(x)
+        x, v = move(
+            x,
+            v,
+            self.pbest_x,
+            self.gbest_x,
+            r1,
+            r2,
+            self.w,
+            cfg.c1,
+            cfg.c2,
+            self.v_max,
+            self.lower,
+            self.upper,
+        )
         self.x, self.v = x, v
         return x.copy()
 

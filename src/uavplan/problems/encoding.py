@@ -10,6 +10,7 @@ is the absolute altitude inside the band; otherwise z spans the bounds.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from uavplan.problems.path_problem import Evaluation, PathProblem
@@ -93,6 +94,34 @@ class CartesianEncoding:
         return self.problem.evaluate(self.decode(X))
 
 
+@njit(cache=True)
+def clipped_cumsum(steps, start, lo, hi):  # pragma: no cover - numba
+    """Waypoints from steps (pop, n, d): ``x_i = clip(x_{i-1} + step_i, lo, hi)``, ``x_0`` the
+    start (d,); clipped after every step, so a cumulative sum will not do."""
+    pop, n, d = steps.shape
+    out = np.empty((pop, n, d))
+    for p in range(pop):
+        for c in range(d):
+            x = start[c]
+            for i in range(n):
+                x = min(max(x + steps[p, i, c], lo[c]), hi[c])
+                out[p, i, c] = x
+    return out
+
+
+def clipped_cumsum_reference(
+    steps: FloatArray, start: FloatArray, lo: FloatArray, hi: FloatArray
+) -> FloatArray:
+    """NumPy reference of :func:`clipped_cumsum` (tests compare the two)."""
+    pop, n, d = steps.shape
+    out = np.empty((pop, n, d))
+    prev = np.broadcast_to(start, (pop, d)).copy()
+    for i in range(n):
+        prev = np.clip(prev + steps[:, i], lo, hi)
+        out[:, i] = prev
+    return out
+
+
 class SphericalEncoding:
     """SPSO's spherical-vector encoding (Phung & Ha 2021); a polar form in 2-D.
 
@@ -159,21 +188,15 @@ class SphericalEncoding:
         n = self.n_waypoints
         g = X.reshape(X.shape[0], n, d)
         lo, hi = self.cart.point_lower, self.cart.point_upper
-        pts = np.empty((X.shape[0], n, d))
-        prev = np.broadcast_to(self._start, (X.shape[0], d)).copy()
-        for i in range(n):
-            r = g[:, i, 0]
-            if d == 3:
-                psi, phi = g[:, i, 1], g[:, i, 2]
-                step = np.stack(
-                    [r * np.cos(psi) * np.cos(phi), r * np.cos(psi) * np.sin(phi), r * np.sin(psi)],
-                    axis=1,
-                )
-            else:
-                phi = g[:, i, 1]
-                step = np.stack([r * np.cos(phi), r * np.sin(phi)], axis=1)
-            prev = np.clip(prev + step, lo, hi)
-            pts[:, i] = prev
+        r = g[:, :, 0]
+        if d == 3:
+            psi, phi = g[:, :, 1], g[:, :, 2]
+            rc = r * np.cos(psi)
+            steps = np.stack([rc * np.cos(phi), rc * np.sin(phi), r * np.sin(psi)], axis=2)
+        else:
+            phi = g[:, :, 1]
+            steps = np.stack([r * np.cos(phi), r * np.sin(phi)], axis=2)
+        pts = clipped_cumsum(np.ascontiguousarray(steps), self._start, lo, hi)
         return pts.reshape(X.shape[0], -1)
 
     def decode(self, X: FloatArray) -> FloatArray:
