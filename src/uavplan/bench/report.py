@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from uavplan.bench import plots, stats
+from uavplan.bench import plots, rggpso, stats
 from uavplan.bench.store import ResultStore
 from uavplan.io.atomic import write_bytes_atomic, write_text_atomic
 
@@ -81,12 +81,36 @@ def _png(fig: Any) -> bytes:
     return buf.getvalue()
 
 
+#: Above this many scenarios the per-scenario tables and figures give way to pooled ones.
+MAX_SCENARIO_ROWS = 12
+
+
+def _pooled_sections(df: pd.DataFrame) -> list[tuple[str, str, Any]]:
+    """Per-algorithm summaries over every scenario (for plans with many scenarios)."""
+    ok = df[df["status"] == "ok"]
+    table = ok.groupby("algorithm").agg(
+        runs=("run_id", "size"),
+        scenarios=("scenario", "nunique"),
+        feasible=("feasible", lambda s: float(np.mean(s.astype(bool)))),
+        first_feasible_iteration=("first_feasible_iteration", _nanmean),
+        evaluations=("evaluations", "mean"),
+        wall_time_s=("wall_time", "mean"),
+    )
+    note = (
+        f"{ok['scenario'].nunique()} scenarios: per-scenario tables and figures are left out; "
+        "means over every run of every scenario"
+    )
+    return [("Runs per algorithm", note, table)]
+
+
 def build_sections(df: pd.DataFrame, manifest: dict[str, Any]) -> list[tuple[str, str, Any]]:
     """(title, note, DataFrame) sections of the report."""
     sections: list[tuple[str, str, Any]] = []
     ok = df[df["status"] == "ok"]
     if ok.empty:
         return sections
+    if ok["scenario"].nunique() > MAX_SCENARIO_ROWS:
+        return sections + _pooled_sections(df)
     sections.append(
         (
             "Final cost",
@@ -171,14 +195,23 @@ def write_report(folder: str | Path) -> tuple[Path, Path]:
         ("boxplot", "Final cost over runs (PPSwarm Fig. 6 style)", lambda: plots.box_figure(df)),
         ("best_paths", "Best run's path per algorithm", lambda: plots.best_paths_figure(df)),
     ]
+    plan = str(manifest.get("plan", ""))
+    many = not df.empty and df["scenario"].nunique() > MAX_SCENARIO_ROWS
     for name, title, make in makers:
-        fig = make() if not df.empty else None
+        fig = make() if not df.empty and not many else None
         if fig is not None:
             data = _png(fig)
             write_bytes_atomic(figdir / f"{name}.png", data)
             figures.append((name, title, data))
 
     sections = build_sections(df, manifest)
+    if plan.startswith("rggpso-") and not df.empty:
+        paper_sections, paper_figures = rggpso.sections(df, plan)
+        sections = paper_sections + sections
+        for name, title, fig in paper_figures:
+            data = _png(fig)
+            write_bytes_atomic(figdir / f"{name}.png", data)
+            figures.insert(0, (name, title, data))
     n = len(df)
     n_err = int((df["status"] != "ok").sum()) if n else 0
     meta_rows = {
