@@ -519,3 +519,21 @@ def test_fused_kernel_convex_fast_path_agrees_with_the_general_method() -> None:
     dp = segment_polygon_distance(P3, verts, starts)
     assert np.array_equal(polygon_hit, np.any(dp <= 0.0, axis=(1, 2)))
     assert polygon_hit.any() and not polygon_hit.all()
+
+
+def test_convex_hulls_of_packed_polygons() -> None:
+    from scipy.spatial import ConvexHull
+
+    from uavplan.world.geometry import _convex_hulls, pack_polygons
+
+    rng = np.random.default_rng(11)
+    polys = [rng.uniform(0, 10, (n, 2)) for n in (3, 5, 9, 14)]
+    polys.append(np.array([[0, 0], [2, 0], [4, 0], [4, 4], [0, 4]], float))  # collinear points
+    hv, hs = _convex_hulls(*pack_polygons(polys))
+    for k, poly in enumerate(polys):
+        h = hv[hs[k] : hs[k + 1]]
+        ref = poly[ConvexHull(poly).vertices]  # counter-clockwise, no collinear points
+        assert len(h) == len(ref)
+        assert {tuple(p) for p in h} == {tuple(p) for p in ref}
+        x, y = h[:, 0], h[:, 1]
+        assert np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)) > 0  # counter-clockwise

@@ -644,6 +644,89 @@ def _convex_clip(ax, ay, bx, by, verts, v0, v1, orient):  # pragma: no cover - n
     return t_in, t_out
 
 
+@njit(cache=True)
+def _convex_hulls(verts, starts):  # pragma: no cover - numba
+    """Counter-clockwise convex hulls (Andrew's monotone chain) of the packed polygons, packed
+    the same way: ``(hull vertices (H, 2), hull starts (K + 1,))``."""
+    K = starts.shape[0] - 1
+    hv = np.empty((2 * verts.shape[0] + 2, 2))
+    hs = np.zeros(K + 1, dtype=np.int64)
+    m = 0
+    for k in range(K):
+        v0 = starts[k]
+        n = starts[k + 1] - v0
+        order = np.arange(n)
+        for q in range(1, n):  # insertion sort by (x, y)
+            key = order[q]
+            r = q - 1
+            while r >= 0 and (
+                verts[v0 + order[r], 0] > verts[v0 + key, 0]
+                or (
+                    verts[v0 + order[r], 0] == verts[v0 + key, 0]
+                    and verts[v0 + order[r], 1] > verts[v0 + key, 1]
+                )
+            ):
+                order[r + 1] = order[r]
+                r -= 1
+            order[r + 1] = key
+        h = np.empty((2 * n + 1, 2))
+        c = 0
+        for sweep in range(2):  # lower chain left to right, then upper chain right to left
+            base = c
+            for q in range(n):
+                i = v0 + (order[q] if sweep == 0 else order[n - 1 - q])
+                px = verts[i, 0]
+                py = verts[i, 1]
+                while c - base >= 2 and (
+                    _cross(
+                        h[c - 1, 0] - h[c - 2, 0],
+                        h[c - 1, 1] - h[c - 2, 1],
+                        px - h[c - 2, 0],
+                        py - h[c - 2, 1],
+                    )
+                    <= 0.0
+                ):
+                    c -= 1
+                h[c, 0] = px
+                h[c, 1] = py
+                c += 1
+            c -= 1  # the chain's last point starts the other chain
+        for q in range(c):
+            hv[m + q, 0] = h[q, 0]
+            hv[m + q, 1] = h[q, 1]
+        m += c
+        hs[k + 1] = m
+    return hv[:m].copy(), hs
+
+
+@njit(cache=True)
+def _hull_missed(ax, ay, bx, by, hv, h0, h1, delta):  # pragma: no cover - numba
+    """True if segment a->b misses the counter-clockwise convex hull hv[h0:h1] grown by
+    ``delta`` (a conservative rejection test: a segment that touches the polygon never misses
+    its grown hull, whatever the rounding)."""
+    rx = bx - ax
+    ry = by - ay
+    t_in = 0.0
+    t_out = 1.0
+    j = h1 - 1
+    for i in range(h0, h1):
+        ex = hv[i, 0] - hv[j, 0]
+        ey = hv[i, 1] - hv[j, 1]
+        num = ey * (ax - hv[j, 0]) - ex * (ay - hv[j, 1]) - delta * np.sqrt(ex * ex + ey * ey)
+        den = ey * rx - ex * ry
+        if den == 0.0:
+            if num > 0.0:
+                return True
+        elif den < 0.0:
+            t_in = max(t_in, -num / den)
+        else:
+            t_out = min(t_out, -num / den)
+        if t_in > t_out:
+            return True
+        j = i
+    return False
+
+
 @njit(cache=True, parallel=True, error_model="numpy")
 def scene2d_batch(paths, centers, radii, verts, starts, margins, lo, hi):  # pragma: no cover
     """One pass over every (path, segment, obstacle) of a scene of circles and polygons.
@@ -674,6 +757,8 @@ def scene2d_batch(paths, centers, radii, verts, starts, margins, lo, hi):  # pra
         maxv = max(maxv, starts[k + 1] - starts[k])
     box = _polygon_boxes(verts, starts)
     convex = _polygon_convexity(verts, starts)
+    hull_v, hull_s = _convex_hulls(verts, starts)
+    delta = 1e-9 * (1.0 + np.max(np.abs(verts))) if verts.shape[0] else 0.0
     cap2 = np.empty(K)
     for k in range(K):
         cap2[k] = max(margins[k], 0.0) ** 2
@@ -738,6 +823,8 @@ def scene2d_batch(paths, centers, radii, verts, starts, margins, lo, hi):  # pra
                         total += (t_out - t_in) * L
                     continue
                 if margins[k] <= 0.0 and A > 0.0:  # no margin: one pass gives both answers
+                    if _hull_missed(ax, ay, bx, by, hull_v, hull_s[k], hull_s[k + 1], delta):
+                        continue  # clear of the convex hull, so of the polygon
                     frac, touch = _inside_fraction_and_touch(ax, ay, bx, by, verts, v0, v1, ts)
                     total += frac * L
                     phit = phit or touch
