@@ -212,7 +212,10 @@ def test_planners_simple2d(name: str) -> None:
 def test_rgg_pso_plus_no_worse_than_pre_divide() -> None:
     sc = load_builtin("simple2d")
     for seed in range(3):
-        r = get_planner("rgg-pso+", pop_size=30).plan(sc, budget=30, seed=seed)
+        # a dense, densified graph: every swarm starts feasible, so the merge rules are tested
+        r = get_planner("rgg-pso+", pop_size=30, n_samples=100, max_doublings=3).plan(
+            sc, budget=30, seed=seed
+        )
         run = r.config["run"]
         assert run["pre_divide_feasible"] and run["divided_at"] == 15
         assert r.feasible
@@ -283,3 +286,23 @@ def test_duplicate_invariant_presets_score_particles_like_decoded_paths() -> Non
     slow_cost, slow_feas = evaluate_decoded(problem, full)
     assert np.allclose(fast_cost, slow_cost, rtol=1e-12, atol=1e-9)
     assert np.array_equal(fast_feas, slow_feas)
+
+
+def test_rgg_pso_samples_n_nodes_by_default_as_the_paper_says() -> None:
+    """Sect. 4.2.1: "Sample N random nodes ... N denotes the PSO particle vector's length"; a
+    graph that does not connect is not densified (max_doublings = 0) and the swarm starts
+    uniform."""
+    sc = load_builtin("simple2d")
+    r = get_planner("rgg-pso", pop_size=20, n_waypoints=7).plan(sc, budget=3, seed=0)
+    assert r.config["run"]["rgg_samples"] == [7]
+    assert r.config["n_samples"] is None and r.config["max_doublings"] == 0
+    dense = get_planner("rgg-pso", pop_size=20, n_samples=50, max_doublings=2)
+    assert dense.plan(sc, budget=3, seed=0).config["run"]["rgg_samples"][0] >= 50
+    seeded = uniform = 0
+    for seed in range(12):
+        run = get_planner("rgg-pso", pop_size=20, n_waypoints=3).plan(sc, budget=2, seed=seed)
+        if run.config["run"]["uniform_seeded"]:
+            uniform += 1
+        else:
+            seeded += 1
+    assert seeded > 0 and uniform > 0  # 3 samples connect the task only sometimes

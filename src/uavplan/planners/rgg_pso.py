@@ -16,7 +16,8 @@ evaluating the particle directly (a zero-length segment adds no length and no in
 test checks it); for presets with turning or climb angles it does not (a zero-length segment
 hides the turn at a duplicated node), hence the decoded path.
 
-**RGG-PSO (``rgg-pso``).** RGG candidates (:func:`uavplan.planners.rgg.rgg_candidates`) give the
+**RGG-PSO (``rgg-pso``).** RGG candidates (:func:`uavplan.planners.rgg.rgg_candidates`, one
+graph of ``N`` free samples per swarm, Sect. 4.2.1, not densified by default) give the
 initial swarm: particle ``i`` is Alg. 1 of candidate ``i mod n_candidates`` with its own random
 duplication. A candidate with more than ``N`` interior nodes is first shortened by an exact
 dynamic program to the shortest feasible sub-sequence of its nodes with at most ``N`` interior
@@ -87,7 +88,6 @@ from uavplan.planners.base import (
 )
 from uavplan.planners.rgg import (
     DEFAULT_GAMMA,
-    DEFAULT_SAMPLES,
     RGGPlanner,
     feasibility_problem,
     rgg_candidates,
@@ -369,8 +369,11 @@ class RGGPSOPlanner(Planner):
     Args:
         n_waypoints: particle length N (default: the scenario's ``n_waypoints``).
         cost, weights: cost preset and weight overrides (the scenario's by default).
-        n_samples: RGG samples per graph (densified by doubling, 3 times at most, until the
-            task connects).
+        n_samples: RGG samples per graph; default (None) the particle length N, as the paper
+            says ("Sample N random nodes ... N denotes the PSO particle vector's length").
+        max_doublings: densify a graph that does not connect the task by doubling its samples,
+            at most this many times (0, the paper's behaviour: a swarm whose graph does not
+            connect starts uniform, like PSO).
         gamma: RGG connectivity constant (:data:`uavplan.planners.rgg.DEFAULT_GAMMA`).
         n_candidates: distinct RGG paths seeding the swarm (at most ``pop_size``).
         penalty: edge-penalty factor for alternative candidates (lengths times ``1 + penalty``).
@@ -385,6 +388,7 @@ class RGGPSOPlanner(Planner):
         "cost",
         "weights",
         "n_samples",
+        "max_doublings",
         "gamma",
         "n_candidates",
         "penalty",
@@ -396,11 +400,12 @@ class RGGPSOPlanner(Planner):
         n_waypoints: int | None = None,
         cost: str | None = None,
         weights: dict[str, float] | None = None,
-        n_samples: int = DEFAULT_SAMPLES,
+        n_samples: int | None = None,
         gamma: float = DEFAULT_GAMMA,
         n_candidates: int = 10,
         penalty: float = 1.0,
         track_feasibility: bool = True,
+        max_doublings: int = 0,
         **pso: Any,
     ) -> None:
         unknown = set(pso) - set(_PSO_FIELDS)
@@ -415,14 +420,17 @@ class RGGPSOPlanner(Planner):
             raise PlannerError(f"{self.name}: {e}") from None
         if n_waypoints is not None and int(n_waypoints) < 1:
             raise PlannerError(f"n_waypoints must be >= 1, got {n_waypoints}")
-        if int(n_samples) < 1 or int(n_candidates) < 1:
+        if (n_samples is not None and int(n_samples) < 1) or int(n_candidates) < 1:
             raise PlannerError("n_samples and n_candidates must be >= 1")
+        if int(max_doublings) < 0:
+            raise PlannerError(f"max_doublings must be >= 0, got {max_doublings}")
         if not gamma > 0 or penalty < 0:
             raise PlannerError(f"need gamma > 0 and penalty >= 0, got {gamma}, {penalty}")
         self.n_waypoints = None if n_waypoints is None else int(n_waypoints)
         self.cost = cost
         self.weights = weights
-        self.n_samples = int(n_samples)
+        self.n_samples = None if n_samples is None else int(n_samples)
+        self.max_doublings = int(max_doublings)
         self.gamma = float(gamma)
         self.n_candidates = int(n_candidates)
         self.penalty = float(penalty)
@@ -437,6 +445,7 @@ class RGGPSOPlanner(Planner):
             "cost": self.cost,
             "weights": self.weights,
             "n_samples": self.n_samples,
+            "max_doublings": self.max_doublings,
             "gamma": self.gamma,
             "n_candidates": self.n_candidates,
             "penalty": self.penalty,
@@ -459,7 +468,8 @@ class RGGPSOPlanner(Planner):
             np.random.default_rng(rgg_ss),
             problem.task,
             n_candidates=min(self.n_candidates, pop),
-            n_samples=self.n_samples,
+            n_samples=self.n_samples if self.n_samples is not None else enc.n_waypoints,
+            max_doublings=self.max_doublings,
             gamma=self.gamma,
             penalty=self.penalty,
             strict_altitude=problem.strict_altitude,
