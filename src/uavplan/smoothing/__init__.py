@@ -1,0 +1,25 @@
+"""Path smoothing: Dubins CSC curves (PPSwarm Sect. 4.4)."""
+
+from uavplan.smoothing.dubins import (
+    CSC_KINDS,
+    DubinsPath,
+    SmoothedPath,
+    discrete_curvature,
+    dubins_csc,
+    max_discrete_curvature,
+    smooth_path,
+    waypoint_headings,
+    wrap_angle,
+)
+
+__all__ = [
+    "CSC_KINDS",
+    "DubinsPath",
+    "SmoothedPath",
+    "discrete_curvature",
+    "dubins_csc",
+    "max_discrete_curvature",
+    "smooth_path",
+    "waypoint_headings",
+    "wrap_angle",
+]
