@@ -14,6 +14,7 @@ from rich.table import Table
 from uavplan.cli_bench import bench_app
 from uavplan.cli_bench import report as report_command
 from uavplan.cli_scenario import scenario_app
+from uavplan.cli_verify import verify as verify_command
 
 app = typer.Typer(
     name="uavplan",
@@ -25,6 +26,7 @@ app = typer.Typer(
 app.add_typer(scenario_app, name="scenario")
 app.add_typer(bench_app, name="bench")
 app.command("report")(report_command)
+app.command("verify")(verify_command)
 
 err = Console(stderr=True)
 out = Console()

@@ -1,0 +1,140 @@
+"""``uavplan verify PLAN SCENARIO``: check a plan independently of the planner.
+
+Prints every violation, then a summary (UAVs, pairs checked, minimum separation, violations by
+kind). Exit codes: 0 no violation, 1 some violation, 2 bad input (a missing or unreadable file,
+invalid JSON, a missing or malformed field, mismatched lengths, an unusable scenario), reported on
+stderr as one line naming the file, the field and the value, without a traceback. What is checked:
+:mod:`uavplan.fleet.verify` and ``docs/verify.md``.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+from rich.console import Console
+
+if TYPE_CHECKING:
+    from uavplan.fleet.verify import VerifyReport
+
+
+def _fail(lines: list[str] | str, code: int = 2) -> typer.Exit:
+    err = Console(stderr=True, highlight=False, soft_wrap=True)
+    for line in [lines] if isinstance(lines, str) else lines:
+        err.print(line, markup=False)
+    return typer.Exit(code)
+
+
+def _read_plan(path: Path) -> Any:
+    if path.is_dir() and (path / "plan.json").is_file():
+        path = path / "plan.json"
+    if not path.exists():
+        raise _fail(f"{path}: no such plan file")
+    if path.is_dir():
+        raise _fail(f"{path}: a folder without a plan.json")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise _fail(f"{path}: cannot read: {exc}") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise _fail(
+            f"{path}: invalid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}"
+        ) from None
+
+
+def _m(v: float) -> str:
+    return f"{v:.3f}".rstrip("0").rstrip(".") if v == v and abs(v) != float("inf") else str(v)
+
+
+def summary_lines(report: VerifyReport, plan_name: str) -> list[str]:
+    """The summary printed after the violations, as plain text lines."""
+    n = len(report.uav_ids)
+    lines = [
+        f"plan: {plan_name} against scenario {report.scenario}: {n} UAV{'s' * (n != 1)}, "
+        f"{report.n_segments} segment{'s' * (report.n_segments != 1)}"
+        + (" (smoothed paths)" if report.smoothed else "")
+    ]
+    lines.append(
+        f"pairs: {report.pairs_total}, {report.pairs_checked} checked exactly after pruning"
+    )
+    if report.min_separation_pair is not None:
+        a, b = report.min_separation_pair
+        lines.append(
+            f"min separation: {_m(report.min_separation)} m between {a} and {b} at "
+            f"t={report.min_separation_time:.3f} s (S2 {_m(report.s2)} m)"
+        )
+    elif n > 1:
+        lines.append(f"min separation: more than S2 = {_m(report.s2)} m (no pair came close)")
+    counts = {k: c for k, c in report.counts.items() if c}
+    if counts:
+        detail = ", ".join(f"{k} {c}" for k, c in counts.items())
+        lines.append(f"violations: {len(report.violations)} ({detail})")
+    else:
+        lines.append("violations: none")
+    return lines
+
+
+def verify(
+    plan_file: Annotated[
+        Path, typer.Argument(help="A plan.json written by `uavplan plan` (or its folder).")
+    ],
+    scenario: Annotated[
+        str, typer.Argument(help="A scenario file (.yaml/.json) or built-in name.")
+    ],
+    smoothed: Annotated[
+        bool,
+        typer.Option(
+            "--smoothed", help="Verify each UAV's smoothed path instead of its waypoints."
+        ),
+    ] = False,
+    max_show: Annotated[
+        int, typer.Option("--max-show", help="Print at most this many violations (0: all).")
+    ] = 0,
+    json_out: Annotated[
+        Path | None, typer.Option("--json", help="Also write the report to this JSON file.")
+    ] = None,
+) -> None:
+    """Check PLAN_FILE against SCENARIO independently of the planner: UAV-UAV separation over
+    continuous time, obstacles, terrain and altitude band along every segment, bounds, times and
+    speed. Exit 0 if all pass, 1 on any violation, 2 on bad input."""
+    from uavplan.fleet.verify import PlanFormatError, parse_plan, verify_trajectories
+    from uavplan.io.scenario_file import ScenarioFileError
+    from uavplan.scenarios import resolve
+
+    data = _read_plan(plan_file)
+    try:
+        world = resolve(scenario)
+    except ScenarioFileError as exc:
+        raise _fail(exc.problems) from None
+    except (OSError, ValueError) as exc:
+        raise _fail(f"{scenario}: {exc}") from None
+    shown = plan_file / "plan.json" if plan_file.is_dir() else plan_file
+    try:
+        trajs, name = parse_plan(data, world.dim, smoothed=smoothed, source=str(shown))
+    except PlanFormatError as exc:
+        raise _fail(exc.problems[0]) from None
+    report = verify_trajectories(trajs, world, name, smoothed)
+
+    out = Console(highlight=False, soft_wrap=True)
+    limit = max_show if max_show > 0 else len(report.violations)
+    for v in report.violations[:limit]:
+        out.print(f"{v.kind}: {v.message}", markup=False)
+    if len(report.violations) > limit:
+        out.print(f"... and {len(report.violations) - limit} more (--max-show 0 shows all)")
+    for w in report.warnings:
+        out.print(f"warning: {w}", markup=False)
+    for line in summary_lines(report, str(shown)):
+        out.print(line, markup=False)
+    out.print("[bold green]OK[/]" if report.ok else "[bold red]FAILED[/]")
+    if json_out is not None:
+        try:
+            json_out.parent.mkdir(parents=True, exist_ok=True)
+            json_out.write_text(json.dumps(report.to_dict(), indent=2) + "\n", encoding="utf-8")
+        except OSError as exc:
+            raise _fail(f"--json {json_out}: cannot write: {exc}") from None
+    if not report.ok:
+        raise typer.Exit(1)
