@@ -36,7 +36,16 @@ from uavplan.world import (
     Terrain,
 )
 
-BUILTINS = ["jacksboro", "simple2d", "spso", "topobathy"]
+BUILTINS = [
+    "jacksboro",
+    "ppswarm1",
+    "ppswarm2",
+    "ppswarm3",
+    "ppswarm4",
+    "simple2d",
+    "spso",
+    "topobathy",
+]
 
 
 # ---------------------------------------------------------------------------- helpers
@@ -398,7 +407,8 @@ def test_schema() -> None:
         "description",
     ):
         assert key in sch["properties"]
-    assert sch["required"] == ["name", "tasks"]
+    assert sch["required"] == ["name"]  # and one of tasks or fleet:
+    assert sch["oneOf"] == [{"required": ["tasks"]}, {"required": ["fleet"]}]
     assert sch["additionalProperties"] is False
 
 
@@ -645,3 +655,157 @@ def test_resolve_generates_rgg_family_scenes() -> None:
         resolve("rgg-n07-i042-s3").metadata["reference_length"]
         == rgg_scenario(7, 42, 3).metadata["reference_length"]
     )
+
+
+# ---------------------------------------------------------------------------- fleet
+def fleet_on_spso(**over: Any) -> dict[str, Any]:
+    data = {k: v for k, v in on_spso().items() if k not in ("tasks", "task_z")}
+    data["fleet"] = {"count": 12, "pattern": "crossing", "seed": 0}
+    data.update(over)
+    return data
+
+
+def test_fleet_generates_tasks() -> None:
+    from uavplan.world.fleet_tasks import fleet_tasks
+
+    s = scenario_from_dict(fleet_on_spso(fleet={"count": 12, "pattern": "random", "seed": 3}))
+    assert [t.id for t in s.tasks] == [f"uav{i}" for i in range(12)]
+    assert s.tasks == fleet_tasks(s, 12, seed=3, pattern="random")
+    assert s.metadata["fleet"] == {"count": 12, "pattern": "random", "seed": 3, "min_spacing": None}
+    assert s.metadata["spec"]["fleet"] == {"count": 12, "pattern": "random", "seed": 3}
+    assert "tasks" not in s.metadata["spec"]
+    # defaults: crossing, seed 0, 3 * S2
+    d = scenario_from_dict(fleet_on_spso(fleet={"count": 5}))
+    assert d.tasks == fleet_tasks(d, 5, seed=0, pattern="crossing", min_spacing=30.0)
+    # min_spacing
+    w = scenario_from_dict(fleet_on_spso(fleet={"count": 5, "min_spacing": 80}))
+    assert w.tasks == fleet_tasks(w, 5, min_spacing=80.0)
+
+
+FLEET_CASES: list[Case] = [
+    (
+        "both.yaml",
+        lambda d: fleet_on_spso(tasks=[{"start": [200, 100, 300], "goal": [800, 800, 300]}]),
+        [("fleet", "give either 'tasks' or 'fleet', not both")],
+    ),
+    (
+        "neither.yaml",
+        lambda d: {k: v for k, v in fleet_on_spso().items() if k != "fleet"},
+        [("tasks", "required field missing (or give 'fleet'")],
+    ),
+    (
+        "null_fleet.yaml",
+        lambda d: fleet_on_spso(fleet=None),
+        [("tasks", "required field missing (or give 'fleet'")],
+    ),
+    (
+        "count0.yaml",
+        lambda d: fleet_on_spso(fleet={"count": 0}),
+        [("fleet.count = 0", "greater than or equal to 1")],
+    ),
+    (
+        "count_bool.yaml",
+        lambda d: fleet_on_spso(fleet={"count": True}),
+        [("fleet.count = true", "not true/false")],
+    ),
+    (
+        "count_float.yaml",
+        lambda d: fleet_on_spso(fleet={"count": 2.5}),
+        [("fleet.count = 2.5", "valid integer")],
+    ),
+    (
+        "no_count.yaml",
+        lambda d: fleet_on_spso(fleet={"pattern": "random"}),
+        [("fleet.count", "required field missing")],
+    ),
+    (
+        "pattern.yaml",
+        lambda d: fleet_on_spso(fleet={"count": 4, "pattern": "zigzag"}),
+        [('fleet.pattern = "zigzag"', "'crossing' or 'random'")],
+    ),
+    (
+        "seed.yaml",
+        lambda d: fleet_on_spso(fleet={"count": 4, "seed": -1}),
+        [("fleet.seed = -1", "greater than or equal to 0")],
+    ),
+    (
+        "spacing.yaml",
+        lambda d: fleet_on_spso(fleet={"count": 4, "min_spacing": -5}),
+        [("fleet.min_spacing = -5", "greater than 0")],
+    ),
+    (
+        "fleet_key.yaml",
+        lambda d: fleet_on_spso(fleet={"count": 4, "size": 3}),
+        [("fleet.size = 3", "unknown key (allowed: count, pattern, seed, min_spacing)")],
+    ),
+    (
+        "fleet_scalar.yaml",
+        lambda d: fleet_on_spso(fleet=7),
+        [("fleet = 7", "valid dictionary")],
+    ),
+    (
+        "too_many.yaml",
+        lambda d: fleet_on_spso(fleet={"count": 5000}),
+        [('fleet = {"count": 5000}', "cannot place 5000 UAV starts at least 30 m apart")],
+    ),
+    (
+        "too_wide.yaml",
+        lambda d: fleet_on_spso(fleet={"count": 40, "min_spacing": 400}),
+        [('fleet = {"count": 40, "min_spacing": 400}', "placed ")],
+    ),
+]
+
+
+@pytest.mark.parametrize("case", FLEET_CASES, ids=[c[0] for c in FLEET_CASES])
+def test_fleet_problem_lines(tmp_path: Path, case: Case) -> None:
+    path = _write_case(tmp_path, case)
+    problems = problems_of(path)
+    for where, reason in case[2]:
+        assert has_line(problems, f"{path}: {where}", reason), problems
+    assert len(problems) == len(case[2]), problems
+
+
+def test_fleet_with_other_problems_still_checked(tmp_path: Path) -> None:
+    data = fleet_on_spso(
+        circles=[{"center": [1, 1], "radius": -1}],
+        polygons=[{"vertices": [[100, 100], [200, 200], [300, 300]]}],
+    )
+    problems = problems_of(write(tmp_path / "f.yaml", data))
+    assert has_line(problems, "circles[0].radius", "greater than 0"), problems
+    assert has_line(problems, "polygons[0].vertices", "zero area"), problems
+    assert len(problems) == 2, problems
+
+
+@pytest.mark.parametrize("suffix", [".yaml", ".json"])
+def test_fleet_round_trip(tmp_path: Path, suffix: str) -> None:
+    s = scenario_from_dict(fleet_on_spso(fleet={"count": 20, "pattern": "random", "seed": 5}))
+    out = save_scenario(s, tmp_path / f"fleet{suffix}")
+    text = out.read_text()
+    data = json.loads(text) if suffix == ".json" else yaml.safe_load(text)
+    assert data["fleet"] == {"count": 20, "pattern": "random", "seed": 5}
+    assert "tasks" not in data  # the fleet block is written, not the expanded tasks
+    again = load_scenario(out)
+    assert_same(s, again)
+    assert scenario_to_dict(again) == scenario_to_dict(s)
+    # spec_from_scenario (a scenario without its file-level spec) writes the expanded tasks
+    spec = spec_from_scenario(s)
+    assert spec.fleet is None and spec.tasks is not None and len(spec.tasks) == 20
+    s.metadata.pop("spec")
+    assert_same(s, load_scenario(save_scenario(s, tmp_path / f"expanded{suffix}")))
+
+
+def test_fleet_builtins_load() -> None:
+    for k, count in zip(range(1, 5), [6, 10, 15, 20], strict=True):
+        s = load_builtin(f"ppswarm{k}")
+        assert len(s.tasks) == 40 and len(s.cylinders) == count
+        assert s.metadata["spec"]["fleet"] == {"count": 40, "pattern": "crossing", "seed": 0}
+        assert (s.cost, s.n_waypoints) == ("ppswarm", 10)
+
+
+def test_fleet_schema() -> None:
+    sch = schema()
+    assert "fleet" in sch["properties"]
+    fleet = sch["$defs"]["FleetSpec"]
+    assert fleet["required"] == ["count"]
+    assert set(fleet["properties"]) == {"count", "pattern", "seed", "min_spacing"}
+    assert ScenarioSpec.model_validate({"name": "x", "fleet": {"count": 3}}).tasks is None

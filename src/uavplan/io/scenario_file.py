@@ -9,6 +9,9 @@ defaults and an example, is ``docs/scenario-format.md``. Frame: x east, y north,
 * :func:`scenario_to_dict` / :func:`save_scenario` write the validated file-level spec back (the
   loaded Scenario keeps it in ``metadata["spec"]``), atomically.
 * :func:`schema` is the JSON Schema of the format.
+* ``fleet:`` (instead of ``tasks:``) generates the tasks with
+  :func:`uavplan.world.fleet_tasks.fleet_tasks`; the spec kept and written back holds the
+  ``fleet`` block, which regenerates the same tasks.
 
 Every problem with a file is reported at once by :class:`ScenarioFileError`, one line per problem:
 ``<file>: <field path> = <value>: <reason>``, e.g.
@@ -18,6 +21,7 @@ Every problem with a file is reported at once by :class:`ScenarioFileError`, one
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import difflib
 import json
 import math
@@ -36,8 +40,11 @@ from pydantic import (
     ConfigDict,
     Field,
     ValidationError,
+    ValidationInfo,
+    field_validator,
     model_validator,
 )
+from pydantic_core import PydanticCustomError
 
 from uavplan.io.atomic import write_text_atomic
 from uavplan.world import (
@@ -54,6 +61,7 @@ from uavplan.world import (
     Terrain,
     UncertainArea,
 )
+from uavplan.world.fleet_tasks import fleet_tasks
 from uavplan.world.terrain import BUILTIN_TERRAINS, TerrainError
 
 __all__ = [
@@ -274,10 +282,41 @@ class PlanningSpec(_Spec):
     )
 
 
+class FleetSpec(_Spec):
+    """A generated fleet: tasks uav0 ... uav<count-1> (uavplan.world.fleet_tasks)."""
+
+    count: Annotated[int, BeforeValidator(_no_bool), Field(ge=1)] = Field(
+        description="Number of UAVs (tasks uav0 ... uav<count-1>)."
+    )
+    pattern: Literal["crossing", "random"] = Field(
+        "crossing",
+        description="'crossing': starts along the west/south edges, goals along the east/north "
+        "edges, paired at random so the lines cross; 'random': anywhere.",
+    )
+    seed: Annotated[int, BeforeValidator(_no_bool), Field(ge=0)] = Field(
+        0, description="Seed of the generator (the same seed gives the same tasks)."
+    )
+    min_spacing: PosNum | None = Field(
+        None,
+        description="Least distance between two starts, and between two goals, metres; "
+        "null = 3 * uav.s2.",
+    )
+
+
+class _TasksMissing:
+    """Stands for a missing ``tasks`` (and no ``fleet``), so the error names ``tasks``."""
+
+
+_TASKS_MISSING = _TasksMissing()
+
+
 class ScenarioSpec(_Spec):
     """A uavplan scenario file (frame: x east, y north, z up; metres, seconds)."""
 
-    model_config = ConfigDict(title="uavplan scenario")
+    model_config = ConfigDict(
+        title="uavplan scenario",
+        json_schema_extra={"oneOf": [{"required": ["tasks"]}, {"required": ["fleet"]}]},
+    )
 
     name: str = Field(min_length=1, description="Scenario name.")
     description: str = Field("", description="Free text (sources, citations).")
@@ -304,8 +343,38 @@ class ScenarioSpec(_Spec):
         description="Whether task z values are absolute or above the terrain (converted to "
         "absolute at load).",
     )
-    tasks: Annotated[list[TaskSpec], Field(min_length=1)] = Field(description="At least one task.")
+    tasks: Annotated[list[TaskSpec], Field(min_length=1)] | None = Field(
+        None, description="At least one task. Required unless 'fleet' is given (not both)."
+    )
+    fleet: FleetSpec | None = Field(
+        None,
+        description="Generate the tasks (uav0 ... uav<count-1>) instead of listing them; not "
+        "with 'tasks'.",
+    )
     planning: PlanningSpec = Field(default_factory=lambda: PlanningSpec.model_validate({}))
+
+    @model_validator(mode="before")
+    @classmethod
+    def _tasks_or_fleet(cls, data: Any) -> Any:
+        if isinstance(data, Mapping) and data.get("tasks") is None and data.get("fleet") is None:
+            return {**data, "tasks": _TASKS_MISSING}
+        return data
+
+    @field_validator("tasks", mode="before")
+    @classmethod
+    def _tasks_given(cls, value: Any) -> Any:
+        if value is _TASKS_MISSING:
+            raise PydanticCustomError("missing", "Field required")
+        return value
+
+    @field_validator("fleet")
+    @classmethod
+    def _not_both(cls, value: FleetSpec | None, info: ValidationInfo) -> FleetSpec | None:
+        if value is not None and info.data.get("tasks") is not None:
+            raise ValueError(
+                "give either 'tasks' or 'fleet', not both ('fleet' generates the tasks)"
+            )
+        return value
 
 
 def schema() -> dict[str, Any]:
@@ -440,6 +509,8 @@ def _reason(err: Mapping[str, Any]) -> str:
             return f"unknown key (did you mean '{close[0]}'?)"
         return "unknown key" + (f" (allowed: {', '.join(allowed)})" if allowed else "")
     if kind == "missing":
+        if loc == ("tasks",):
+            return "required field missing (or give 'fleet' to generate the tasks)"
         return "required field missing"
     if kind == "finite_number":
         hint = "; use null for no limit" if last in ("z_min", "z_max") else ""
@@ -634,7 +705,7 @@ def _pruned(
         keep = [i for i in range(len(items)) if i not in bad]
         out[key] = [items[i] for i in keep]
         index_map[key] = keep
-    if not out.get("tasks"):
+    if not out.get("tasks") and out.get("fleet") is None:
         return None
     return out, index_map
 
@@ -909,7 +980,7 @@ def _build(spec: ScenarioSpec, problems: _Problems, base_dir: Path) -> Scenario:
     tasks: list[Task] = []
     checks: list[tuple[int, str, tuple[float, ...]]] = []  # (spec index, which, point)
     seen: dict[str, int] = {}
-    for i, t in enumerate(spec.tasks):
+    for i, t in enumerate(spec.tasks or []):
         tid = t.id if t.id is not None else f"uav{problems.orig('tasks', i)}"
         if tid in seen:
             problems.add(
@@ -944,6 +1015,8 @@ def _build(spec: ScenarioSpec, problems: _Problems, base_dir: Path) -> Scenario:
     if not tasks and checks:  # no valid task, but single points to check: scene for checks only
         p0 = checks[0][2]
         tasks.append(Task("check", p0, p0))
+    if spec.fleet is not None and bounds is not None:  # stands in until the fleet is generated
+        tasks.append(Task("fleet", bounds.lower, bounds.lower))
     if bounds is None or uav is None or not tasks or dim is None or terrain_failed:
         problems.raise_if_any()
         raise ScenarioFileError([f"{problems.source}: invalid scenario"])  # pragma: no cover
@@ -978,7 +1051,27 @@ def _build(spec: ScenarioSpec, problems: _Problems, base_dir: Path) -> Scenario:
         for reason in scenario.point_problems(np.asarray(point)):
             problems.add(("tasks", i, which), reason)
     problems.raise_if_any()
+    if spec.fleet is not None:
+        scenario = _with_generated_fleet(scenario, spec.fleet, problems)
     return scenario
+
+
+def _with_generated_fleet(scenario: Scenario, fleet: FleetSpec, problems: _Problems) -> Scenario:
+    """The scenario with the tasks its ``fleet`` block generates (every other check passed)."""
+    try:
+        tasks = fleet_tasks(
+            scenario,
+            fleet.count,
+            seed=fleet.seed,
+            pattern=fleet.pattern,
+            min_spacing=fleet.min_spacing,
+        )
+    except ValueError as exc:
+        problems.add(("fleet",), str(exc))
+        problems.raise_if_any()
+        raise  # pragma: no cover
+    scenario.metadata["fleet"] = fleet.model_dump()
+    return dataclasses.replace(scenario, tasks=tasks)
 
 
 # ---------------------------------------------------------------------------- writing

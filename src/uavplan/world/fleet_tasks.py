@@ -1,0 +1,423 @@
+"""Tasks for a fleet of UAVs: reproducible starts and goals for 10 to 500 (and more) UAVs.
+
+PPSwarm (Meng et al. 2024, Drones 8:192, Sect. 5.1-5.2) plans 10-40 UAVs in each of four
+scenarios and up to 500 in scenario 1, but gives neither the start and goal positions nor how they
+were chosen (its Fig. 4 only shows the obstacles). The choices below are ours.
+
+* **Where.** Inside the x/y bounds shrunk by an edge margin ``max(uav.turn_radius, uav.s1)``
+  (20 m with the PPSwarm defaults: room for a minimum-radius turn, and the threat safety distance
+  kept from the box walls). Every start and goal is a valid place (``scenario.point_problems``
+  empty) and keeps at least ``uav.s1`` (S1) from the edge of every cylinder, circle and no-fly
+  polygon, as PPSwarm's threat cost (Eq. 5) asks of the path. Moving obstacles and danger areas
+  are not looked at.
+* **Height.** z is absolute: the middle of the altitude band (above the ground for a ``ground``
+  band: ``ground(x, y) + (min + max) / 2``, 150 m above ground in the PPSwarm scenarios); without a
+  band, halfway between the ground (or the bounds' lower z) and the bounds' upper z; no z in 2-D.
+* **Spacing.** Starts are pairwise at least ``min_spacing`` apart (default ``3 * uav.s2``, 30 m),
+  and so are goals (a start may be near another UAV's goal: every UAV leaves its start at t = 0,
+  before any other can reach its goal). Candidates are the nodes of a hexagonal lattice of constant
+  ``min_spacing`` (random rotation and offset), the densest packing, which is what lets 500 UAVs
+  fit on the 1045 m x 879 m map even around 20 cylinders; the chosen nodes are then jittered
+  (up to half the lattice constant, each move kept only if spacing and validity still hold), so
+  small fleets do not sit on a visible grid.
+* **Patterns.**
+
+  - ``"crossing"``: starts along the west and south edges, goals along the east and north edges.
+    The start region is the band of depth ``BAND_FRACTION`` (12 %) of the shorter side (about
+    100 m on the PPSwarm map) along the west and south edges, on the south-west side of the
+    north-west/south-east diagonal; the goal region is its mirror image. Starts are drawn at
+    random from the start region; when it cannot hold the fleet the region grows inward, nearest
+    nodes first, then past the diagonal. Goals come from the goal region the same way, and are
+    paired with the starts at random, so the straight start-goal lines cross each other many
+    times (about 60 % of the pairs of lines for 40 UAVs).
+  - ``"random"``: starts and goals drawn uniformly from the whole free area, paired at random.
+
+  In both, every straight start-goal line is at least ``min_length_fraction`` (40 %) of the x/y
+  diagonal of the bounds long (546 m on the PPSwarm map). Pairing is a uniformly random-cost
+  assignment (:func:`scipy.optimize.linear_sum_assignment`) between the starts and the first
+  goal candidates in selection order that never takes a pair shorter than that; when none
+  exists, the goal candidates grow (by half, in selection order) until one does. The jitter keeps
+  the length rule too.
+* **Determinism.** Everything is drawn from ``np.random.default_rng(seed)``; the same scenario,
+  ``n_uavs``, seed, pattern and spacing always give the same tasks. Fleets of different sizes are
+  independent draws (not nested).
+* **Failure.** If fewer than ``n_uavs`` valid spaced positions exist (after 8 lattice placements),
+  or no pairing meets the length rule, a ``ValueError`` says how many could be placed (or
+  paired).
+
+Task ids are ``uav0`` ... ``uav{n-1}``; every task leaves at t = 0.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import linear_sum_assignment
+
+from uavplan.world.scenario import Scenario, Task
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+__all__ = [
+    "BAND_FRACTION",
+    "MIN_LENGTH_FRACTION",
+    "PATTERNS",
+    "SPACING_FACTOR",
+    "fleet_tasks",
+    "placement_box",
+    "with_fleet",
+]
+
+#: The task patterns :func:`fleet_tasks` knows.
+PATTERNS: tuple[str, ...] = ("crossing", "random")
+#: Default ``min_spacing`` = this times ``uav.s2`` (S2, the safe distance between UAVs).
+SPACING_FACTOR = 3.0
+#: Straight start-goal lines are at least this fraction of the bounds' x/y diagonal long.
+MIN_LENGTH_FRACTION = 0.4
+#: Depth of the start (goal) band along the west and south (east and north) edges, as a fraction
+#: of the shorter side of the placement box.
+BAND_FRACTION = 0.12
+#: Lattice placements (rotation and offset) tried before giving up.
+LATTICE_TRIES = 8
+#: Jitter moves tried per chosen node.
+JITTER_TRIES = 8
+#: Upper limit on lattice nodes (a coarser lattice is used on maps huge compared to the spacing).
+MAX_LATTICE_NODES = 200_000
+
+
+def placement_box(scenario: Scenario) -> tuple[FloatArray, FloatArray, float]:
+    """Where fleet starts and goals may go: ``(lower [x, y], upper [x, y], band depth)``, metres.
+
+    ``lower``/``upper`` are the x/y bounds shrunk by ``max(uav.turn_radius, uav.s1)``; the
+    ``"crossing"`` start band is the strip ``band`` deep inside it along the west and south
+    edges, the goal band the one along the east and north edges. A scenario whose obstacles keep
+    (with S1) inside ``[lower + band, upper - band]`` leaves both bands free.
+    """
+    edge = max(scenario.uav.turn_radius, scenario.uav.s1)
+    lo = scenario.bounds.lo[:2] + edge
+    hi = scenario.bounds.hi[:2] - edge
+    if np.any(hi <= lo):
+        raise ValueError(
+            f"scenario {scenario.name!r}: the x/y bounds are too small for an edge margin of "
+            f"{edge:g} m"
+        )
+    band = BAND_FRACTION * float(np.min(hi - lo))
+    return lo, hi, band
+
+
+# ---------------------------------------------------------------------------- validity
+def _heights(scenario: Scenario, xy: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """(z, ground) of fleet positions at ``xy`` (n, 2), each (n,); zeros in 2-D."""
+    n = xy.shape[0]
+    if scenario.dim == 2:
+        return np.zeros(n), np.zeros(n)
+    ground = np.asarray(scenario.ground(xy[:, 0], xy[:, 1]), dtype=np.float64).reshape(n)
+    band = scenario.altitude
+    if band is not None and band.reference == "ground":
+        z = ground + band.mid
+    elif band is not None:
+        z = np.full(n, band.mid)
+    else:
+        floor = ground if scenario.terrain is not None else np.full(n, scenario.bounds.lower[2])
+        floor = np.maximum(floor, scenario.bounds.lower[2])
+        z = 0.5 * (floor + scenario.bounds.upper[2])
+    return z, ground
+
+
+def _segment_distance(xy: FloatArray, vertices: FloatArray) -> FloatArray:
+    """Distance from each point (n, 2) to the boundary of a closed polygon (k, 2)."""
+    a = vertices
+    b = np.roll(vertices, -1, axis=0)
+    ab = b - a  # (k, 2)
+    ap = xy[:, None, :] - a[None, :, :]  # (n, k, 2)
+    denom = np.maximum(np.sum(ab * ab, axis=1), 1e-300)
+    t = np.clip(np.sum(ap * ab[None], axis=2) / denom[None], 0.0, 1.0)
+    d = ap - t[..., None] * ab[None]
+    return np.asarray(np.min(np.hypot(d[..., 0], d[..., 1]), axis=1))
+
+
+def _valid(scenario: Scenario, xy: FloatArray, lo: FloatArray, hi: FloatArray) -> BoolArray:
+    """Which positions (n, 2) are valid fleet starts/goals (vectorized, conservative)."""
+    s1 = scenario.uav.s1
+    ok = np.all((xy >= lo) & (xy <= hi), axis=1)
+    z, ground = _heights(scenario, xy)
+    for c in scenario.cylinders:
+        d = np.hypot(xy[:, 0] - c.center[0], xy[:, 1] - c.center[1])
+        reach = c.effective_radius + s1
+        if scenario.dim == 3 and not c.infinite:
+            near_z = (z >= c.z_min - c.margin - s1) & (z <= c.z_max + c.margin + s1)
+            ok &= ~((d < reach) & near_z)
+        else:
+            ok &= d >= reach
+    for ci in scenario.circles:
+        d = np.hypot(xy[:, 0] - ci.center[0], xy[:, 1] - ci.center[1])
+        ok &= d >= ci.effective_radius + s1
+    for poly in scenario.no_fly_polygons:
+        if not np.any(ok):
+            break
+        idx = np.flatnonzero(ok)
+        inside = poly.contains(xy[idx])
+        near = _segment_distance(xy[idx], poly.array) < poly.margin + s1
+        ok[idx[inside | near]] = False
+    if scenario.dim == 3:
+        ok &= (z >= scenario.bounds.lower[2]) & (z <= scenario.bounds.upper[2])
+        if scenario.terrain is not None:
+            ok &= z >= ground
+        band = scenario.altitude
+        if band is not None:
+            h = z - ground if band.reference == "ground" else z
+            ok &= (h >= band.min) & (h <= band.max)
+    return np.asarray(ok)
+
+
+def _point(scenario: Scenario, xy: FloatArray, z: float) -> tuple[float, ...]:
+    if scenario.dim == 2:
+        return (float(xy[0]), float(xy[1]))
+    return (float(xy[0]), float(xy[1]), float(z))
+
+
+# ---------------------------------------------------------------------------- placement
+def _lattice(lo: FloatArray, hi: FloatArray, a: float, rng: np.random.Generator) -> FloatArray:
+    """Nodes of a hexagonal lattice of constant ``a`` (random rotation and offset) in the box."""
+    theta = rng.uniform(0.0, math.pi / 3)
+    e1 = a * np.array([math.cos(theta), math.sin(theta)])
+    e2 = a * np.array([math.cos(theta + math.pi / 3), math.sin(theta + math.pi / 3)])
+    center = 0.5 * (lo + hi) + rng.uniform(0.0, 1.0) * e1 + rng.uniform(0.0, 1.0) * e2
+    radius = 0.5 * float(np.hypot(*(hi - lo)))
+    k = math.ceil(2 * radius / (a * math.sqrt(3) / 2)) + 2
+    idx = np.arange(-k, k + 1, dtype=np.float64)
+    i, j = np.meshgrid(idx, idx, indexing="ij")
+    pts = center + i.reshape(-1, 1) * e1 + j.reshape(-1, 1) * e2
+    inside = np.all((pts >= lo) & (pts <= hi), axis=1)
+    return np.asarray(pts[inside])
+
+
+def _keys(
+    pattern: str,
+    xy: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    band: float,
+    goal: bool,
+    rng: np.random.Generator,
+) -> FloatArray:
+    """Selection order of candidate nodes (smallest first)."""
+    if pattern == "random":
+        return np.asarray(rng.random(xy.shape[0]), dtype=np.float64)
+    p = (hi - xy) if goal else (xy - lo)  # distances from the west/south (east/north) edges
+    uv = p / (hi - lo)
+    own_side = uv[:, 0] + uv[:, 1] <= 1.0
+    depth = np.min(p, axis=1)
+    diag = float(np.hypot(*(hi - lo)))
+    return np.where(
+        own_side,
+        np.where(depth <= band, band * rng.random(xy.shape[0]), depth),
+        1e3 * diag + (uv[:, 0] + uv[:, 1]) * diag,
+    )
+
+
+def _lattice_constant(scenario: Scenario, spacing: float) -> float:
+    lo, hi, _ = placement_box(scenario)
+    area = float(np.prod(hi - lo))
+    # A hair over the spacing, so that rounding never brings two nodes under it.
+    return max(spacing * (1 + 1e-9) + 1e-9, math.sqrt(area * 2 / math.sqrt(3) / MAX_LATTICE_NODES))
+
+
+def _candidates(
+    scenario: Scenario,
+    n: int,
+    a: float,
+    pattern: str,
+    goal: bool,
+    rng: np.random.Generator,
+) -> tuple[FloatArray | None, int]:
+    """Valid lattice nodes (m, 2), m >= ``n``, in selection order; or ``(None, most found)``."""
+    lo, hi, band = placement_box(scenario)
+    best = 0
+    for _ in range(LATTICE_TRIES):
+        nodes = _lattice(lo, hi, a, rng)
+        nodes = nodes[_valid(scenario, nodes, lo, hi)]
+        best = max(best, nodes.shape[0])
+        if nodes.shape[0] >= n:
+            keys = _keys(pattern, nodes, lo, hi, band, goal, rng)
+            return np.asarray(nodes[np.argsort(keys, kind="stable")]), nodes.shape[0]
+    return None, best
+
+
+def _pair(
+    starts: FloatArray, pool: FloatArray, n: int, min_len: float, rng: np.random.Generator
+) -> tuple[FloatArray | None, int]:
+    """Goals for ``starts`` from the first nodes of ``pool`` (in order), paired at random so that
+    every start-goal distance is >= ``min_len``; or ``(None, most pairs that are long enough)``.
+
+    The pool grows (by half) until the pairing works: a uniformly random-cost assignment between
+    the starts and the pool, with long-enough pairs always preferred.
+    """
+    m = n
+    while True:
+        cand = pool[:m]
+        length = np.hypot(
+            starts[:, None, 0] - cand[None, :, 0], starts[:, None, 1] - cand[None, :, 1]
+        )
+        short = length < min_len
+        cost = rng.random((n, m)) + short * (n + 1.0)
+        rows, cols = linear_sum_assignment(cost)
+        bad = int(np.count_nonzero(short[rows, cols]))
+        if not bad:
+            return np.asarray(cand[cols[np.argsort(rows)]]), n
+        if m == pool.shape[0]:
+            return None, n - bad
+        m = min(pool.shape[0], m + max(1, m // 2))
+
+
+def _jitter(
+    scenario: Scenario,
+    pts: FloatArray,
+    partners: FloatArray,
+    spacing: float,
+    min_len: float,
+    a: float,
+    rng: np.random.Generator,
+) -> None:
+    """Move each point (in place) up to ``a / 2`` at random where validity, the spacing to the
+    other points and the length to its partner (the other end of its task) allow."""
+    lo, hi, _ = placement_box(scenario)
+    n = pts.shape[0]
+    for i in rng.permutation(n):
+        r = 0.5 * a * np.sqrt(rng.random(JITTER_TRIES))
+        phi = rng.uniform(0.0, 2 * math.pi, JITTER_TRIES)
+        cand = pts[i] + np.stack([r * np.cos(phi), r * np.sin(phi)], axis=1)
+        ok = np.hypot(*(cand - partners[i]).T) >= min_len
+        others = np.delete(pts, i, axis=0)
+        if others.shape[0]:
+            d = np.hypot(
+                cand[:, None, 0] - others[None, :, 0], cand[:, None, 1] - others[None, :, 1]
+            )
+            ok &= np.min(d, axis=1) >= spacing * (1 + 1e-9)
+        if not np.any(ok):
+            continue
+        ok[ok] = _valid(scenario, cand[ok], lo, hi)
+        if np.any(ok):
+            pts[i] = cand[int(np.argmax(ok))]
+
+
+def fleet_tasks(
+    scenario: Scenario,
+    n_uavs: int,
+    seed: int = 0,
+    pattern: str = "crossing",
+    min_spacing: float | None = None,
+    *,
+    min_length_fraction: float = MIN_LENGTH_FRACTION,
+) -> tuple[Task, ...]:
+    """Start and goal for each of ``n_uavs`` UAVs (``uav0`` ... ``uav{n-1}``), reproducibly.
+
+    Args:
+        scenario: the world (its tasks are ignored).
+        n_uavs: number of UAVs (>= 1).
+        seed: seed of ``np.random.default_rng``.
+        pattern: ``"crossing"`` (starts along the west/south edges, goals along the east/north
+            edges, paired at random so the lines cross) or ``"random"`` (anywhere).
+        min_spacing: least distance between two starts, and between two goals, metres; default
+            ``3 * uav.s2``.
+        min_length_fraction: least straight start-goal length, as a fraction of the bounds' x/y
+            diagonal.
+
+    Returns:
+        The tasks, absolute z (see the module docstring), all leaving at t = 0.
+
+    Raises:
+        ValueError: bad arguments, or the fleet does not fit (the message says how many fit).
+    """
+    if isinstance(n_uavs, bool) or not isinstance(n_uavs, int | np.integer) or n_uavs < 1:
+        raise ValueError(f"n_uavs must be a positive integer, got {n_uavs!r}")
+    n = int(n_uavs)
+    if pattern not in PATTERNS:
+        raise ValueError(f"unknown fleet pattern {pattern!r} (choose from {', '.join(PATTERNS)})")
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    spacing = SPACING_FACTOR * scenario.uav.s2 if min_spacing is None else float(min_spacing)
+    if not (math.isfinite(spacing) and spacing > 0):
+        what = "3 * uav.s2" if min_spacing is None else "min_spacing"
+        raise ValueError(f"min_spacing must be a positive number, got {spacing!r} ({what})")
+    if not (0 <= min_length_fraction < 1):
+        raise ValueError(f"min_length_fraction must be in [0, 1), got {min_length_fraction!r}")
+
+    rng = np.random.default_rng(int(seed))
+    where = f"scenario {scenario.name!r}"
+    a = _lattice_constant(scenario, spacing)
+    pools: list[FloatArray] = []
+    for goal in (False, True):
+        pool, count = _candidates(scenario, n, a, pattern, goal, rng)
+        if pool is None:
+            what = "goals" if goal else "starts"
+            raise ValueError(
+                f"cannot place {n} UAV {what} at least {spacing:g} m apart in {where}: placed "
+                f"{count} (valid positions are at least S1 = {scenario.uav.s1:g} m from every "
+                "obstacle and inside the bounds less the edge margin); use fewer UAVs or a "
+                "smaller min_spacing"
+            )
+        pools.append(pool)
+    starts = pools[0][:n].copy()
+
+    # Goals paired at random with the starts, among the pairs that are long enough.
+    diag = float(np.hypot(*(scenario.bounds.hi[:2] - scenario.bounds.lo[:2])))
+    min_len = min_length_fraction * diag
+    goals, paired = _pair(starts, pools[1], n, min_len, rng)
+    if goals is None:
+        raise ValueError(
+            f"cannot pair {n} UAV starts and goals in {where} so that every straight start-goal "
+            f"line is at least {min_len:.0f} m long ({min_length_fraction:g} of the x/y "
+            f"diagonal): all {n} starts placed, but at most {paired} of them get a goal far "
+            "enough; use fewer UAVs or a smaller min_spacing"
+        )
+    goals = goals.copy()
+    _jitter(scenario, starts, goals, spacing, min_len, a, rng)
+    _jitter(scenario, goals, starts, spacing, min_len, a, rng)
+
+    z_s, _ = _heights(scenario, starts)
+    z_g, _ = _heights(scenario, goals)
+    tasks = tuple(
+        Task(f"uav{i}", _point(scenario, starts[i], z_s[i]), _point(scenario, goals[i], z_g[i]))
+        for i in range(n)
+    )
+    for t in tasks:  # the vectorized checks are stricter; this is the scenario's own word
+        for which, p in (("start", t.start), ("goal", t.goal)):
+            problems = scenario.point_problems(np.asarray(p))
+            if problems:  # pragma: no cover - _valid is stricter than point_problems
+                raise AssertionError(f"{t.id} {which} {p}: {'; '.join(problems)}")
+    return tasks
+
+
+def with_fleet(
+    scenario: Scenario,
+    n_uavs: int,
+    seed: int = 0,
+    pattern: str = "crossing",
+    min_spacing: float | None = None,
+) -> Scenario:
+    """The same scenario with a generated fleet of ``n_uavs`` tasks (see :func:`fleet_tasks`).
+
+    ``metadata["fleet"]`` records the fleet parameters (as a loaded fleet file does: ``count``,
+    ``pattern``, ``seed``, ``min_spacing``, None for the default); a file-level spec kept in
+    ``metadata["spec"]`` (a scenario loaded from a file) gets the ``fleet`` block in place of its
+    ``tasks``, so saving the new scenario writes a file that loads to the same tasks.
+    """
+    tasks = fleet_tasks(scenario, n_uavs, seed=seed, pattern=pattern, min_spacing=min_spacing)
+    fleet: dict[str, Any] = {"count": int(n_uavs), "pattern": pattern, "seed": int(seed)}
+    if min_spacing is not None:
+        fleet["min_spacing"] = float(min_spacing)
+    metadata = dict(scenario.metadata)
+    metadata["fleet"] = {**fleet, "min_spacing": fleet.get("min_spacing")}
+    spec = metadata.get("spec")
+    if isinstance(spec, Mapping):
+        new_spec = {k: v for k, v in spec.items() if k not in ("tasks", "fleet")}
+        new_spec["fleet"] = dict(fleet)
+        metadata["spec"] = new_spec
+    return dataclasses.replace(scenario, tasks=tasks, metadata=metadata)
