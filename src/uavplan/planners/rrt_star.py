@@ -1,0 +1,1027 @@
+"""RRT* (PPSwarm Alg. 1: Meng, Li, Zhang, Wang & Tian 2024, "PPSwarm: Multi-UAV path planning
+based on hybrid PSO in complex scenarios", Drones 8(5), 192, Sect. 3.2 and 4.2.1), in 3-D (and
+2-D), as a planner of its own (``rrt-star``) and as :func:`rrt_star`, PPSwarm's initial path.
+
+**Alg. 1, line by line** (:meth:`RRTStarTree.iterate` is one pass of its loop):
+
+3. ``Randsample(E)``: x, y uniform in the scenario's bounds; z uniform in the altitude band
+   above the terrain (``reference="ground"``: a height drawn uniformly in the band plus
+   :meth:`Scenario.ground` at (x, y)), uniform in the band intersected with the z bounds
+   (``"absolute"``), or uniform in the z bounds (no band). With probability ``goal_bias`` the
+   sample is the goal itself (not in the paper, see the defaults). Samples are drawn in blocks
+   from the one ``numpy.random.Generator``, so a run is a function of its seed.
+4. ``Nearest``: a uniform grid over the bounds (:class:`GridIndex`, Numba kernels): rings of
+   cells around the query cell, outwards, until the best distance found is below the distance
+   to the next ring (exact; ties go to the lower node index, as :func:`nearest_brute`). The
+   cell is ``max(r(n), (box measure / n)^(1/d))`` (``r(n)`` below; the second term keeps about
+   a node per cell, so that a young tree in a large world does not leave the rings empty), and
+   the grid is rebuilt whenever that falls below half the current cell. Only when the rings
+   would visit more cells than there are nodes are the nodes scanned instead (a tree of a few
+   dozen nodes, or a query far outside it): then that is the cheaper exact answer.
+5. ``Steer``: at most ``step`` metres from ``x_nearest`` towards the sample (the sample itself if
+   it is closer). A sample that coincides with its nearest node is skipped.
+6. ``IsCollisionFree(x_nearest, x_new)``: the segment is feasible for
+   ``PathProblem(scenario, task, strict_altitude=True)`` (see *Validity*); if not, the iteration
+   ends.
+7. ``Near``: the nodes within ``r(n) = min(near_radius, rewire_factor * gamma*
+   (log n / n)^(1/d))`` of ``x_new`` (``n`` = nodes + 1 as OMPL counts, ``d`` = 2 or 3), from the
+   grid's neighbour cells (27 while ``r`` <= cell). ``gamma* = (2 (1 + 1/d) mu / zeta_d)^(1/d)``
+   is the RRT* bound of Karaman & Frazzoli (2011, IJRR 30(7), Thm. 38) in OMPL's form, ``mu`` the
+   measure of the sampling region and ``zeta_d`` the unit ball's. ``x_nearest`` is always a
+   candidate parent.
+8. ``ChooseParent``: the candidate with a free segment to ``x_new`` and the least cost-to-come
+   plus segment length (ties: the lower index).
+9. ``InsertNodeAndRewire``: every other candidate with a free segment whose cost-to-come through
+   ``x_new`` is lower (by more than 1 nm) takes ``x_new`` as its parent; the costs of its whole
+   subtree are recomputed (cost = parent cost + segment length, exactly), so the tree stays
+   consistent. A rewired node is never an ancestor of ``x_new`` (its cost would be lower), so no
+   cycle can form.
+10. ``InGoalRegion``: ``|x_new - goal| <= goal_radius`` **and** the segment ``x_new -> goal`` is
+    free: the path must end exactly at the goal, so a node in the region that cannot see the goal
+    does not end the search (a small deviation: the paper only says "in the goal region").
+11. ``ExtractPathToGoal``: the tree path start .. ``x_new`` plus the exact goal. With
+    ``stop_at_goal=False`` the loop goes on (plain anytime RRT*) and the path is the shortest one
+    through any goal-connected node.
+12. ``break`` when ``stop_at_goal`` (the default of :class:`RRTStarConfig`, as Alg. 1).
+
+All segment checks of one iteration (every near candidate to ``x_new``, and ``x_new`` to the
+goal when in the region) go to **one** batched :meth:`PathProblem.evaluate` call; a segment is
+free in both directions, so rewiring reuses the choose-parent checks. The paper's Sect. 3.2 text
+takes the choose-parent set within the step size and the rewiring set within an unnamed
+"radius"; we use one near set for both, as RRT* does.
+
+**Validity.** A segment is free when ``PathProblem(scenario, task, cost=(),
+strict_altitude=True)`` finds it feasible: in bounds, clear of cylinders, circles, polygons and
+revealed uncertain areas (exact), above the terrain along the segment (exact, bilinear DEM) and
+inside the altitude band along it (``strict_altitude``). No cost term is computed (``cost=()``;
+feasibility does not depend on the preset, so this is the same verdict as
+``cost="ppswarm"`` at about half the time). Node heights in the band are also read the way the
+scenario's cost preset reads them (``nearest`` for ``spso``), so a path free for the tree is
+feasible for the scenario's own problem too. Moving obstacles are checked as if each segment were
+flown from the task's start time (the tree has no time); the planner re-evaluates its path
+honestly.
+
+**Defaults** (the paper gives no number for any of them; chosen for SPSO's 1045 m x 879 m
+ChrismasTerrain world, 100-200 m above ground, that PPSwarm's experiments follow):
+
+* ``step = 50`` m: about 1/18 of the 923 m start-goal distance and well under the threat
+  radii (70-80 m) and the gaps between them, so the tree threads between the cylinders. On spso
+  (100 seeds) the first path comes after a median 133 iterations (max 296).
+* ``near_radius = 100`` m (2 ``step``), the cap of the shrinking RRT* radius; with
+  ``rewire_factor = 1.1`` (OMPL's default) the rule gives r = 152 m at 100 nodes, 82 m at 1000
+  and 51 m at 5000 on spso, so the cap acts only in young trees, i.e. in Alg. 1's runs that stop
+  at the goal. The RRT* literature (and OMPL) caps at the step; twice the step gives a first
+  path 11 % shorter on spso (median 1118 m vs 1262 m, 100 seeds) for 2.8 times the segment
+  checks (400 vs 145 per run, about 35 % more time).
+* ``goal_radius = 50`` m (= ``step``): a node one step from the goal may end the search.
+* ``goal_bias = 0.05``: OMPL's default; the paper samples uniformly (``goal_bias=0``), which
+  doubles the iterations to the first path on spso (median 264, max 1537) and lengthens it 5 %.
+* ``max_iterations = 5000``: over three times the worst first-path iteration above, even
+  without goal bias.
+* ``shortcut = False``: greedy shortcutting (:func:`shortcut_path`) is not in the paper.
+
+Runs that grow the tree (:meth:`RRTStarTree.run`, the planner) execute Numba's parallel
+feasibility kernels on one thread (:func:`serial_numba`): a batch is a few dozen segments, and
+waking threads for it costs more than the work. Measured numbers: ``benchmarks/rrt_star_nn.py``.
+
+**Planner** (:class:`RRTStarPlanner`, ``rrt-star``). One planner iteration runs ``pop_size``
+RRT* iterations (default 1, so the budget counts RRT* iterations; named ``pop_size`` so that the
+common planner option applies). By default the planner is *anytime*: it keeps growing and
+rewiring the tree until its budget is spent (``stop_at_goal=False``), so that it spends the same
+budget as the other planners; pass ``stop_at_goal=True`` for Alg. 1's break. Whenever the
+tree's shortest goal path changes, that path is evaluated under the scenario's cost preset (one
+path evaluation); the result is the lowest-cost feasible path so evaluated. ``history`` is the
+best such cost so far per planner iteration (inf before the first path, as ``rgg``);
+``evaluations`` counts segment checks (and shortcut checks), the work that dominates; path
+evaluations are reported in ``config["run"]``. If no path is found, the result is the straight
+start-goal segment with ``feasible=False`` and ``"no_path"`` among its violations.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import asdict, dataclass, fields, replace
+from typing import Any
+
+import numba
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from uavplan.optimizers.base import Budget
+from uavplan.planners.base import (
+    _REGISTRY,
+    Planner,
+    PlannerError,
+    PlanResult,
+    ProgressCallback,
+    register_planner,
+)
+from uavplan.problems.path_problem import LOOKUP, PathProblem
+from uavplan.world.scenario import Scenario, Task
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
+
+#: Samples drawn from the generator at a time.
+SAMPLE_BLOCK = 256
+#: Most cells of a :class:`GridIndex` (the cell grows to stay below it).
+MAX_CELLS = 1 << 21
+#: A rewire must shorten the cost-to-come by more than this (metres): no churn on round-off.
+REWIRE_TOL = 1e-9
+#: Segments per batched check in :func:`shortcut_path`.
+EDGE_CHUNK = 65536
+
+
+# ------------------------------------------------------------------------------ configuration
+@dataclass(frozen=True)
+class RRTStarConfig:
+    """RRT* settings (metres); defaults and their reasons in the module docstring.
+
+    Attributes:
+        step: steering step (Alg. 1 line 5's step size).
+        max_iterations: Alg. 1's ``Iterations``.
+        goal_radius: the goal region's radius around the goal (line 10).
+        near_radius: cap of the near/rewire radius (line 7).
+        goal_bias: probability that a sample is the goal (not in the paper).
+        rewire_factor: factor on the RRT* radius bound ``gamma*`` (OMPL's ``rewire_factor``).
+        stop_at_goal: Alg. 1 line 12's ``break`` at the first goal connection.
+        shortcut: greedy shortcutting of the extracted path (not in the paper).
+    """
+
+    step: float = 50.0
+    max_iterations: int = 5000
+    goal_radius: float = 50.0
+    near_radius: float = 100.0
+    goal_bias: float = 0.05
+    rewire_factor: float = 1.1
+    stop_at_goal: bool = True
+    shortcut: bool = False
+
+    def __post_init__(self) -> None:
+        for name in ("step", "goal_radius", "near_radius", "rewire_factor"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v > 0):
+                raise PlannerError(f"rrt-star: {name} must be finite and > 0, got {v}")
+        if int(self.max_iterations) != self.max_iterations or self.max_iterations < 1:
+            raise PlannerError(f"rrt-star: max_iterations must be >= 1, got {self.max_iterations}")
+        if not 0.0 <= self.goal_bias < 1.0:
+            raise PlannerError(f"rrt-star: goal_bias must be in [0, 1), got {self.goal_bias}")
+
+
+@dataclass(frozen=True)
+class RRTStarResult:
+    """The outcome of :func:`rrt_star`.
+
+    Attributes:
+        path: (n, dim) start .. goal (the exact goal last), or None if none was found.
+        n_nodes: tree size at the end; iterations: loop passes run (Alg. 1 line 2).
+        found_iteration: 1-based iteration of the first goal connection, None if none.
+        cost: the path's length (inf without a path).
+        edge_checks: segments checked (tree and shortcut).
+    """
+
+    path: FloatArray | None
+    n_nodes: int
+    iterations: int
+    found_iteration: int | None
+    cost: float
+    edge_checks: int = 0
+
+
+# ------------------------------------------------------------------------------ grid kernels
+@njit(cache=True)
+def _cell(x: float, lo: float, cell: float) -> int:
+    return int(np.floor((x - lo) / cell))
+
+
+@njit(cache=True)
+def _clamp(c: int, n: int) -> int:
+    if c < 0:
+        return 0
+    if c >= n:
+        return n - 1
+    return c
+
+
+@njit(cache=True)
+def _grid_insert(pts, i, head, nxt, lo, cell, dims):
+    a = _clamp(_cell(pts[i, 0], lo[0], cell), dims[0])
+    b = _clamp(_cell(pts[i, 1], lo[1], cell), dims[1])
+    c = _clamp(_cell(pts[i, 2], lo[2], cell), dims[2])
+    k = (a * dims[1] + b) * dims[2] + c
+    nxt[i] = head[k]
+    head[k] = i
+
+
+@njit(cache=True)
+def _grid_rebuild(pts, n, head, nxt, lo, cell, dims):
+    head[:] = -1
+    for i in range(n):
+        _grid_insert(pts, i, head, nxt, lo, cell, dims)
+
+
+@njit(cache=True)
+def _scan(pts, head, nxt, k, q0, q1, q2, best, bd2):
+    j = head[k]
+    while j >= 0:
+        dx = pts[j, 0] - q0
+        dy = pts[j, 1] - q1
+        dz = pts[j, 2] - q2
+        d2 = dx * dx + dy * dy + dz * dz
+        if d2 < bd2 or (d2 == bd2 and j < best):
+            best = j
+            bd2 = d2
+        j = nxt[j]
+    return best, bd2
+
+
+@njit(cache=True)
+def _box_cells(ci, k, dims):
+    """Cells of the grid within Chebyshev index distance k of ``ci`` (0 for k < 0)."""
+    if k < 0:
+        return 0
+    out = 1
+    for a in range(3):
+        w = min(ci[a] + k, dims[a] - 1) - max(ci[a] - k, 0) + 1
+        if w <= 0:
+            return 0
+        out *= w
+    return out
+
+
+@njit(cache=True)
+def _grid_nearest(pts, n, head, nxt, lo, cell, dims, q, limit):
+    """Nearest point to ``q``: rings of cells of Chebyshev index distance k = 0, 1, ... around
+    q's (unclamped) cell; stop once the best distance is <= k cell + (q's distance to its own
+    cell's faces), a lower bound on any point in a farther ring. If the rings would visit more
+    than ``limit`` cells, scan the ``n`` points instead (cheaper then; same answer)."""
+    ci = np.empty(3, dtype=np.int64)
+    dface = np.inf
+    kmax = 0
+    for a in range(3):
+        ci[a] = _cell(q[a], lo[a], cell)
+        f = (q[a] - lo[a]) - ci[a] * cell
+        dface = min(dface, f, cell - f)
+        kmax = max(kmax, abs(ci[a]), abs(dims[a] - 1 - ci[a]))
+    dface = max(dface, 0.0)
+    best = -1
+    bd2 = np.inf
+    visited = 0
+    for k in range(kmax + 1):
+        visited += _box_cells(ci, k, dims) - _box_cells(ci, k - 1, dims)
+        if visited > limit:
+            best = -1
+            bd2 = np.inf
+            for j in range(n):
+                dx = pts[j, 0] - q[0]
+                dy = pts[j, 1] - q[1]
+                dz = pts[j, 2] - q[2]
+                d2 = dx * dx + dy * dy + dz * dz
+                if d2 < bd2:
+                    best = j
+                    bd2 = d2
+            return best, bd2
+        a0, a1 = max(ci[0] - k, 0), min(ci[0] + k, dims[0] - 1)
+        b0, b1 = max(ci[1] - k, 0), min(ci[1] + k, dims[1] - 1)
+        c0, c1 = max(ci[2] - k, 0), min(ci[2] + k, dims[2] - 1)
+        for a in range(a0, a1 + 1):
+            for b in range(b0, b1 + 1):
+                base = (a * dims[1] + b) * dims[2]
+                if abs(a - ci[0]) == k or abs(b - ci[1]) == k:
+                    for c in range(c0, c1 + 1):
+                        best, bd2 = _scan(pts, head, nxt, base + c, q[0], q[1], q[2], best, bd2)
+                else:
+                    c = ci[2] - k
+                    if 0 <= c < dims[2]:
+                        best, bd2 = _scan(pts, head, nxt, base + c, q[0], q[1], q[2], best, bd2)
+                    c = ci[2] + k
+                    if k > 0 and 0 <= c < dims[2]:
+                        best, bd2 = _scan(pts, head, nxt, base + c, q[0], q[1], q[2], best, bd2)
+        if best >= 0:
+            bound = k * cell + dface
+            if bd2 <= bound * bound:
+                break
+    return best, bd2
+
+
+@njit(cache=True)
+def _grid_near(pts, head, nxt, lo, cell, dims, q, r, out):
+    """Points within ``r`` of ``q`` (cells within ceil(r / cell) of q's cell: the 27 neighbours
+    while r <= cell) into ``out``; returns how many there are (may exceed ``len(out)``)."""
+    m = max(int(np.ceil(r / cell)), 1)
+    r2 = r * r
+    count = 0
+    ci0 = _cell(q[0], lo[0], cell)
+    ci1 = _cell(q[1], lo[1], cell)
+    ci2 = _cell(q[2], lo[2], cell)
+    for a in range(max(ci0 - m, 0), min(ci0 + m, dims[0] - 1) + 1):
+        for b in range(max(ci1 - m, 0), min(ci1 + m, dims[1] - 1) + 1):
+            base = (a * dims[1] + b) * dims[2]
+            for c in range(max(ci2 - m, 0), min(ci2 + m, dims[2] - 1) + 1):
+                j = head[base + c]
+                while j >= 0:
+                    dx = pts[j, 0] - q[0]
+                    dy = pts[j, 1] - q[1]
+                    dz = pts[j, 2] - q[2]
+                    if dx * dx + dy * dy + dz * dz <= r2:
+                        if count < out.shape[0]:
+                            out[count] = j
+                        count += 1
+                    j = nxt[j]
+    return count
+
+
+# ------------------------------------------------------------------------------ tree kernels
+@njit(cache=True)
+def _dist(pts, i, j):
+    dx = pts[i, 0] - pts[j, 0]
+    dy = pts[i, 1] - pts[j, 1]
+    dz = pts[i, 2] - pts[j, 2]
+    return np.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+@njit(cache=True)
+def _insert_rewire(pts, parent, cost, first_child, next_sib, stack, new, cand, ok):
+    """Alg. 1 lines 8-9 for node ``new`` (its point already in ``pts``): choose the parent among
+    the candidates with ``ok`` segments, then rewire the others through ``new`` and recompute the
+    costs of their subtrees. Returns the number of rewired nodes (-1 if no candidate is ok)."""
+    best = -1
+    bc = np.inf
+    for t in range(cand.shape[0]):
+        if ok[t]:
+            c = cost[cand[t]] + _dist(pts, cand[t], new)
+            if c < bc:
+                bc = c
+                best = cand[t]
+    if best < 0:
+        return -1
+    parent[new] = best
+    cost[new] = bc
+    first_child[new] = -1
+    next_sib[new] = first_child[best]
+    first_child[best] = new
+    rewired = 0
+    for t in range(cand.shape[0]):
+        j = cand[t]
+        if not ok[t] or j == best:
+            continue
+        c = bc + _dist(pts, j, new)
+        if c + REWIRE_TOL < cost[j]:
+            # unlink j from its old parent's children
+            p = parent[j]
+            if first_child[p] == j:
+                first_child[p] = next_sib[j]
+            else:
+                s = first_child[p]
+                while next_sib[s] != j:
+                    s = next_sib[s]
+                next_sib[s] = next_sib[j]
+            parent[j] = new
+            next_sib[j] = first_child[new]
+            first_child[new] = j
+            cost[j] = c
+            # recompute the subtree's costs, depth first
+            top = 0
+            ch = first_child[j]
+            while ch >= 0:
+                stack[top] = ch
+                top += 1
+                ch = next_sib[ch]
+            while top > 0:
+                top -= 1
+                u = stack[top]
+                cost[u] = cost[parent[u]] + _dist(pts, u, parent[u])
+                ch = first_child[u]
+                while ch >= 0:
+                    stack[top] = ch
+                    top += 1
+                    ch = next_sib[ch]
+            rewired += 1
+    return rewired
+
+
+# ------------------------------------------------------------------------------ grid index
+def _pad3(p: FloatArray) -> FloatArray:
+    out = np.zeros(3)
+    v = np.asarray(p, dtype=np.float64).ravel()
+    out[: len(v)] = v
+    return out
+
+
+class GridIndex:
+    """Nearest and near(r) queries over points added one at a time (2-D or 3-D).
+
+    A uniform grid of cubic cells over a box (``lo``..``hi``; points outside go to the border
+    cells, so they are found but may make ``nearest`` inexact: keep them inside), one linked list
+    of point indices per cell (``head`` per cell, ``nxt`` per point), point arrays that grow by
+    doubling. 2-D points get z = 0 and a grid one cell thick. :meth:`set_cell` rebuilds the grid
+    with another cell size (at most :data:`MAX_CELLS` cells: the cell grows to respect it);
+    :meth:`balance` shrinks the cell as the points get denser.
+
+    ``nearest`` searches rings of cells outwards; when the rings would visit more cells than
+    ``scan_limit`` times the number of points (a young tree in a fine grid, or a query far from
+    every point), scanning the points is cheaper and gives the same answer, so it does that
+    (``scan_limit = inf``: rings only).
+    """
+
+    def __init__(self, lo: FloatArray, hi: FloatArray, cell: float, capacity: int = 1024) -> None:
+        self.dim = len(np.ravel(lo))
+        if self.dim not in (2, 3):
+            raise ValueError(f"GridIndex is 2-D or 3-D, got {self.dim}")
+        self._box_lo = _pad3(lo)
+        self._box_hi = _pad3(hi)
+        if np.any(self._box_hi < self._box_lo):
+            raise ValueError("GridIndex needs lo <= hi")
+        self._pts = np.zeros((max(int(capacity), 1), 3))
+        self._nxt = np.full(len(self._pts), -1, dtype=np.int64)
+        self.n = 0
+        self.scan_limit = 1.0
+        self.set_cell(cell)
+
+    @property
+    def points(self) -> FloatArray:
+        """The points so far, (n, dim) (a view)."""
+        return self._pts[: self.n, : self.dim]
+
+    @property
+    def n_cells(self) -> int:
+        return int(np.prod(self._dims))
+
+    @property
+    def measure(self) -> float:
+        """Length, area or volume of the box (its first ``dim`` sides)."""
+        return float(np.prod((self._box_hi - self._box_lo)[: self.dim]))
+
+    def balance(self, r: float) -> None:
+        """Shrink the cell to ``max(r, (measure / n)^(1/dim))`` (``r``: the radius of the near
+        queries to come; the second term keeps about one point per cell of a uniform set) when
+        that is below half the current cell; never grows it."""
+        target = max(float(r), (self.measure / max(self.n, 1)) ** (1.0 / self.dim))
+        if 0 < target < 0.5 * self.cell:
+            self.set_cell(target)
+
+    def set_cell(self, cell: float) -> None:
+        """Rebuild the grid with cubic cells of side ``cell`` (or larger, see the class)."""
+        if not (np.isfinite(cell) and cell > 0):
+            raise ValueError(f"cell must be finite and > 0, got {cell}")
+        extent = self._box_hi - self._box_lo
+        pad = 1e-6 * (1.0 + float(extent.max()))
+        lo = self._box_lo - pad
+        span = extent + 2 * pad
+        while True:
+            dims = np.floor(span / cell).astype(np.int64) + 1
+            if self.dim == 2:
+                dims[2] = 1
+            if int(np.prod(dims)) <= MAX_CELLS:
+                break
+            cell *= 1.25
+        self.cell = float(cell)
+        self._lo = lo
+        self._dims = dims
+        self._head = np.full(int(np.prod(dims)), -1, dtype=np.int64)
+        _grid_rebuild(self._pts, self.n, self._head, self._nxt, self._lo, self.cell, self._dims)
+
+    def add(self, p: FloatArray) -> int:
+        """Add a point; returns its index."""
+        if self.n == len(self._pts):
+            cap = 2 * len(self._pts)
+            pts = np.zeros((cap, 3))
+            pts[: self.n] = self._pts
+            nxt = np.full(cap, -1, dtype=np.int64)
+            nxt[: self.n] = self._nxt
+            self._pts, self._nxt = pts, nxt
+        i = self.n
+        self._pts[i] = _pad3(p)
+        _grid_insert(self._pts, i, self._head, self._nxt, self._lo, self.cell, self._dims)
+        self.n += 1
+        return i
+
+    def nearest(self, q: FloatArray) -> tuple[int, float]:
+        """Index of the nearest point (lowest index among ties) and its distance."""
+        if self.n == 0:
+            raise ValueError("nearest of an empty GridIndex")
+        limit = self.scan_limit * self.n
+        i, d2 = _grid_nearest(
+            self._pts,
+            self.n,
+            self._head,
+            self._nxt,
+            self._lo,
+            self.cell,
+            self._dims,
+            _pad3(q),
+            float(min(limit, 1e18)),
+        )
+        return int(i), math.sqrt(d2)
+
+    def near(self, q: FloatArray, r: float) -> IntArray:
+        """Indices of the points within ``r`` of ``q`` (distance <= r), ascending."""
+        qq = _pad3(q)
+        out = np.empty(64, dtype=np.int64)
+        while True:
+            k = _grid_near(
+                self._pts, self._head, self._nxt, self._lo, self.cell, self._dims, qq, float(r), out
+            )
+            if k <= len(out):
+                return np.sort(out[:k])
+            out = np.empty(2 * k, dtype=np.int64)
+
+
+def nearest_brute(points: FloatArray, q: FloatArray) -> tuple[int, float]:
+    """Reference for :meth:`GridIndex.nearest`: a scan of every point (same arithmetic)."""
+    p = np.asarray(points, dtype=np.float64)
+    d = p - np.asarray(q, dtype=np.float64)
+    d2 = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]
+    if p.shape[1] == 3:
+        d2 = d2 + d[:, 2] * d[:, 2]
+    i = int(np.argmin(d2))
+    return i, math.sqrt(float(d2[i]))
+
+
+def near_brute(points: FloatArray, q: FloatArray, r: float) -> IntArray:
+    """Reference for :meth:`GridIndex.near`: a scan of every point (same arithmetic)."""
+    p = np.asarray(points, dtype=np.float64)
+    d = p - np.asarray(q, dtype=np.float64)
+    d2 = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]
+    if p.shape[1] == 3:
+        d2 = d2 + d[:, 2] * d[:, 2]
+    return np.asarray(np.flatnonzero(d2 <= r * r), dtype=np.int64)
+
+
+# ------------------------------------------------------------------------------ problem helpers
+@contextmanager
+def serial_numba() -> Iterator[None]:
+    """Run Numba's parallel kernels on one thread inside the block (this thread only; the
+    previous count is restored): RRT*'s segment batches are a few dozen segments, for which
+    waking and joining threads costs more than the work."""
+    prev = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(prev)
+
+
+def validity_problem(scenario: Scenario, task: Task | str | int | None = None) -> PathProblem:
+    """The segment checker of the tree: strict-altitude feasibility, no cost terms, node heights
+    read as the scenario's cost preset reads them (see the module docstring)."""
+    problem = PathProblem(scenario, task, cost=(), strict_altitude=True)
+    problem.lookup = LOOKUP.get(scenario.cost, "bilinear")
+    return problem
+
+
+def _segments_ok(problem: PathProblem, a: FloatArray, b: FloatArray) -> BoolArray:
+    out = np.zeros(len(a), dtype=bool)
+    for s in range(0, len(a), EDGE_CHUNK):
+        seg = np.stack([a[s : s + EDGE_CHUNK], b[s : s + EDGE_CHUNK]], axis=1)
+        out[s : s + EDGE_CHUNK] = problem.evaluate(seg).feasible
+    return out
+
+
+def _shortcut(problem: PathProblem, path: FloatArray) -> tuple[FloatArray, int]:
+    p = np.asarray(path, dtype=np.float64)
+    n = len(p)
+    if n <= 2:
+        return p.copy(), 0
+    i, j = np.triu_indices(n, k=2)
+    ok = np.zeros((n, n), dtype=bool)
+    ok[i, j] = _segments_ok(problem, p[i], p[j])
+    keep = [0]
+    cur = 0
+    while cur < n - 1:
+        later = np.flatnonzero(ok[cur, cur + 2 :])
+        cur = cur + 2 + int(later[-1]) if len(later) else cur + 1
+        keep.append(cur)
+    return np.asarray(p[keep]), len(i)
+
+
+def shortcut_path(problem: PathProblem, path: FloatArray) -> FloatArray:
+    """Greedy shortcutting: from each kept node jump to the farthest later node whose straight
+    segment is feasible for ``problem`` (all node pairs checked in one batched call); the next
+    node is kept when no later one is reachable. Never longer than ``path``; start and goal
+    kept. Not in the paper."""
+    return _shortcut(problem, path)[0]
+
+
+# ------------------------------------------------------------------------------ the tree
+def _unit_ball_volume(d: int) -> float:
+    return float(math.pi ** (d / 2) / math.gamma(d / 2 + 1))
+
+
+class RRTStarTree:
+    """One RRT* run (PPSwarm Alg. 1), one loop pass per :meth:`iterate`.
+
+    Node 0 is the start. Arrays (first ``n_nodes`` rows valid): ``points`` (n, dim),
+    ``parent`` (-1 for the root), ``cost`` (cost-to-come, metres). ``goal_nodes`` are the nodes
+    whose segment to the exact goal is free and within ``goal_radius``.
+
+    Args:
+        scenario, task: the world and the task (start = root, goal).
+        config: :class:`RRTStarConfig`.
+        rng: the only source of randomness.
+        problem: the segment checker (default :func:`validity_problem`).
+    """
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        task: Task | str | int | None,
+        config: RRTStarConfig,
+        rng: np.random.Generator,
+        problem: PathProblem | None = None,
+    ) -> None:
+        self.scenario = scenario
+        self.task = task if isinstance(task, Task) else scenario.task(task)
+        self.config = config
+        self.rng = rng
+        self.problem = problem if problem is not None else validity_problem(scenario, self.task)
+        self.dim = scenario.dim
+        self.start = np.asarray(self.task.start, dtype=np.float64)
+        self.goal = np.asarray(self.task.goal, dtype=np.float64)
+        # sampling region
+        lo = scenario.bounds.lo.astype(np.float64).copy()
+        hi = scenario.bounds.hi.astype(np.float64).copy()
+        self._ground_z = False
+        band = scenario.altitude
+        if self.dim == 3 and band is not None:
+            if band.reference == "ground":
+                lo[2], hi[2] = band.min, band.max
+                self._ground_z = True
+            else:
+                lo[2], hi[2] = max(lo[2], band.min), min(hi[2], band.max)
+                if hi[2] <= lo[2]:
+                    raise PlannerError("rrt-star: the altitude band does not meet the bounds")
+        self._lo, self._hi = lo, hi
+        self.measure = float(np.prod(hi - lo))
+        d = self.dim
+        self.gamma = config.rewire_factor * float(
+            (2.0 * (1.0 + 1.0 / d) * self.measure / _unit_ball_volume(d)) ** (1.0 / d)
+        )
+        # the grid covers the bounds, the start and the goal
+        blo = np.minimum.reduce([scenario.bounds.lo, self.start, self.goal])
+        bhi = np.maximum.reduce([scenario.bounds.hi, self.start, self.goal])
+        side = float(np.prod((bhi - blo)[: self.dim])) ** (1.0 / self.dim)
+        self.grid = GridIndex(blo, bhi, max(config.near_radius, side))
+        cap = len(self.grid._pts)
+        self._parent = np.full(cap, -1, dtype=np.int64)
+        self._cost = np.zeros(cap)
+        self._first_child = np.full(cap, -1, dtype=np.int64)
+        self._next_sib = np.full(cap, -1, dtype=np.int64)
+        self._stack = np.zeros(cap, dtype=np.int64)
+        self.grid.add(self.start)
+        self.goal_nodes: list[int] = []
+        self.iterations = 0
+        self.edge_checks = 0
+        self.rewires = 0
+        self.found_iteration: int | None = None
+        self._samples = np.zeros((0, 3))
+        self._goal_draw = np.zeros(0, dtype=bool)
+        self._pos = 0
+
+    # ---------------------------------------------------------------- views
+    @property
+    def n_nodes(self) -> int:
+        return self.grid.n
+
+    @property
+    def points(self) -> FloatArray:
+        return self.grid.points
+
+    @property
+    def parent(self) -> IntArray:
+        return self._parent[: self.n_nodes]
+
+    @property
+    def cost(self) -> FloatArray:
+        return self._cost[: self.n_nodes]
+
+    def radius(self) -> float:
+        """The near radius for the current tree (Alg. 1 line 7)."""
+        card = self.n_nodes + 1
+        r = self.gamma * (math.log(card) / card) ** (1.0 / self.dim)
+        return float(min(self.config.near_radius, r))
+
+    # ---------------------------------------------------------------- Alg. 1
+    def _refill(self) -> None:
+        b = SAMPLE_BLOCK
+        self._goal_draw = self.rng.random(b) < self.config.goal_bias
+        p = self._lo + self.rng.random((b, self.dim)) * (self._hi - self._lo)
+        if self._ground_z:
+            p[:, 2] += self.scenario.ground(p[:, 0], p[:, 1])
+        self._samples = np.zeros((b, 3))
+        self._samples[:, : self.dim] = p
+        self._pos = 0
+
+    def sample(self) -> FloatArray:
+        """Alg. 1 line 3 (padded to 3 coordinates)."""
+        if self._pos >= len(self._samples):
+            self._refill()
+        i = self._pos
+        self._pos += 1
+        return _pad3(self.goal) if self._goal_draw[i] else self._samples[i]
+
+    def _grow(self) -> None:
+        cap = len(self.grid._pts)
+        for name, fill in (("_parent", -1), ("_cost", 0), ("_first_child", -1), ("_next_sib", -1)):
+            old = getattr(self, name)
+            new = np.full(cap, fill, dtype=old.dtype)
+            new[: len(old)] = old
+            setattr(self, name, new)
+        self._stack = np.zeros(cap, dtype=np.int64)
+
+    def iterate(self) -> bool:
+        """One pass of Alg. 1's loop (lines 3-10). True if ``x_new`` joined the goal."""
+        self.iterations += 1
+        cfg = self.config
+        q = self.sample()
+        r = self.radius()
+        self.grid.balance(r)
+        i_near, d_near = self.grid.nearest(q)
+        if d_near <= 0.0:
+            return False
+        x_near = self.grid._pts[i_near]
+        x_new = q.copy() if d_near <= cfg.step else x_near + (q - x_near) * (cfg.step / d_near)
+        cand = self.grid.near(x_new, r)
+        pos = int(np.searchsorted(cand, i_near))
+        if pos == len(cand) or cand[pos] != i_near:
+            cand = np.insert(cand, pos, i_near)
+        d = self.dim
+        dg = float(np.linalg.norm(x_new[:d] - self.goal))
+        want_goal = dg <= cfg.goal_radius
+        k = len(cand)
+        edges = np.empty((k + int(want_goal), 2, d))
+        edges[:k, 0] = self.grid._pts[cand, :d]
+        edges[:k, 1] = x_new[:d]
+        if want_goal:
+            edges[k, 0] = x_new[:d]
+            edges[k, 1] = self.goal
+        ok = self.problem.evaluate(edges).feasible
+        self.edge_checks += len(edges)
+        if not ok[pos]:
+            return False
+        new = self.grid.add(x_new)
+        if len(self._parent) < len(self.grid._pts):
+            self._grow()
+        self.rewires += int(
+            _insert_rewire(
+                self.grid._pts,
+                self._parent,
+                self._cost,
+                self._first_child,
+                self._next_sib,
+                self._stack,
+                new,
+                cand,
+                ok[:k],
+            )
+        )
+        if want_goal and ok[k]:
+            self.goal_nodes.append(new)
+            if self.found_iteration is None:
+                self.found_iteration = self.iterations
+            return True
+        return False
+
+    def run(self, max_iterations: int, stop_at_goal: bool) -> None:
+        """Iterate until ``max_iterations`` passes in all, or the goal when ``stop_at_goal``
+        (in :func:`serial_numba`)."""
+        with serial_numba():
+            while self.iterations < max_iterations:
+                if self.iterate() and stop_at_goal:
+                    break
+
+    # ---------------------------------------------------------------- Alg. 1 line 11
+    def best_goal_node(self) -> int | None:
+        """The goal-connected node with the shortest start-goal path, None if none yet."""
+        if not self.goal_nodes:
+            return None
+        nodes = np.asarray(self.goal_nodes, dtype=np.int64)
+        total = self._cost[nodes] + np.linalg.norm(
+            self.grid._pts[nodes, : self.dim] - self.goal, axis=1
+        )
+        return int(nodes[int(np.argmin(total))])
+
+    def path_indices(self, node: int) -> IntArray:
+        """Node indices start .. ``node`` along the tree."""
+        out = [node]
+        while self._parent[out[-1]] >= 0:
+            out.append(int(self._parent[out[-1]]))
+            if len(out) > self.n_nodes:
+                raise RuntimeError("cycle in the RRT* tree")
+        return np.asarray(out[::-1], dtype=np.int64)
+
+    def path_of(self, idx: IntArray) -> FloatArray:
+        """Waypoints of the nodes ``idx`` plus the exact goal (not repeated if the last node is
+        the goal)."""
+        p = self.grid._pts[idx, : self.dim]
+        if np.array_equal(p[-1], self.goal):
+            return np.asarray(p.copy())
+        return np.asarray(np.vstack([p, self.goal[None]]))
+
+    def path(self) -> FloatArray | None:
+        """The shortest start-goal path found so far (None if none)."""
+        node = self.best_goal_node()
+        return None if node is None else self.path_of(self.path_indices(node))
+
+
+def _length(path: FloatArray) -> float:
+    return float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1)))
+
+
+def rrt_star(
+    scenario: Scenario,
+    task: Task | str | int | None,
+    config: RRTStarConfig,
+    rng: np.random.Generator,
+    max_iterations: int | None = None,
+) -> RRTStarResult:
+    """PPSwarm Alg. 1: RRT* from the task's start until a node joins the goal (or, with
+    ``config.stop_at_goal=False``, for all iterations), then the tree path plus the exact goal,
+    shortcut if ``config.shortcut``. ``max_iterations`` overrides the config's."""
+    tree = RRTStarTree(scenario, task, config, rng)
+    n_it = int(max_iterations if max_iterations is not None else config.max_iterations)
+    tree.run(n_it, config.stop_at_goal)
+    path = tree.path()
+    checks = tree.edge_checks
+    if path is not None and config.shortcut:
+        with serial_numba():
+            path, k = _shortcut(tree.problem, path)
+        checks += k
+    return RRTStarResult(
+        path=path,
+        n_nodes=tree.n_nodes,
+        iterations=tree.iterations,
+        found_iteration=tree.found_iteration,
+        cost=_length(path) if path is not None else float("inf"),
+        edge_checks=checks,
+    )
+
+
+# ------------------------------------------------------------------------------ the planner
+#: The planner's configuration when none is given: anytime (see the module docstring).
+PLANNER_CONFIG = RRTStarConfig(stop_at_goal=False)
+
+
+class RRTStarPlanner(Planner):
+    """RRT* as a planner (``rrt-star``); see the module docstring.
+
+    Args:
+        config: an :class:`RRTStarConfig` (default :data:`PLANNER_CONFIG`: the defaults with
+            ``stop_at_goal=False``); keyword overrides of its fields (``step=30.0``) apply on top.
+        pop_size: RRT* iterations per planner iteration (default 1).
+        cost, weights: cost preset and weight overrides (the scenario's by default).
+        track_feasibility: accepted for the common planner interface; always tracked.
+
+    Budget: planner iterations (an int or ``Budget.max_iterations``; by default
+    ``ceil(config.max_iterations / pop_size)``), stopped earlier by its evaluations (segment
+    checks), its time or the callback, or at the first goal connection with ``stop_at_goal``.
+    """
+
+    name = "rrt-star"
+
+    def __init__(
+        self,
+        config: RRTStarConfig | None = None,
+        pop_size: int = 1,
+        cost: str | None = None,
+        weights: dict[str, float] | None = None,
+        track_feasibility: bool = True,
+        **overrides: Any,
+    ) -> None:
+        known = {f.name for f in fields(RRTStarConfig)}
+        unknown = set(overrides) - known
+        if unknown:
+            raise PlannerError(
+                f"rrt-star: unknown parameter(s) {sorted(unknown)}; known: "
+                f"{sorted(known | {'config', 'cost', 'pop_size', 'track_feasibility', 'weights'})}"
+            )
+        if int(pop_size) < 1:
+            raise PlannerError(f"pop_size must be >= 1, got {pop_size}")
+        try:
+            self.config = replace(config if config is not None else PLANNER_CONFIG, **overrides)
+        except (TypeError, ValueError) as e:
+            raise PlannerError(f"rrt-star: {e}") from e
+        self.pop_size = int(pop_size)
+        self.cost = cost
+        self.weights = weights
+
+    def describe(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "pop_size": self.pop_size,
+            "cost": self.cost,
+            "weights": self.weights,
+            **asdict(self.config),
+        }
+
+    def _plan(
+        self,
+        scenario: Scenario,
+        task: Task,
+        budget: Budget | int | None,
+        seed: int | None,
+        callback: ProgressCallback | None,
+    ) -> PlanResult:
+        t0 = time.perf_counter()
+        cfg = self.config
+        default_iterations = -(-cfg.max_iterations // self.pop_size)
+        b = Budget.of(budget if budget is not None else default_iterations)
+        max_iterations = b.max_iterations or default_iterations
+        problem = PathProblem(scenario, task, cost=self.cost, weights=self.weights)
+        rng = np.random.default_rng(np.random.SeedSequence(seed))
+        tree = RRTStarTree(scenario, task, cfg, rng)
+        best_path: FloatArray | None = None
+        best_cost, best_feasible, best_length = np.inf, False, np.inf
+        history: list[float] = []
+        feasible_history: list[float] = []
+        evals_history: list[int] = []
+        path_evaluations = shortcut_checks = 0
+        last: IntArray | None = None
+        with serial_numba():
+            while True:
+                for _ in range(self.pop_size):
+                    if tree.iterate() and cfg.stop_at_goal:
+                        break
+                node = tree.best_goal_node()
+                if node is not None:
+                    idx = tree.path_indices(node)
+                    if last is None or not np.array_equal(idx, last):
+                        last = idx
+                        path = tree.path_of(idx)
+                        if cfg.shortcut:
+                            path, k = _shortcut(tree.problem, path)
+                            shortcut_checks += k
+                        ev = problem.evaluate(path[None])
+                        path_evaluations += 1
+                        c, f = float(ev.cost[0]), bool(ev.feasible[0])
+                        if (f, -c) > (best_feasible, -best_cost):
+                            best_path, best_cost, best_feasible = path, c, f
+                            best_length = _length(path)
+                prev_f = feasible_history[-1] if feasible_history else np.inf
+                history.append(min(history[-1], best_cost) if history else best_cost)
+                feasible_history.append(min(prev_f, best_cost if best_feasible else np.inf))
+                evaluations = tree.edge_checks + shortcut_checks
+                evals_history.append(evaluations)
+                it = len(history)
+                if callback is not None and callback(it, history[-1]):
+                    break
+                if cfg.stop_at_goal and tree.found_iteration is not None:
+                    break
+                if it >= max_iterations:
+                    break
+                if b.max_evaluations is not None and evaluations >= b.max_evaluations:
+                    break
+                if b.max_time is not None and time.perf_counter() - t0 >= b.max_time:
+                    break
+        reason: tuple[str, ...] = ()
+        final = best_path
+        if final is None:
+            final = np.stack([problem.start, problem.goal])
+            reason = ("no_path",)
+        ev = problem.evaluate(final[None])
+        fh = np.asarray(feasible_history, dtype=np.float64)
+        finite = np.flatnonzero(np.isfinite(fh))
+        config = self.describe()
+        config["run"] = {
+            "rrt_iterations": tree.iterations,
+            "found_iteration": tree.found_iteration,
+            "n_nodes": tree.n_nodes,
+            "edge_checks": tree.edge_checks,
+            "shortcut_checks": shortcut_checks,
+            "path_evaluations": path_evaluations,
+            "rewires": tree.rewires,
+            "radius": tree.radius(),
+            "length": best_length if best_path is not None else None,
+            "reason": "no start-goal path found within the budget" if reason else "",
+        }
+        return PlanResult(
+            uav_id=task.id,
+            waypoints=final,
+            times=problem.times(final[None])[0],
+            cost=float(ev.cost[0]),
+            terms={k: float(v[0]) for k, v in ev.terms.items()},
+            feasible=bool(ev.feasible[0]) and not reason,
+            evaluations=tree.edge_checks + shortcut_checks,
+            iterations=len(history),
+            wall_time=time.perf_counter() - t0,
+            history=np.asarray(history, dtype=np.float64),
+            algorithm=self.name,
+            config=config,
+            seed=seed,
+            cost_model=problem.cost_name,
+            violations=tuple(k for k, v in ev.violations.items() if v[0]) + reason,
+            feasible_history=fh,
+            first_feasible_iteration=int(finite[0]) + 1 if len(finite) else None,
+            evaluations_history=np.asarray(evals_history, dtype=np.int64),
+        )
+
+
+def register_all() -> None:
+    """Register ``rrt-star`` (idempotent)."""
+    if "rrt-star" not in _REGISTRY:
+        register_planner("rrt-star", lambda **kw: RRTStarPlanner(**kw))
