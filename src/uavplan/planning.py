@@ -13,22 +13,27 @@ import numpy as np
 from uavplan import __version__
 from uavplan.io.atomic import write_json_atomic
 from uavplan.optimizers.base import Budget
-from uavplan.planners.base import Planner, PlanResult, ProgressCallback
+from uavplan.planners.base import FleetPlanner, FleetResult, Planner, PlanResult, ProgressCallback
 from uavplan.world.scenario import Scenario
 
 
 @dataclass(frozen=True)
 class FleetPlan:
-    """Independent plans for every task of a scenario (the fleet planner comes later)."""
+    """Plans for every task of a scenario: planned one by one by a single-UAV planner, or
+    together by a :class:`FleetPlanner` (then ``fleet`` holds its fleet-level result, and
+    feasibility includes the separation between UAVs)."""
 
     scenario: Scenario
     algorithm: str
     config: dict[str, Any]
     seed: int | None
     results: tuple[PlanResult, ...]
+    fleet: FleetResult | None = None
 
     @property
     def feasible(self) -> bool:
+        if self.fleet is not None:
+            return bool(self.fleet.feasible)
         return all(r.feasible for r in self.results)
 
     def to_dict(self) -> dict[str, Any]:
@@ -41,6 +46,8 @@ class FleetPlan:
             "version": __version__,
             "python": platform.python_version(),
             "frame": "local ENU metres: x east, y north, z up (absolute altitude)",
+            "separation_checked": self.fleet is not None,
+            **({"fleet": self.fleet.to_dict()} if self.fleet is not None else {}),
             "uavs": [r.to_dict() for r in self.results],
         }
 
@@ -60,7 +67,12 @@ def plan_all(
     progress: Callable[[str], ProgressCallback | None] | None = None,
     tasks: Sequence[str] | None = None,
 ) -> FleetPlan:
-    """Plan each task (or those named in ``tasks``) independently."""
+    """Plan each task (or those named in ``tasks``) independently, or the whole fleet at once
+    with a :class:`FleetPlanner` (``progress`` then gets the key ``"fleet"``)."""
+    if isinstance(planner, FleetPlanner):
+        cb = progress("fleet") if progress else None
+        fr = planner.plan_fleet(scenario, budget, seed, cb, tuple(tasks) if tasks else None)
+        return FleetPlan(scenario, planner.name, planner.describe(), seed, fr.results, fr)
     chosen = [t for t in scenario.tasks if tasks is None or t.id in tasks]
     results = []
     for task, s in zip(chosen, task_seeds(seed, len(chosen)), strict=True):

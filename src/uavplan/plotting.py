@@ -33,6 +33,15 @@ def _terrain_xy(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     return xs, ys, t.heights
 
 
+def _colors(n: int) -> Any:
+    """A colour per path: tab10 for a few, a continuous map for a fleet."""
+    if n <= 10:
+        cmap = plt.get_cmap("tab10")
+        return lambda k: cmap(k % 10)
+    cmap = plt.get_cmap("turbo")
+    return lambda k: cmap(k / max(n - 1, 1))
+
+
 def draw_top(ax: Axes, scenario: Scenario, results: Sequence[Any] = ()) -> None:
     """Top view: terrain shading and contours, obstacles and areas, paths, starts and goals.
 
@@ -79,21 +88,29 @@ def draw_top(ax: Axes, scenario: Scenario, results: Sequence[Any] = ()) -> None:
         ax.add_patch(
             CirclePatch((m.positions[0, 0], m.positions[0, 1]), m.radius, fill=False, ec="tab:gray")
         )
-    colors = plt.get_cmap("tab10")
+    color = _colors(len(results))
+    many = len(results) > 10
     for k, r in enumerate(results):
         w = np.asarray(r.waypoints)
+        sm = getattr(r, "smoothed", None)
         ax.plot(
             w[:, 0],
             w[:, 1],
             "-",
-            color=colors(k % 10),
-            lw=1.6,
+            color=color(k),
+            lw=0.7 if many else 1.6,
+            alpha=0.5 if sm is not None else 1.0,
             label=f"{r.uav_id} ({'feasible' if r.feasible else 'infeasible'})",
         )
-        ax.plot(w[1:-1, 0], w[1:-1, 1], ".", color=colors(k % 10), ms=4)
+        if sm is not None:  # PPSwarm Fig. 11: solid planned path, dashed Dubins-smoothed one
+            sm = np.asarray(sm)
+            ax.plot(sm[:, 0], sm[:, 1], "--", color=color(k), lw=0.7 if many else 1.2)
+        if not many:
+            ax.plot(w[1:-1, 0], w[1:-1, 1], ".", color=color(k), ms=4)
+    ms = 3 if len(scenario.tasks) > 40 else 7
     for t in scenario.tasks:
-        ax.plot(*t.start[:2], "o", color="green", ms=7, mec="k")
-        ax.plot(*t.goal[:2], "*", color="red", ms=11, mec="k")
+        ax.plot(*t.start[:2], "o", color="green", ms=ms, mec="k", mew=0.5)
+        ax.plot(*t.goal[:2], "*", color="red", ms=ms * 1.5, mec="k", mew=0.5)
     lo, hi = scenario.bounds.lo, scenario.bounds.hi
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
@@ -139,11 +156,12 @@ def draw_3d(ax: Any, scenario: Scenario, results: Sequence[PlanResult] = ()) -> 
             ax.plot(cx, cy, z, color="tab:red", lw=0.8)
         for k in range(0, len(theta), 5):
             ax.plot([cx[k], cx[k]], [cy[k], cy[k]], [float(z0), float(z1)], color="tab:red", lw=0.4)
-    colors = plt.get_cmap("tab10")
+    color = _colors(len(results))
     for k, r in enumerate(results):
-        w = np.asarray(r.waypoints)
+        sm = getattr(r, "smoothed", None)
+        w = np.asarray(sm if sm is not None else r.waypoints)
         zs = w[:, 2] if w.shape[1] == 3 else np.zeros(len(w))
-        ax.plot(w[:, 0], w[:, 1], zs, "-", color=colors(k % 10), lw=2)
+        ax.plot(w[:, 0], w[:, 1], zs, "-", color=color(k), lw=2 if len(results) <= 10 else 0.8)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_zlabel("z (m)")

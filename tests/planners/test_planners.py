@@ -49,7 +49,12 @@ PLANNERS = available_planners()
 @pytest.mark.parametrize("make", [easy_2d, easy_3d], ids=["2d", "3d"])
 def test_planner_solves_easy_scenario(name: str, make) -> None:
     sc = make()
-    r = get_planner(name, pop_size=40).plan(sc, budget=60, seed=1)
+    planner = get_planner(name, pop_size=40)
+    if sc.dim not in planner.dims:
+        with pytest.raises(PlannerError, match=f"{sc.dim}-D"):
+            planner.plan(sc, budget=60, seed=1)
+        return
+    r = planner.plan(sc, budget=60, seed=1)
     assert isinstance(r, PlanResult)
     assert r.feasible, (name, r.violations, r.cost)
     assert np.isfinite(r.cost)
@@ -70,7 +75,7 @@ def test_planner_solves_easy_scenario(name: str, make) -> None:
 
 @pytest.mark.parametrize("name", PLANNERS)
 def test_planner_deterministic_per_seed(name: str) -> None:
-    sc = easy_2d()
+    sc = easy_2d() if 2 in get_planner(name).dims else easy_3d()
     a = get_planner(name, pop_size=20).plan(sc, budget=10, seed=7)
     b = get_planner(name, pop_size=20).plan(sc, budget=10, seed=7)
     c = get_planner(name, pop_size=20).plan(sc, budget=10, seed=8)

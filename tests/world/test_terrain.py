@@ -681,3 +681,16 @@ def test_downsample_keeps_nodes() -> None:
     D = T.downsample(3)
     assert D.dx == 3 * T.dx and D.dy == 3 * T.dy
     np.testing.assert_array_equal(D.heights, T.heights[::3, ::3])
+
+
+@FAST
+@given(seed=SEEDS)
+def test_stays_within_agrees_with_max_clearance(seed: int) -> None:
+    T = random_terrain(seed)
+    rng = np.random.default_rng(seed + 5)
+    segs = random_segments(T, rng, 12)
+    top = T.max_clearance(segs)
+    finite = np.isfinite(top)
+    for ceiling in (np.nanmedian(np.where(finite, top, np.nan)), float(np.max(top[finite])) + 1):
+        got = T.stays_within(segs, ceiling)
+        np.testing.assert_array_equal(got[finite], top[finite] <= ceiling)

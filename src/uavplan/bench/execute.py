@@ -134,9 +134,65 @@ def _run_function(spec: RunSpec) -> dict[str, Any]:
     }
 
 
+def fleet_scenario(ref: str) -> Any:
+    """A fleet scenario reference: a built-in name or file, optionally ``@N`` for the same world
+    with a generated fleet of N UAVs (its own crossing pattern and seed, see
+    :func:`uavplan.world.fleet_tasks.with_fleet`)."""
+    from uavplan.world.fleet_tasks import with_fleet
+
+    base, _, n = ref.partition("@")
+    scenario = _scenario(base)
+    if not n:
+        return scenario
+    fleet = dict(scenario.metadata.get("fleet") or {})
+    return with_fleet(
+        scenario, int(n), seed=int(fleet.get("seed", 0)), pattern=fleet.get("pattern", "crossing")
+    )
+
+
+def _run_fleet(spec: RunSpec) -> dict[str, Any]:
+    """A fleet planner run, its plan checked by the independent verifier
+    (:mod:`uavplan.fleet.verify`), planned and smoothed paths both."""
+    from uavplan.fleet.verify import verify_plan
+    from uavplan.planners import get_planner
+    from uavplan.planning import FleetPlan
+
+    p = spec.params
+    scenario = fleet_scenario(spec.scenario)
+    planner = get_planner(p["planner"], **dict(p["options"]))
+    budget = int(p["iterations"]) if p.get("iterations") else None
+    fr = planner.plan_fleet(scenario, budget, spec.seed)  # type: ignore[attr-defined]
+    plan = FleetPlan(scenario, planner.name, planner.describe(), spec.seed, fr.results, fr)
+    d = plan.to_dict()
+    rep = verify_plan(d, scenario)
+    smoothed = all(r.smoothed is not None for r in fr.results)
+    rep_s = verify_plan(d, scenario, smoothed=True) if smoothed else None
+    return {
+        "best_cost": fr.cost,
+        "path_length": float(sum(r.length for r in fr.results)),
+        "feasible": fr.feasible,
+        "first_feasible_iteration": None,
+        "evaluations": int(fr.info.get("evaluations", 0)),
+        "iterations": len(fr.history),
+        "history": np.asarray(fr.history),
+        "restart_costs": np.asarray(fr.restart_costs),
+        "n_uavs": len(fr.results),
+        "n_infeasible": int(sum(not r.feasible for r in fr.results)),
+        "verified": bool(rep.ok),
+        "verify_violations": len(rep.violations),
+        "min_separation": float(rep.min_separation),
+        "smoothed_verified": None if rep_s is None else bool(rep_s.ok),
+        "smoothed_violations": None if rep_s is None else len(rep_s.violations),
+        "smoothed_not_clear": int(sum(r.smoothed_ok is False for r in fr.results)),
+        "rrt_time": float(fr.info.get("rrt_time", 0.0)),
+        "planner_wall_time": float(fr.wall_time),
+    }
+
+
 KINDS: dict[str, Callable[[RunSpec], dict[str, Any]]] = {
     "planner": _run_planner,
     "function": _run_function,
+    "fleet": _run_fleet,
 }
 
 
@@ -230,6 +286,12 @@ def warm_up() -> None:
             PathProblem(sc, cost=preset).evaluate(paths)
     terrain.min_clearance(np.full((1, 2, 3), 5.0))
     terrain.max_clearance(np.full((1, 2, 3), 5.0))
+    terrain.stays_within(np.full((1, 2, 3), 5.0), 10.0)
+    from uavplan.fleet.reservations import ReservationTable
+
+    table = ReservationTable(np.zeros(3), np.full(3, 30.0), 1.0)
+    table.add("a", np.array([[1.0, 1, 5], [29, 29, 5]]), np.array([0.0, 3.0]))
+    table.conflicts(np.array([[[29.0, 1, 5], [1, 29, 5]]]), np.array([[0.0, 3.0]]))
 
 
 def execute_chunk(specs: list[RunSpec], single_thread: bool = True) -> list[dict[str, Any]]:

@@ -69,6 +69,7 @@ class Scale:
     pop_size: int | None = None
     evaluations: int | None = None
     scenarios: tuple[str, ...] | None = None  # this scale's scenarios (default: the plan's)
+    options: Mapping[str, Any] = field(default_factory=dict)  # override every algorithm's
 
 
 @dataclass(frozen=True)
@@ -116,6 +117,7 @@ class ExperimentPlan:
                 options = dict(alg.options)
                 if sc.pop_size is not None and "pop_size" not in options:
                     options["pop_size"] = sc.pop_size
+                options.update(sc.options)
                 for i in range(n_runs):
                     out.append(
                         RunSpec(
@@ -250,6 +252,7 @@ def builtin_plans() -> list[ExperimentPlan]:
             reference="spso",
         ),
         *_rggpso_plans(),
+        *_ppswarm_plans(),
         ExperimentPlan(
             name="overhead",
             description=(
@@ -318,3 +321,111 @@ def _rggpso_plans() -> list[ExperimentPlan]:
             metric="path_length",
         ),
     ]
+
+
+def _ppswarm_plans() -> list[ExperimentPlan]:
+    """PPSwarm (Meng, Chen & Qu 2024) Sect. 5 on our four scenarios (``ppswarm1``-``4``, 40 UAVs;
+    ``NAME@N`` is the same world with a generated fleet of N UAVs). Each configuration runs with
+    its own ``N_iter`` (a scale's ``iterations = 0``); the smoke scale runs 4 UAVs with a tiny
+    budget. Every fleet plan is checked by the independent verifier."""
+    table2 = {  # Table 2: the baselines under LH prioritized planning, N_pop 300, N_iter 100
+        "pso": {"optimizer": "pso", "w": 0.8, "c1": 1.45, "c2": 1.5},
+        "de": {"optimizer": "de", "F": 0.8, "CR": 0.9},
+        # ABC: one of our iterations is one phase, so 100 cycles are 201 iterations
+        "abc": {"optimizer": "abc", "n_iter": 201},
+        "gwo": {"optimizer": "gwo", "max_iterations": 100},
+        "spso": {"optimizer": "spso", "w": 1.0, "c1": 1.5, "c2": 1.5},
+    }
+    scen4 = tuple(f"ppswarm{i}" for i in range(1, 5))
+    smoke = Scale(
+        runs=1,
+        iterations=3,
+        pop_size=12,
+        scenarios=("ppswarm1@4",),
+        options={"pop_size": 12, "rrt_iterations": 1500},
+    )
+    smoke_params = Scale(
+        runs=1,
+        iterations=2,
+        scenarios=("ppswarm1@3",),
+        options={"pop_size": 8, "n_restart": 2, "rrt_iterations": 1500},
+    )
+    plans = [
+        ExperimentPlan(
+            name="ppswarm-table3",
+            description=(
+                "PPSwarm vs PSO, DE, ABC, GWO, SPSO (LH prioritized planning), 40 UAVs, four "
+                "scenarios, 20 runs: best/worst/mean/std cost and runtime (Table 3), "
+                "convergence (Fig. 5), box plots (Fig. 6)"
+            ),
+            scenarios=scen4,
+            algorithms=(
+                Algorithm("ppswarm", "ppswarm"),
+                *(Algorithm(k, "prioritized", v) for k, v in table2.items()),
+            ),
+            scales={"smoke": smoke, "paper": Scale(runs=20, iterations=0, pop_size=300)},
+            kind="fleet",
+            reference="ppswarm",
+        ),
+        ExperimentPlan(
+            name="ppswarm-table4",
+            description=(
+                "PPSwarm scalability on scenario 1: 40-500 UAVs with N_restart = 1 and 5 "
+                "(Table 4, Fig. 7)"
+            ),
+            scenarios=tuple(f"ppswarm1@{n}" for n in (40, 100, 200, 300, 400, 500)),
+            algorithms=(
+                Algorithm("ppswarm-r1", "ppswarm", {"n_restart": 1}),
+                Algorithm("ppswarm-r5", "ppswarm", {"n_restart": 5}),
+            ),
+            scales={"smoke": smoke, "paper": Scale(runs=1, iterations=0, pop_size=300)},
+            kind="fleet",
+            reference="ppswarm-r5",
+        ),
+        ExperimentPlan(
+            name="ppswarm-table5",
+            description=(
+                "Priority orders LH vs SH vs RND with 10, 20, 30, 40 UAVs on the four "
+                "scenarios, 20 runs (Table 5)"
+            ),
+            scenarios=tuple(f"{s}@{n}" for s in scen4 for n in (10, 20, 30, 40)),
+            algorithms=tuple(
+                Algorithm(f"ppswarm-{o}", "ppswarm", {"order": o}) for o in ("lh", "sh", "rnd")
+            ),
+            scales={"smoke": smoke, "paper": Scale(runs=20, iterations=0, pop_size=300)},
+            kind="fleet",
+            reference="ppswarm-lh",
+        ),
+        ExperimentPlan(
+            name="ppswarm-params",
+            description=(
+                "Sect. 5.3.3 parameter analysis on scenario 1 (10 UAVs), 30 restarts: N_iter "
+                "20/40/60 with N_pop 100 and 300 and rho 0 (Fig. 9); rho 0-60 % (Fig. 10)"
+            ),
+            scenarios=("ppswarm1@10",),
+            algorithms=(
+                *(
+                    Algorithm(
+                        f"pop{p}-iter{it}-rho0",
+                        "ppswarm",
+                        {"pop_size": p, "n_iter": it, "rho": 0.0, "n_restart": 30},
+                    )
+                    for p in (100, 300)
+                    for it in (20, 40, 60)
+                ),
+                *(
+                    Algorithm(
+                        f"pop{p}-iter{it}-rho{int(r * 100)}",
+                        "ppswarm",
+                        {"pop_size": p, "n_iter": it, "rho": r, "n_restart": 30},
+                    )
+                    for p, it in ((100, 20), (300, 20), (300, 40), (300, 60))
+                    for r in (0.2, 0.4, 0.6)
+                ),
+            ),
+            scales={"smoke": smoke_params, "paper": Scale(runs=20, iterations=0)},
+            kind="fleet",
+            reference="pop300-iter20-rho20",
+        ),
+    ]
+    return plans

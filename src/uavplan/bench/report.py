@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from uavplan.bench import plots, rggpso, stats
+from uavplan.bench import plots, ppswarm, rggpso, stats
 from uavplan.bench.store import ResultStore
 from uavplan.io.atomic import write_bytes_atomic, write_text_atomic
 
@@ -205,8 +205,10 @@ def write_report(folder: str | Path) -> tuple[Path, Path]:
             figures.append((name, title, data))
 
     sections = build_sections(df, manifest)
-    if plan.startswith("rggpso-") and not df.empty:
-        paper_sections, paper_figures = rggpso.sections(df, plan)
+    paper = {"rggpso-": rggpso.sections, "ppswarm-": ppswarm.sections}
+    maker = next((m for p, m in paper.items() if plan.startswith(p)), None)
+    if maker is not None and not df.empty:
+        paper_sections, paper_figures = maker(df, plan)
         sections = paper_sections + sections
         for name, title, fig in paper_figures:
             data = _png(fig)

@@ -69,6 +69,12 @@ class PlanResult:
     evaluations_history: NDArray[np.int64] = field(
         default_factory=lambda: np.zeros(0, dtype=np.int64)
     )
+    #: a flyable version of ``waypoints`` (Dubins-smoothed dense polyline, (m, dim)), its times
+    #: (m,) and whether it keeps every clearance (None: not smoothed)
+    smoothed: FloatArray | None = None
+    smoothed_times: FloatArray | None = None
+    smoothed_ok: bool | None = None
+    smoothed_violations: tuple[str, ...] = ()
 
     @property
     def length(self) -> float:
@@ -90,6 +96,18 @@ class PlanResult:
             "wall_time": float(self.wall_time),
             "history": [_num(v) for v in np.asarray(self.history)],
             "first_feasible_iteration": self.first_feasible_iteration,
+            **(
+                {
+                    "smoothed": {
+                        "points": np.asarray(self.smoothed).round(6).tolist(),
+                        "times": np.asarray(self.smoothed_times).round(6).tolist(),
+                        "clear": self.smoothed_ok,
+                        "violations": list(self.smoothed_violations),
+                    }
+                }
+                if self.smoothed is not None
+                else {}
+            ),
         }
 
 
@@ -103,6 +121,8 @@ class Planner(ABC):
     """Plans one task. Subclasses set ``name`` and implement :meth:`_plan`."""
 
     name: ClassVar[str] = "planner"
+    #: the scenario dimensions this planner handles (2-D scenes, 3-D worlds)
+    dims: ClassVar[tuple[int, ...]] = (2, 3)
 
     def plan(
         self,
@@ -114,6 +134,11 @@ class Planner(ABC):
     ) -> PlanResult:
         """Plan ``task`` (default: the first) of ``scenario`` within ``budget`` from ``seed``."""
         t = task if isinstance(task, Task) else scenario.task(task)
+        if scenario.dim not in self.dims:
+            raise PlannerError(
+                f"{self.name} plans {' or '.join(f'{d}-D' for d in self.dims)} scenarios; "
+                f"{scenario.name!r} is {scenario.dim}-D"
+            )
         t0 = time.perf_counter()
         result = self._plan(scenario, t, budget, seed, callback)
         if result.wall_time <= 0:
@@ -132,6 +157,97 @@ class Planner(ABC):
 
     def describe(self) -> dict[str, Any]:
         return {"name": self.name}
+
+
+@dataclass(frozen=True)
+class FleetResult:
+    """A whole fleet's plan from a :class:`FleetPlanner`.
+
+    Attributes:
+        results: one :class:`PlanResult` per task, in the scenario's task order.
+        priority: task ids in the order they were planned in the kept solution.
+        cost: total cost (sum of the UAVs' costs; inf if any is infeasible).
+        feasible: every UAV feasible, including separation from the others.
+        history: the fleet's cost per low-level iteration (see the planner's docs).
+        restart_costs: the fleet cost after each restart.
+        wall_time: seconds; info: planner-specific figures (timings, smoothing report).
+    """
+
+    results: tuple[PlanResult, ...]
+    priority: tuple[str, ...]
+    cost: float
+    feasible: bool
+    history: FloatArray
+    restart_costs: FloatArray
+    wall_time: float
+    algorithm: str
+    config: dict[str, Any] = field(default_factory=dict)
+    seed: int | None = None
+    info: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "priority": list(self.priority),
+            "cost": _num(self.cost),
+            "feasible": bool(self.feasible),
+            "history": [_num(v) for v in np.asarray(self.history)],
+            "restart_costs": [_num(v) for v in np.asarray(self.restart_costs)],
+            "wall_time": float(self.wall_time),
+            "info": self.info,
+        }
+
+
+class FleetPlanner(Planner):
+    """Plans all tasks of a scenario together (UAV-UAV separation included).
+
+    Subclasses implement :meth:`_plan_fleet`; planning a single task plans a fleet of one.
+    """
+
+    def plan_fleet(
+        self,
+        scenario: Scenario,
+        budget: Budget | int | None = None,
+        seed: int | None = None,
+        callback: ProgressCallback | None = None,
+        tasks: tuple[str, ...] | None = None,
+    ) -> FleetResult:
+        """Plan every task of ``scenario`` (or those named in ``tasks``)."""
+        if scenario.dim not in self.dims:
+            raise PlannerError(
+                f"{self.name} cannot plan {scenario.dim}-D scenario {scenario.name!r}"
+            )
+        sc = scenario
+        if tasks is not None:
+            chosen = tuple(t for t in scenario.tasks if t.id in set(tasks))
+            if not chosen:
+                raise PlannerError(f"none of the tasks {list(tasks)} is in {scenario.name!r}")
+            sc = _with_tasks(scenario, chosen)
+        return self._plan_fleet(sc, budget, seed, callback)
+
+    @abstractmethod
+    def _plan_fleet(
+        self,
+        scenario: Scenario,
+        budget: Budget | int | None,
+        seed: int | None,
+        callback: ProgressCallback | None,
+    ) -> FleetResult: ...
+
+    def _plan(
+        self,
+        scenario: Scenario,
+        task: Task,
+        budget: Budget | int | None,
+        seed: int | None,
+        callback: ProgressCallback | None,
+    ) -> PlanResult:
+        return self._plan_fleet(_with_tasks(scenario, (task,)), budget, seed, callback).results[0]
+
+
+def _with_tasks(scenario: Scenario, tasks: tuple[Task, ...]) -> Scenario:
+    import dataclasses
+
+    return dataclasses.replace(scenario, tasks=tasks)
 
 
 _REGISTRY: dict[str, Callable[..., Planner]] = {}
@@ -160,7 +276,9 @@ def get_planner(name: str, **options: Any) -> Planner:
 
 
 def _load_builtins() -> None:
-    from uavplan.planners import optimizer_planner, rgg_pso
+    from uavplan.planners import optimizer_planner, ppswarm, rgg_pso, rrt_star
 
     optimizer_planner.register_all()
     rgg_pso.register_all()
+    rrt_star.register_all()
+    ppswarm.register_all()

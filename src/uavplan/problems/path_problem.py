@@ -344,7 +344,7 @@ class PathProblem:
             h = _band_heights(ctx)
             bad = np.any((h < band.min - 1e-9) | (h > band.max + 1e-9), axis=1)
             if self.strict_altitude and band.reference == "ground" and sc.terrain is not None:
-                bad |= np.any(sc.terrain.max_clearance(p) > band.max + 1e-9, axis=1)
+                bad |= ~np.all(sc.terrain.stays_within(p, band.max + 1e-9), axis=1)
             out["altitude"] = bad
         if sc.moving_obstacles:
             radii = np.array([o.radius for o in sc.moving_obstacles])

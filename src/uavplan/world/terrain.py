@@ -197,6 +197,27 @@ class Terrain:
         )
         return np.asarray(-out)
 
+    def stays_within(self, paths: ArrayLike, clearance: float) -> NDArray[np.bool_]:
+        """Whether every point of every segment is at most ``clearance`` above the terrain:
+        the yes/no form of :meth:`max_clearance` (the search prunes every block of cells that
+        is clearly below the ceiling). Returns (pop, n_points - 1) bool."""
+        p = np.asarray(paths, dtype=np.float64)
+        u, v = self._uv_snapped(p[..., 0], p[..., 1])
+        neg, (flat, off, shp) = self._neg
+        cap = -float(clearance)
+        out = tk.min_clearance_batch(
+            neg,
+            flat,
+            off,
+            shp,
+            np.ascontiguousarray(u),
+            np.ascontiguousarray(v),
+            np.ascontiguousarray(-p[..., 2]),
+            cap,
+            True,
+        )
+        return np.asarray(out >= cap)
+
     def mean_height(self, paths: ArrayLike) -> FloatArray:
         """Exact mean terrain height under each segment's ground track, (pop, n_points - 1)."""
         p = np.asarray(paths, dtype=np.float64)

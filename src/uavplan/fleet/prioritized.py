@@ -1,0 +1,512 @@
+"""Prioritized fleet planning with a low-level population optimizer (PPSwarm and its baselines).
+
+Meng, Q., Chen, K. & Qu, Q. (2024). PPSwarm: Multi-UAV path planning based on hybrid PSO in
+complex scenarios. *Drones* 8, 192.
+
+* **High level** (Alg. 2-3): every UAV gets an initial path (RRT*, Alg. 1, or none); UAVs are
+  planned one at a time in priority order, each avoiding the UAVs planned before it; after each
+  pass (a *restart*) the priorities are shuffled and the fleet is planned again.
+* **Low level** (Alg. 4): a population optimizer over the UAV's free waypoints (Cartesian
+  encoding, Sect. 4.1.3) minimizing F = sum b_c F_c (Eqs. 2-13). Its first population is seeded
+  from the initial path by Eq. (15) in the first restart, and from the UAV's previous population
+  with a share ``rho`` of random paths by Eq. (16) in later ones. PSO (Eq. 14) is PPSwarm's; any
+  registered optimizer can replace it, which is how the paper's baselines run (Table 2: LH
+  priorities, one pass, uniform random first populations).
+* **Collisions between UAVs** (Eqs. 11-12, Sect. 4.3, Alg. 5): the chosen paths of the UAVs
+  already planned are kept in a :class:`~uavplan.fleet.reservations.ReservationTable`; a
+  candidate that comes closer than S2 to one of them at any instant costs infinity.
+
+Choices where the paper is silent or vague (all parameters of :class:`PrioritizedConfig`):
+
+* **Infeasible means infinite cost**, as Sect. 2 says of every constraint; we apply it to the
+  continuous checks of :class:`~uavplan.problems.path_problem.PathProblem` with
+  ``strict_altitude=True`` (terrain and altitude band along whole segments, cylinders exact),
+  so that the kept path of a UAV is always flyable, not only at its waypoints.
+* **Eq. (15)**: ``alpha`` is not given; we use 0.1 (particles within a tenth of the box from the
+  RRT* path, as the thin lines of Fig. 2 suggest), blending in the optimizer's gene space (x, y
+  and height above ground). ``randpath(T_m)`` is a path of uniform random free waypoints.
+* **Eq. (16)**: ``x_i^last`` are the particle positions the optimizer evaluated last.
+* **The RRT* path as a particle**: its vertices are kept and the remaining free waypoints are
+  spread along its segments in proportion to their lengths, so the particle is the same polyline
+  (and as feasible); a path with more vertices than free waypoints is shortcut first, then
+  resampled by arc length. Without an RRT* path (not found, or ``seeding="uniform"``) the
+  straight start-goal line stands in for ``P^m``.
+* **Priorities**: ``lh`` plans the longer tasks first, ``sh`` the shorter, ``rnd`` at random
+  (Sect. 5.3.1). A task's length is its RRT* path length when the planner has one (Alg. 3 line 4,
+  SortbyCost: "higher costs receiving higher priorities"), else the start-goal distance.
+* **Which solution is returned**: Alg. 3 returns the last restart's; we return the best restart's
+  (fewest infeasible UAVs, then lowest total cost), since Table 4 reports best costs falling with
+  restarts. The fleet history (Fig. 5) has one value per low-level iteration of each restart:
+  the sum over UAVs of each UAV's best cost after that many iterations of its own optimizer.
+* A UAV whose optimizer found no feasible path keeps its best (infeasible) path, which is still
+  reserved so that later UAVs avoid it; the fleet is then infeasible.
+* Iterations: ``N_iter`` counts iterations as every optimizer here does, the first one being the
+  evaluation of the first population (Alg. 4 line 3), so a restart evaluates ``N_iter`` swarms
+  per UAV (Alg. 4 read literally moves ``N_iter`` times after that: one swarm more).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass, field, fields, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from uavplan import optimizers
+from uavplan.fleet.reservations import ReservationTable
+from uavplan.optimizers.base import Budget
+from uavplan.planners.base import (
+    FleetPlanner,
+    FleetResult,
+    PlannerError,
+    PlanResult,
+    ProgressCallback,
+)
+from uavplan.problems.encoding import ENCODINGS, CartesianEncoding
+from uavplan.problems.path_problem import PRESETS, Context, PathProblem, Term
+from uavplan.world.scenario import Scenario, Task
+
+FloatArray = NDArray[np.float64]
+
+ORDERS = ("lh", "sh", "rnd")
+SEEDINGS = ("rrt-star", "uniform")
+
+
+class SeparatedPathProblem(PathProblem):
+    """A UAV's :class:`PathProblem` plus F5 (Eqs. 11-12) against a reservation table, with every
+    continuous-constraint violation costed as infinity (Sect. 2)."""
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        task: Task,
+        table: ReservationTable | None,
+        cost: str = "ppswarm",
+        weights: dict[str, float] | None = None,
+    ) -> None:
+        if cost not in PRESETS:
+            raise PlannerError(f"unknown cost preset {cost!r}")
+        self.table = table
+        terms = (*PRESETS[cost], Term("separation", 1.0, self._t_separation))
+        super().__init__(scenario, task, cost=terms, weights=weights, strict_altitude=True)
+        self.cost_name = f"{cost}+separation"
+
+    def _conflicts(self, ctx: Context) -> NDArray[np.bool_]:
+        got = getattr(ctx, "_conflicts", None)
+        if got is None:
+            if self.table is None or len(self.table) == 0:
+                got = np.zeros(ctx.paths.shape[0], dtype=bool)
+            else:
+                got = self.table.conflicts(ctx.paths, ctx.times)
+            ctx._conflicts = got  # type: ignore[attr-defined]
+        return np.asarray(got)
+
+    def _t_separation(self, ctx: Context) -> FloatArray:
+        return np.where(self._conflicts(ctx), np.inf, 0.0)
+
+    def _violations(self, ctx: Context) -> dict[str, NDArray[np.bool_]]:
+        out = super()._violations(ctx)
+        out["separation"] = self._conflicts(ctx)
+        return out
+
+    def cost(self, paths: FloatArray) -> FloatArray:
+        """Total cost, inf where any check fails: the cost terms first, then the continuous
+        world checks only for paths still finite, then separation only for those left (the
+        same result as ``evaluate``'s cost where feasible, inf elsewhere; tests compare)."""
+        p = self._check(paths)
+        ctx = Context(self, p)
+        total = np.zeros(p.shape[0])
+        for t in self.terms:
+            if t.name != "separation":
+                total = total + t.weight * np.asarray(t.fn(ctx), dtype=np.float64)
+        idx = np.flatnonzero(np.isfinite(total))
+        if idx.size:
+            sub = Context(self, np.ascontiguousarray(p[idx]))
+            bad = np.zeros(idx.size, dtype=bool)
+            for v in PathProblem._violations(self, sub).values():
+                bad |= v
+            total[idx[bad]] = np.inf
+            idx = idx[~bad]
+        if idx.size and self.table is not None and len(self.table):
+            sub = Context(self, np.ascontiguousarray(p[idx]))
+            total[idx[self._conflicts(sub)]] = np.inf
+        return total
+
+
+@dataclass(frozen=True)
+class PrioritizedConfig:
+    """Fleet planner settings. Defaults: PPSwarm Table 1 (N_iter 20, N_restart 5, N_pop 300,
+    rho 20 %, PSO w = 1, c1 = c2 = 1.5) and Sect. 5.1; the rest documented in the module."""
+
+    optimizer: str = "pso"
+    optimizer_params: dict[str, Any] = field(default_factory=dict)
+    pop_size: int = 300
+    n_iter: int = 20
+    n_restart: int = 5
+    rho: float = 0.2
+    alpha: float = 0.1
+    order: str = "lh"
+    seeding: str = "rrt-star"
+    rrt_iterations: int | None = None
+    rrt_params: dict[str, Any] = field(default_factory=dict)
+    n_waypoints: int | None = None
+    cost: str = "ppswarm"
+    weights: dict[str, float] | None = None
+    dt: float = 1.0
+    smooth: bool = True
+    smooth_step: float = 5.0
+
+    def __post_init__(self) -> None:
+        if self.order not in ORDERS:
+            raise PlannerError(f"order must be one of {ORDERS}, got {self.order!r}")
+        if self.seeding not in SEEDINGS:
+            raise PlannerError(f"seeding must be one of {SEEDINGS}, got {self.seeding!r}")
+        if self.pop_size < 1 or self.n_iter < 1 or self.n_restart < 1:
+            raise PlannerError("pop_size, n_iter and n_restart must be >= 1")
+        if not 0.0 <= self.rho <= 1.0 or not 0.0 <= self.alpha <= 1.0:
+            raise PlannerError(f"rho and alpha must be in [0, 1], got {self.rho}, {self.alpha}")
+        if not self.dt > 0:
+            raise PlannerError(f"dt must be positive, got {self.dt}")
+
+
+def polyline_with_n_vertices(path: FloatArray, n: int) -> FloatArray:
+    """The polyline ``path`` (k, d) as exactly ``n >= k`` vertices, start and goal included: the
+    original vertices are kept and the extra ones placed on the segments in proportion to their
+    lengths (largest remainders), so the geometry is unchanged."""
+    p = np.asarray(path, dtype=np.float64)
+    k = p.shape[0]
+    if n < k:
+        raise ValueError(f"cannot keep {k} vertices in {n}")
+    seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    extra = n - k
+    if extra == 0:
+        return p.copy()
+    if seg.sum() <= 0:
+        return np.repeat(p[:1], n, axis=0)
+    share = seg / seg.sum() * extra
+    add = np.floor(share).astype(int)
+    rest = extra - add.sum()
+    if rest:
+        add[np.argsort(-(share - add), kind="stable")[:rest]] += 1
+    out = [p[0]]
+    for i in range(k - 1):
+        m = add[i] + 1
+        t = np.arange(1, m + 1)[:, None] / m
+        out.extend(p[i] + t * (p[i + 1] - p[i]))
+    return np.asarray(out)
+
+
+def resample_by_length(path: FloatArray, n: int) -> FloatArray:
+    """``n`` points equally spaced along the polyline (start and goal included)."""
+    p = np.asarray(path, dtype=np.float64)
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
+    u = np.linspace(0.0, s[-1], n)
+    return np.stack([np.interp(u, s, p[:, d]) for d in range(p.shape[1])], axis=1)
+
+
+class PrioritizedPlanner(FleetPlanner):
+    """Prioritized planning with restarts and a low-level population optimizer.
+
+    ``budget`` (iterations) sets ``n_iter`` when given: the low-level optimizer's moves per UAV
+    per restart.
+    """
+
+    name = "prioritized"
+    dims = (3,)
+
+    def __init__(self, config: PrioritizedConfig | None = None, **options: Any) -> None:
+        base = config or PrioritizedConfig()
+        known = {f.name for f in fields(PrioritizedConfig)}
+        opt_known = {f.name for f in fields(optimizers.get(base.optimizer).Config)}
+        if "optimizer" in options:
+            opt_known = {f.name for f in fields(optimizers.get(options["optimizer"]).Config)}
+        direct = {k: v for k, v in options.items() if k in known}
+        routed = {k: v for k, v in options.items() if k not in known and k in opt_known}
+        unknown = set(options) - set(direct) - set(routed) - {"track_feasibility"}
+        if unknown:
+            raise PlannerError(
+                f"{self.name}: unknown option(s) {sorted(unknown)}; known: {sorted(known)} and "
+                f"the optimizer's {sorted(opt_known)}"
+            )
+        cfg = replace(base, **direct)
+        if routed:
+            cfg = replace(cfg, optimizer_params={**cfg.optimizer_params, **routed})
+        self.config = cfg
+        self.optimizer_cls = optimizers.get(cfg.optimizer)
+        params = dict(cfg.optimizer_params)
+        params.setdefault("pop_size", cfg.pop_size)
+        try:
+            self.opt_config = self.optimizer_cls.Config(**params)
+        except TypeError as exc:
+            raise PlannerError(f"{cfg.optimizer}: {exc}") from None
+
+    def describe(self) -> dict[str, Any]:
+        d = asdict(self.config)
+        d["name"] = self.name
+        d["optimizer_config"] = asdict(self.opt_config)
+        return d
+
+    # ------------------------------------------------------------------ high level (Alg. 3)
+    def _plan_fleet(
+        self,
+        scenario: Scenario,
+        budget: Budget | int | None,
+        seed: int | None,
+        callback: ProgressCallback | None,
+    ) -> FleetResult:
+        cfg = self.config
+        n_iter = cfg.n_iter
+        if budget is not None:
+            b = Budget.of(budget)
+            if b.max_iterations is None:
+                raise PlannerError(f"{self.name} takes an iteration budget (N_iter)")
+            n_iter = int(b.max_iterations)
+        t_start = time.perf_counter()
+        tasks = scenario.tasks
+        M = len(tasks)
+        root = np.random.SeedSequence(seed)
+        s_rrt, s_opt, s_order = root.spawn(3)
+        order_rng = np.random.default_rng(s_order)
+        n_free = int(cfg.n_waypoints if cfg.n_waypoints is not None else scenario.n_waypoints)
+
+        # Alg. 3 lines 1-3: initial paths
+        t0 = time.perf_counter()
+        init_paths, rrt_found = self._initial_paths(scenario, n_free, s_rrt)
+        t_rrt = time.perf_counter() - t0
+        lengths = np.array([float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in
+                            init_paths])  # fmt: skip
+        # line 4: priorities
+        if cfg.order == "lh":
+            priority = list(np.argsort(-lengths, kind="stable"))
+        elif cfg.order == "sh":
+            priority = list(np.argsort(lengths, kind="stable"))
+        else:
+            priority = list(order_rng.permutation(M))
+
+        lower = np.asarray(scenario.bounds.lo, dtype=np.float64)
+        upper = np.asarray(scenario.bounds.hi, dtype=np.float64)
+        if lower.shape[0] == 2:  # pragma: no cover - 3-D checked above
+            raise PlannerError("3-D bounds needed")
+        opt_seeds = s_opt.spawn(cfg.n_restart * M)
+        current = [p.copy() for p in init_paths]  # P^m, as full paths
+        last_pop: list[FloatArray | None] = [None] * M
+        best: tuple[Any, ...] | None = None
+        restart_costs: list[float] = []
+        fleet_history: list[float] = []
+        per_uav_cost = np.full(M, np.inf)
+        evaluations = 0
+        stop = False
+        for r in range(cfg.n_restart):
+            table = ReservationTable(lower, upper, scenario.uav.s2, dt=cfg.dt)
+            results: list[PlanResult | None] = [None] * M
+            histories: list[FloatArray] = []
+            for idx, m in enumerate(priority):
+                task = tasks[m]
+                res, pop = self._low_level(
+                    scenario, task, table, current[m], last_pop[m], r, n_iter, n_free,
+                    np.random.default_rng(opt_seeds[r * M + idx]),
+                )  # fmt: skip
+                evaluations += res.evaluations
+                results[m] = res
+                last_pop[m] = pop
+                current[m] = res.waypoints
+                table.add(task.id, res.waypoints, res.times)
+                histories.append(res.history)
+                per_uav_cost[m] = res.cost if res.feasible else np.inf
+                if callback is not None:  # progress per UAV; a stop request ends the restart
+                    stop = bool(callback(r * M + idx + 1, float(np.sum(per_uav_cost)))) or stop
+            fleet_history.extend(self._fleet_curve(histories))
+            finished = tuple(res for res in results if res is not None)
+            n_bad = sum(not res.feasible for res in finished)
+            total = float(sum(res.cost for res in finished))
+            restart_costs.append(np.inf if n_bad else total)
+            key = (n_bad, total)
+            if best is None or key < best[0]:
+                best = (key, finished, [tasks[m].id for m in priority], r)
+            if stop:
+                break
+            priority = list(order_rng.permutation(M))  # line 13: shuffle
+        assert best is not None
+        (n_bad, total), chosen, prio, best_restart = best
+        results_t = tuple(chosen)
+        info: dict[str, Any] = {
+            "rrt_time": t_rrt,
+            "rrt_found": int(sum(rrt_found)),
+            "best_restart": int(best_restart) + 1,
+            "evaluations": int(evaluations),
+            "n_infeasible": int(n_bad),
+            "n_iter": n_iter,
+        }
+        if cfg.smooth:
+            t0 = time.perf_counter()
+            results_t, report = smooth_fleet(scenario, results_t, prio, cfg)
+            info["smoothing_time"] = time.perf_counter() - t0
+            info["smoothing"] = report
+        wall = time.perf_counter() - t_start
+        return FleetResult(
+            results=results_t,
+            priority=tuple(prio),
+            cost=float(total) if n_bad == 0 else float("inf"),
+            feasible=n_bad == 0,
+            history=np.asarray(fleet_history),
+            restart_costs=np.asarray(restart_costs),
+            wall_time=wall,
+            algorithm=self.name,
+            config=self.describe(),
+            seed=seed,
+            info=info,
+        )
+
+    @staticmethod
+    def _fleet_curve(histories: list[FloatArray]) -> list[float]:
+        """One value per low-level iteration of a restart: the sum over UAVs of each one's
+        best cost after that many iterations of its own optimizer."""
+        if not histories:
+            return []
+        n = max(len(h) for h in histories)
+        h = np.array([np.pad(x, (0, n - len(x)), mode="edge") for x in histories])
+        return [float(v) for v in h.sum(axis=0)]
+
+    def _initial_paths(
+        self, scenario: Scenario, n_free: int, ss: np.random.SeedSequence
+    ) -> tuple[list[FloatArray], list[bool]]:
+        """P^m for every UAV as a full path of ``n_free + 2`` vertices (Alg. 3 lines 1-3)."""
+        cfg = self.config
+        out: list[FloatArray] = []
+        found: list[bool] = []
+        seeds = ss.spawn(len(scenario.tasks))
+        for task, s in zip(scenario.tasks, seeds, strict=True):
+            start = np.asarray(task.start, dtype=np.float64)
+            goal = np.asarray(task.goal, dtype=np.float64)
+            path: FloatArray | None = None
+            if cfg.seeding == "rrt-star":
+                from uavplan.planners.rrt_star import RRTStarConfig, rrt_star, shortcut_path
+
+                rc = RRTStarConfig(**cfg.rrt_params)
+                res = rrt_star(
+                    scenario, task, rc, np.random.default_rng(s), max_iterations=cfg.rrt_iterations
+                )
+                path = res.path
+                if path is not None and path.shape[0] > n_free + 2:
+                    problem = PathProblem(scenario, task, strict_altitude=True)
+                    path = shortcut_path(problem, path)
+            found.append(path is not None)
+            if path is None:
+                path = np.stack([start, goal])
+            if path.shape[0] <= n_free + 2:
+                full = polyline_with_n_vertices(path, n_free + 2)
+            else:
+                full = resample_by_length(path, n_free + 2)
+            full[0], full[-1] = start, goal
+            out.append(full)
+        return out, found
+
+    # ------------------------------------------------------------------ low level (Alg. 4)
+    def _low_level(
+        self,
+        scenario: Scenario,
+        task: Task,
+        table: ReservationTable,
+        P_m: FloatArray,
+        x_last: FloatArray | None,
+        restart: int,
+        n_iter: int,
+        n_free: int,
+        rng: np.random.Generator,
+    ) -> tuple[PlanResult, FloatArray]:
+        cfg = self.config
+        problem = SeparatedPathProblem(scenario, task, table, cfg.cost, cfg.weights)
+        enc_name = str(getattr(self.optimizer_cls, "encoding", "cartesian"))
+        enc: Any = ENCODINGS[enc_name](problem, n_free)
+        N_pop = self.opt_config.pop_size
+        lo, hi = enc.lower, enc.upper
+        rand = rng.uniform(lo, hi, size=(N_pop, enc.dim))  # randpath(T_m)
+        if cfg.seeding == "uniform" and restart == 0:
+            init = rand
+        elif restart == 0 or x_last is None:  # Eq. (15)
+            if not isinstance(enc, CartesianEncoding):
+                raise PlannerError(f"{cfg.optimizer}: RRT* seeding needs the Cartesian encoding")
+            P_gene = np.clip(enc.encode(np.asarray(P_m)[None])[0], lo, hi)
+            init = (1.0 - cfg.alpha) * P_gene[None] + cfg.alpha * rand
+            init[0] = P_gene
+        else:  # Eq. (16)
+            init = np.array(x_last, copy=True)
+            n_rand = int(np.floor(cfg.rho * N_pop))
+            init[:n_rand] = rand[:n_rand]
+        opt = self.optimizer_cls(enc, self.opt_config, seed=rng, init=init)
+        t0 = time.perf_counter()
+        X_last = init
+        for _ in range(n_iter):
+            X = opt.ask()
+            f = enc.evaluate(X)
+            opt.tell(X, f)
+            X_last = X
+        assert opt.best_x is not None
+        path = enc.decode(opt.best_x[None])
+        ev = problem.evaluate(path)
+        res = PlanResult(
+            uav_id=task.id,
+            waypoints=path[0],
+            times=problem.times(path)[0],
+            cost=float(ev.cost[0]),
+            terms={k: float(v[0]) for k, v in ev.terms.items()},
+            feasible=bool(ev.feasible[0]),
+            evaluations=opt.evaluations,
+            iterations=opt.iterations,
+            wall_time=time.perf_counter() - t0,
+            history=np.asarray(opt.history),
+            evaluations_history=np.asarray(opt.evaluations_history, dtype=np.int64),
+            algorithm=self.name,
+            cost_model=problem.cost_name,
+            violations=tuple(k for k, v in ev.violations.items() if v[0]),
+        )
+        return res, np.asarray(X_last)
+
+
+def smooth_fleet(
+    scenario: Scenario,
+    results: tuple[PlanResult, ...],
+    priority: list[str],
+    cfg: PrioritizedConfig,
+) -> tuple[tuple[PlanResult, ...], dict[str, Any]]:
+    """Dubins-smooth every UAV's path (Sect. 4.4) and check the smoothed paths: against the world
+    (the same continuous checks as planning) and against each other (separation S2)."""
+    from uavplan.smoothing.dubins import smooth_path
+
+    by_id = {r.uav_id: r for r in results}
+    lower = np.asarray(scenario.bounds.lo, dtype=np.float64)
+    upper = np.asarray(scenario.bounds.hi, dtype=np.float64)
+    table = ReservationTable(lower, upper, scenario.uav.s2, dt=cfg.dt)
+    out: dict[str, PlanResult] = {}
+    not_clear: list[str] = []
+    failed: list[str] = []
+    for uid in priority:
+        r = by_id[uid]
+        task = next(t for t in scenario.tasks if t.id == uid)
+        try:
+            sm = smooth_path(r.waypoints, scenario.uav.turn_radius, cfg.smooth_step)
+            pts = np.asarray(sm.points, dtype=np.float64)
+        except ValueError:
+            failed.append(uid)
+            out[uid] = r
+            continue
+        problem = PathProblem(scenario, task, strict_altitude=True)
+        ev = problem.evaluate(pts[None])
+        times = problem.times(pts[None])[0]
+        viol = [k for k, v in ev.violations.items() if v[0]]
+        if len(table) and bool(table.conflicts(pts[None], times[None])[0]):
+            viol.append("separation")
+        table.add(uid, pts, times)
+        if viol:
+            not_clear.append(uid)
+        out[uid] = replace(
+            r,
+            smoothed=pts,
+            smoothed_times=times,
+            smoothed_ok=not viol,
+            smoothed_violations=tuple(viol),
+        )
+    report = {"not_clear": not_clear, "failed": failed, "checked": len(results)}
+    return tuple(out[r.uav_id] for r in results), report

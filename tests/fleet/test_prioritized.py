@@ -1,0 +1,148 @@
+"""Prioritized fleet planning (PPSwarm and its baselines): separation, verification, seeding."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from uavplan.cli import app
+from uavplan.fleet.prioritized import (
+    SeparatedPathProblem,
+    polyline_with_n_vertices,
+    resample_by_length,
+)
+from uavplan.fleet.reservations import ReservationTable
+from uavplan.fleet.verify import verify_plan
+from uavplan.planners import PlannerError, get_planner
+from uavplan.planning import FleetPlan, plan_all
+from uavplan.scenarios import resolve
+from uavplan.world import Scenario, Task
+from uavplan.world.fleet_tasks import with_fleet
+
+SMALL = {"pop_size": 24, "n_iter": 6, "n_restart": 2, "rrt_iterations": 2000}
+
+
+@pytest.fixture(scope="module")
+def fleet3() -> Scenario:
+    return with_fleet(resolve("ppswarm1"), 3, seed=0)
+
+
+def test_polyline_keeps_its_vertices_and_shape() -> None:
+    p = np.array([[0.0, 0, 0], [10, 0, 0], [10, 30, 5], [12, 31, 5]])
+    q = polyline_with_n_vertices(p, 11)
+    assert q.shape == (11, 3)
+    for v in p:  # every original vertex is still there, in order
+        assert np.any(np.all(np.isclose(q, v), axis=1))
+    L = lambda a: np.linalg.norm(np.diff(a, axis=0), axis=1).sum()  # noqa: E731
+    assert L(q) == pytest.approx(L(p))
+    assert np.allclose(resample_by_length(p, 2), p[[0, -1]])
+    with pytest.raises(ValueError):
+        polyline_with_n_vertices(p, 3)
+
+
+def test_fast_cost_equals_full_evaluation(fleet3: Scenario) -> None:
+    import dataclasses
+
+    fleet3 = dataclasses.replace(fleet3, cylinders=fleet3.cylinders[:1])
+    rng = np.random.default_rng(3)
+    task = fleet3.tasks[0]
+    table = ReservationTable(fleet3.bounds.lo, fleet3.bounds.hi, fleet3.uav.s2)
+    other = fleet3.tasks[1]
+    line = np.linspace(other.start, other.goal, 6)
+    table.add(other.id, line, np.linspace(0, 40, 6))
+    problem = SeparatedPathProblem(fleet3, task, table)
+    paths = np.linspace(task.start, task.goal, 8)[None].repeat(200, axis=0)
+    paths[:, 1:-1, :2] += rng.normal(0, 60, size=(200, 6, 2))
+    xy = paths[:, 1:-1, :2]
+    paths[:, 1:-1, 2] = fleet3.ground(xy[..., 0], xy[..., 1]) + rng.normal(150, 25, (200, 6))
+    ev = problem.evaluate(paths)
+    fast = problem.cost(paths)
+    want = np.where(ev.feasible, ev.cost, np.inf)
+    np.testing.assert_array_equal(fast, want)
+    assert 0 < np.isfinite(fast).sum() < 200
+
+
+def test_small_fleet_is_feasible_verified_and_deterministic(fleet3: Scenario) -> None:
+    a = get_planner("ppswarm", **SMALL).plan_fleet(fleet3, seed=5)
+    b = get_planner("ppswarm", **SMALL).plan_fleet(fleet3, seed=5)
+    c = get_planner("ppswarm", **SMALL).plan_fleet(fleet3, seed=6)
+    assert a.feasible and np.isfinite(a.cost)
+    for ra, rb in zip(a.results, b.results, strict=True):
+        assert np.array_equal(ra.waypoints, rb.waypoints)
+    assert any(
+        not np.array_equal(ra.waypoints, rc.waypoints)
+        for ra, rc in zip(a.results, c.results, strict=True)
+    )
+    assert a.cost == pytest.approx(sum(r.cost for r in a.results))
+    assert len(a.restart_costs) == 2 and a.cost == pytest.approx(np.min(a.restart_costs))
+    assert len(a.history) == 2 * SMALL["n_iter"]
+    d = FleetPlan(fleet3, "ppswarm", {}, 5, a.results, a).to_dict()
+    assert verify_plan(d, fleet3).ok
+    # the planner's own judgement of the smoothed paths agrees with the verifier's
+    rep = verify_plan(d, fleet3, smoothed=True)
+    assert rep.ok == all(r.smoothed_ok for r in a.results)
+
+
+def test_head_on_swap_is_separated() -> None:
+    base = resolve("ppswarm1")
+    z = 150.0
+    g = lambda x, y: (x, y, float(base.ground(np.array(x), np.array(y))) + z)  # noqa: E731
+    # two UAVs swap ends of the same straight line at the same time: the straight lines meet
+    tasks = (Task("a", g(60.0, 440.0), g(990.0, 440.0)), Task("b", g(990.0, 440.0), g(60.0, 440.0)))
+    sc = base.__class__(**{**base.__dict__, "tasks": tasks, "cylinders": ()})
+    r = get_planner("ppswarm", **SMALL).plan_fleet(sc, seed=0)
+    assert r.feasible
+    d = FleetPlan(sc, "ppswarm", {}, 0, r.results, r).to_dict()
+    rep = verify_plan(d, sc)
+    assert rep.ok and rep.min_separation >= sc.uav.s2
+
+
+def test_priority_orders(fleet3: Scenario) -> None:
+    lengths = {t.id: float(np.linalg.norm(np.subtract(t.goal, t.start))) for t in fleet3.tasks}
+    opts = {**SMALL, "seeding": "uniform", "n_restart": 1, "n_iter": 2, "smooth": False}
+    lh = get_planner("prioritized", **{**opts, "order": "lh"}).plan_fleet(fleet3, seed=1)
+    sh = get_planner("prioritized", **{**opts, "order": "sh"}).plan_fleet(fleet3, seed=1)
+    assert list(lh.priority) == sorted(lengths, key=lambda k: -lengths[k])
+    assert list(sh.priority) == sorted(lengths, key=lambda k: lengths[k])
+
+
+@pytest.mark.parametrize("opt", ["de", "spso"])
+def test_any_optimizer_runs_the_low_level(fleet3: Scenario, opt: str) -> None:
+    r = get_planner("prioritized", optimizer=opt, pop_size=12, n_iter=3, smooth=False).plan_fleet(
+        fleet3, seed=0
+    )
+    assert len(r.results) == 3 and all(x.evaluations == 36 for x in r.results)
+
+
+def test_bad_options_and_2d() -> None:
+    with pytest.raises(PlannerError, match="unknown option"):
+        get_planner("ppswarm", bogus=1)
+    with pytest.raises(PlannerError, match="order"):
+        get_planner("ppswarm", order="tallest")
+    with pytest.raises(PlannerError, match="2-D"):
+        get_planner("ppswarm").plan_fleet(resolve("simple2d"))
+
+
+def test_plan_and_verify_cli(tmp_path, fleet3: Scenario) -> None:
+    from uavplan.io.scenario_file import save_scenario
+
+    f = tmp_path / "fleet.yaml"
+    save_scenario(fleet3, f)
+    out = tmp_path / "out"
+    runner = CliRunner()
+    args = ["plan", str(f), "-a", "ppswarm", "--out", str(out)]
+    for k, v in SMALL.items():
+        args += ["--param", f"{k}={v}"]
+    res = runner.invoke(app, args)
+    assert res.exit_code == 0, res.output
+    plan = json.loads((out / "plan.json").read_text())
+    assert plan["separation_checked"] and plan["fleet"]["feasible"]
+    assert all("smoothed" in u and u["times"] for u in plan["uavs"])
+    res = runner.invoke(app, ["verify", str(out / "plan.json"), str(f)])
+    assert res.exit_code == 0, res.output
+    # the same fleet planned independently (no separation) is written too, never checked
+    fp = plan_all(fleet3, get_planner("pso", pop_size=10), 2, 0)
+    assert fp.to_dict()["separation_checked"] is False

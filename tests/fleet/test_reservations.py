@@ -1,0 +1,122 @@
+"""The reservation table finds exactly the conflicts a brute-force scan finds."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from uavplan.fleet.reservations import ReservationTable, split_pieces
+
+LO = np.array([0.0, 0.0, 0.0])
+HI = np.array([400.0, 400.0, 100.0])
+
+
+def _random_path(rng: np.random.Generator, n: int = 6) -> np.ndarray:
+    pts = rng.uniform(LO, HI, size=(n, 3))
+    pts[:, 2] = rng.uniform(40, 60, size=n)  # a thin layer, so that paths meet often
+    return pts
+
+
+def _times(points: np.ndarray, speed: float = 20.0, t0: float = 0.0) -> np.ndarray:
+    seg = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    return t0 + np.concatenate([[0.0], np.cumsum(seg)]) / speed
+
+
+def _dense_min_distance(pa, ta, pb, tb, step=0.002):
+    """Sampled reference: both positions at common instants (fine grid)."""
+    lo, hi = max(ta[0], tb[0]), min(ta[-1], tb[-1])
+    if lo > hi:
+        return np.inf
+    t = np.linspace(lo, hi, max(2, int((hi - lo) / step)))
+    a = np.stack([np.interp(t, ta, pa[:, d]) for d in range(3)], axis=1)
+    b = np.stack([np.interp(t, tb, pb[:, d]) for d in range(3)], axis=1)
+    return float(np.min(np.linalg.norm(a - b, axis=1)))
+
+
+def test_pieces_stay_in_one_bucket_and_cover_the_path():
+    rng = np.random.default_rng(1)
+    p = _random_path(rng)
+    t = _times(p)
+    p0, p1, t0, t1, k = split_pieces(p, t, 0.7)
+    assert np.all(t1 > t0)
+    assert np.all(np.floor(t0 / 0.7 + 1e-12) == k)
+    assert np.all(t1 <= (k + 1) * 0.7 + 1e-12)
+    assert t0[0] == t[0] and t1[-1] == t[-1]
+    np.testing.assert_allclose(t0[1:], t1[:-1])
+    np.testing.assert_allclose(p0[1:], p1[:-1], atol=1e-9)
+
+
+@pytest.mark.parametrize("dt", [0.25, 1.0, 3.0])
+@pytest.mark.parametrize("cell", [None, 7.0, 300.0])
+def test_conflicts_equal_brute_force(dt, cell):
+    rng = np.random.default_rng(int(dt * 100) + (0 if cell is None else int(cell)))
+    table = ReservationTable(LO, HI, separation=10.0, dt=dt, cell=cell)
+    reserved = []
+    for i in range(12):
+        p = _random_path(rng)
+        t = _times(p, t0=rng.uniform(0, 5))
+        table.add(f"u{i}", p, t)
+        reserved.append((p, t))
+    cands = np.stack([_random_path(rng) for _ in range(60)])
+    times = np.stack([_times(c, t0=rng.uniform(0, 5)) for c in cands])
+    got = table.conflicts(cands, times)
+    mind = table.min_distance(cands, times)
+    ref = np.array([table.min_distance_reference(c, t) for c, t in zip(cands, times, strict=True)])
+    np.testing.assert_array_equal(got, ref < 10.0)
+    close = ref < 10.0
+    np.testing.assert_allclose(mind[close], ref[close], rtol=1e-9, atol=1e-9)
+    assert 5 < close.sum() < 55  # the case is neither trivial nor saturated
+
+
+def test_exact_distance_agrees_with_dense_sampling():
+    rng = np.random.default_rng(7)
+    table = ReservationTable(LO, HI, separation=10.0, dt=1.0)
+    pa = _random_path(rng)
+    ta = _times(pa)
+    table.add("a", pa, ta)
+    for _ in range(30):
+        pb = _random_path(rng)
+        tb = _times(pb, t0=rng.uniform(0, 3))
+        exact = table.min_distance_reference(pb, tb)
+        dense = _dense_min_distance(pa, ta, pb, tb)
+        assert exact <= dense + 1e-9
+        assert dense - exact < 0.05  # 40 m/s closing speed x 0.002 s sampling / 2 + slack
+
+
+def test_head_on_crossing_between_samples_is_a_conflict():
+    # Two UAVs swap places along x at 20 m/s: they meet at t = 5 s, between 1-s samples of the
+    # positions (4.5 s and 5.5 s would be 20 m apart).
+    table = ReservationTable(LO, HI, separation=10.0, dt=1.0)
+    a = np.array([[0.0, 100.0, 50.0], [200.0, 100.0, 50.0]])
+    table.add("a", a, np.array([0.0, 10.0]))
+    b = a[::-1].copy()
+    tb = np.array([0.5, 10.5])
+    assert table.conflicts(b[None], tb[None])[0]
+    # The same path one second later in an offset lane (12 m) is clear.
+    b2 = b + np.array([0.0, 12.0, 0.0])
+    assert not table.conflicts(b2[None], tb[None])[0]
+    np.testing.assert_allclose(table.min_distance(b2[None], tb[None]), [12.0], atol=1e-9)
+
+
+def test_landed_uav_is_no_hazard_and_boundary_instants_count():
+    table = ReservationTable(LO, HI, separation=10.0, dt=1.0)
+    # a lands at (100, 100, 50) at t = 5 exactly (a bucket boundary)
+    a = np.array([[0.0, 100.0, 50.0], [100.0, 100.0, 50.0]])
+    table.add("a", a, np.array([0.0, 5.0]))
+    # b takes off from there at t = 5: they share that instant at distance 0
+    b = np.array([[100.0, 100.0, 50.0], [100.0, 300.0, 50.0]])
+    assert table.conflicts(b[None], np.array([[5.0, 15.0]]))[0]
+    # b takes off from there 0.6 s later: a is down, no hazard
+    assert not table.conflicts(b[None], np.array([[5.6, 15.6]]))[0]
+
+
+def test_empty_table_and_bad_shapes():
+    table = ReservationTable(LO, HI, separation=10.0)
+    p = np.zeros((3, 4, 3))
+    assert not table.conflicts(p, np.zeros((3, 4))).any()
+    with pytest.raises(ValueError):
+        table.add("x", np.zeros((4, 2)), np.zeros(4))
+    with pytest.raises(ValueError):
+        table.conflicts(p, np.zeros((3, 5)))
+    with pytest.raises(ValueError):
+        ReservationTable(LO, HI, separation=0.0)
