@@ -137,7 +137,8 @@ def _summary(plan: Any, elapsed: float, out_dir: Path) -> None:
         "time (s)",
     ):
         table.add_column(col, justify="right")
-    for r in plan.results:
+    shown = plan.results if len(plan.results) <= 25 else plan.results[:20]
+    for r in shown:
         table.add_row(
             r.uav_id,
             "yes" if r.feasible else "NO: " + ",".join(r.violations),
@@ -148,6 +149,25 @@ def _summary(plan: Any, elapsed: float, out_dir: Path) -> None:
             f"{r.wall_time:.2f}",
         )
     out.print(table)
+    if len(shown) < len(plan.results):
+        out.print(f"... and {len(plan.results) - len(shown)} more UAVs in plan.json")
+    fleet = getattr(plan, "fleet", None)
+    if fleet is not None:
+        n_bad = sum(not r.feasible for r in plan.results)
+        sm = fleet.info.get("smoothing", {})
+        verdict = (
+            "feasible (separation S2 included)" if fleet.feasible else f"{n_bad} UAV(s) infeasible"
+        )
+        restarts = [round(float(c), 1) for c in fleet.restart_costs]
+        out.print(
+            f"fleet of {len(plan.results)}: cost {fleet.cost:.6g}, {verdict}, "
+            f"restarts {restarts}, best restart {fleet.info.get('best_restart')}"
+        )
+        if sm:
+            out.print(
+                f"Dubins-smoothed paths: {len(sm.get('not_clear', []))} of {sm.get('checked')} "
+                f"not clear {sm.get('not_clear', [])[:10]}"
+            )
     out.print(f"wrote {out_dir / 'plan.json'} and {out_dir / 'plan.png'} ({elapsed:.1f} s)")
 
 

@@ -146,3 +146,19 @@ def test_plan_and_verify_cli(tmp_path, fleet3: Scenario) -> None:
     # the same fleet planned independently (no separation) is written too, never checked
     fp = plan_all(fleet3, get_planner("pso", pop_size=10), 2, 0)
     assert fp.to_dict()["separation_checked"] is False
+
+
+@pytest.mark.parametrize("name", ["ppswarm2", "ppswarm4"])
+@pytest.mark.parametrize("planner", ["ppswarm", "prioritized"])
+def test_every_feasible_fleet_passes_the_verifier(name: str, planner: str) -> None:
+    sc = with_fleet(resolve(name), 5, seed=2)
+    opts = {**SMALL, "n_restart": 1} if planner == "ppswarm" else {"pop_size": 40, "n_iter": 8}
+    r = get_planner(planner, **opts).plan_fleet(sc, seed=3)
+    d = FleetPlan(sc, planner, {}, 3, r.results, r).to_dict()
+    rep = verify_plan(d, sc)
+    if r.feasible:
+        assert rep.ok, [v.message for v in rep.violations]
+    # and per UAV: every UAV the planner calls feasible has no violation of its own, except
+    # separation from a UAV that is itself infeasible (planned later paths avoid earlier ones)
+    bad_uavs = {u for v in rep.violations for u in v.uavs if v.kind != "separation"}
+    assert not bad_uavs & {x.uav_id for x in r.results if x.feasible}

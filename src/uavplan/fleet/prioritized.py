@@ -472,8 +472,14 @@ def smooth_fleet(
     cfg: PrioritizedConfig,
 ) -> tuple[tuple[PlanResult, ...], dict[str, Any]]:
     """Dubins-smooth every UAV's path (Sect. 4.4) and check the smoothed paths: against the world
-    (the same continuous checks as planning) and against each other (separation S2)."""
-    from uavplan.smoothing.dubins import smooth_path
+    (the same continuous checks as planning) and against the UAVs smoothed before it in priority
+    order (separation S2, continuous time at the UAV's speed along the smoothed path).
+
+    The paper's curves pass through every waypoint (headings bisecting the turns); where such a
+    path is not clear, the corner-cutting variant (:func:`midpoint_poses`) is tried, and the
+    one with fewer kinds of violation is kept. A path neither variant keeps clear is reported
+    (``smoothed_ok = False`` and its violations) and its planned polyline stays the plan."""
+    from uavplan.smoothing.dubins import midpoint_poses, smooth_path
 
     by_id = {r.uav_id: r for r in results}
     lower = np.asarray(scenario.bounds.lo, dtype=np.float64)
@@ -482,22 +488,37 @@ def smooth_fleet(
     out: dict[str, PlanResult] = {}
     not_clear: list[str] = []
     failed: list[str] = []
+    corners: list[str] = []
     for uid in priority:
         r = by_id[uid]
         task = next(t for t in scenario.tasks if t.id == uid)
-        try:
-            sm = smooth_path(r.waypoints, scenario.uav.turn_radius, cfg.smooth_step)
+        problem = PathProblem(scenario, task, strict_altitude=True)
+        tried: list[tuple[list[str], FloatArray, FloatArray]] = []
+        for variant in ("through", "corners"):
+            try:
+                if variant == "through":  # Sect. 4.4: through every waypoint
+                    sm = smooth_path(r.waypoints, scenario.uav.turn_radius, cfg.smooth_step)
+                else:  # fallback: turn at the corners (see midpoint_poses)
+                    poses, heads = midpoint_poses(r.waypoints)
+                    sm = smooth_path(poses, scenario.uav.turn_radius, cfg.smooth_step, heads)
+            except ValueError:
+                continue
             pts = np.asarray(sm.points, dtype=np.float64)
-        except ValueError:
+            ev = problem.evaluate(pts[None])
+            times = problem.times(pts[None])[0]
+            viol = [k for k, v in ev.violations.items() if v[0]]
+            if len(table) and bool(table.conflicts(pts[None], times[None])[0]):
+                viol.append("separation")
+            tried.append((viol, pts, times))
+            if not viol:
+                break
+        if not tried:
             failed.append(uid)
             out[uid] = r
             continue
-        problem = PathProblem(scenario, task, strict_altitude=True)
-        ev = problem.evaluate(pts[None])
-        times = problem.times(pts[None])[0]
-        viol = [k for k, v in ev.violations.items() if v[0]]
-        if len(table) and bool(table.conflicts(pts[None], times[None])[0]):
-            viol.append("separation")
+        viol, pts, times = min(tried, key=lambda x: len(x[0]))
+        if tried.index(min(tried, key=lambda x: len(x[0]))) == 1:
+            corners.append(uid)
         table.add(uid, pts, times)
         if viol:
             not_clear.append(uid)
@@ -508,5 +529,10 @@ def smooth_fleet(
             smoothed_ok=not viol,
             smoothed_violations=tuple(viol),
         )
-    report = {"not_clear": not_clear, "failed": failed, "checked": len(results)}
+    report = {
+        "not_clear": not_clear,
+        "failed": failed,
+        "corner_cut": corners,
+        "checked": len(results),
+    }
     return tuple(out[r.uav_id] for r in results), report

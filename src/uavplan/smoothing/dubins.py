@@ -456,3 +456,27 @@ def smooth_path(
         pieces=tuple(pieces),
         turn_radius=rho,
     )
+
+
+def midpoint_poses(waypoints: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Poses for corner-cutting smoothing: the start, the midpoint of every segment and the
+    goal, each heading along its segment (the start and goal along the first and last ones).
+
+    Dubins curves between these poses turn *at* each interior waypoint's corner instead of
+    passing *through* it (:func:`waypoint_headings`), so a sharp corner is cut by a short arc
+    rather than looped around. Returns points (n + 1, 3) and headings (n + 1,) for an (n, 3)
+    path of n >= 2 distinct waypoints; consecutive duplicates are dropped first.
+    """
+    p = np.asarray(waypoints, dtype=np.float64)
+    p = p[_drop_consecutive_duplicates(p, 1e-9)]
+    if p.shape[0] < 2:
+        return p.copy(), waypoint_headings(p)
+    seg = np.diff(p, axis=0)
+    h = waypoint_headings(p)  # handles vertical and degenerate segments
+    seg_h = np.where(
+        np.hypot(seg[:, 0], seg[:, 1]) > 1e-12, np.arctan2(seg[:, 1], seg[:, 0]), h[:-1]
+    )
+    mids = 0.5 * (p[:-1] + p[1:])
+    pts = np.concatenate([p[:1], mids, p[-1:]])
+    heads = np.concatenate([seg_h[:1], seg_h, seg_h[-1:]])
+    return pts, wrap_angle(heads)
