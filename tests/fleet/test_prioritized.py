@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -162,3 +163,31 @@ def test_every_feasible_fleet_passes_the_verifier(name: str, planner: str) -> No
     # separation from a UAV that is itself infeasible (planned later paths avoid earlier ones)
     bad_uavs = {u for v in rep.violations for u in v.uavs if v.kind != "separation"}
     assert not bad_uavs & {x.uav_id for x in r.results if x.feasible}
+
+
+def test_departure_delay_retries_until_a_later_take_off_is_clear(monkeypatch, fleet3) -> None:
+    """A UAV whose low level finds nothing conflict-free tries later take-offs (max_delays)."""
+    from uavplan.fleet.prioritized import PrioritizedPlanner
+
+    real = PrioritizedPlanner._low_level
+    calls: list[float] = []
+
+    def blocked_until_10s(self, scenario, task, *args):  # type: ignore[no-untyped-def]
+        res, pop = real(self, scenario, task, *args)
+        calls.append(task.start_time)
+        if task.id == "uav1" and task.start_time < 10.0:
+            res = dataclasses.replace(res, feasible=False, violations=("separation",))
+        return res, pop
+
+    monkeypatch.setattr(PrioritizedPlanner, "_low_level", blocked_until_10s)
+    opts = {**SMALL, "n_restart": 1, "smooth": False, "delay_step": 5.0}
+    plain = get_planner("ppswarm", **opts).plan_fleet(fleet3, seed=0)
+    assert not plain.feasible and plain.info["delayed"] == {}
+    calls.clear()
+    waited = get_planner("ppswarm", **opts, max_delays=3).plan_fleet(fleet3, seed=0)
+    assert waited.feasible and waited.info["delayed"] == {"uav1": 10.0}
+    assert sorted(calls) == [0.0, 0.0, 0.0, 5.0, 10.0]  # two refusals, then take-off at 10 s
+    b = next(r for r in waited.results if r.uav_id == "uav1")
+    assert b.times[0] == pytest.approx(10.0)
+    d = FleetPlan(fleet3, "ppswarm", {}, 0, waited.results, waited).to_dict()
+    assert verify_plan(d, fleet3).ok

@@ -40,6 +40,9 @@ Choices where the paper is silent or vague (all parameters of :class:`Prioritize
   the sum over UAVs of each UAV's best cost after that many iterations of its own optimizer.
 * A UAV whose optimizer found no feasible path keeps its best (infeasible) path, which is still
   reserved so that later UAVs avoid it; the fleet is then infeasible.
+* **Departure delays** (not in the paper; off by default, ``max_delays = 0``): a UAV whose
+  low level finds no conflict-free path may take off ``delay_step`` s later, up to
+  ``max_delays`` times, each try a fresh low-level run; the delays are reported.
 * Iterations: ``N_iter`` counts iterations as every optimizer here does, the first one being the
   evaluation of the first population (Alg. 4 line 3), so a restart evaluates ``N_iter`` swarms
   per UAV (Alg. 4 read literally moves ``N_iter`` times after that: one swarm more).
@@ -155,6 +158,8 @@ class PrioritizedConfig:
     cost: str = "ppswarm"
     weights: dict[str, float] | None = None
     dt: float = 1.0
+    max_delays: int = 0
+    delay_step: float = 5.0
     smooth: bool = True
     smooth_step: float = 5.0
 
@@ -301,14 +306,28 @@ class PrioritizedPlanner(FleetPlanner):
         for r in range(cfg.n_restart):
             table = ReservationTable(lower, upper, scenario.uav.s2, dt=cfg.dt)
             results: list[PlanResult | None] = [None] * M
+            delayed: dict[str, float] = {}
             histories: list[FloatArray] = []
             for idx, m in enumerate(priority):
                 task = tasks[m]
+                rng = np.random.default_rng(opt_seeds[r * M + idx])
                 res, pop = self._low_level(
-                    scenario, task, table, current[m], last_pop[m], r, n_iter, n_free,
-                    np.random.default_rng(opt_seeds[r * M + idx]),
-                )  # fmt: skip
+                    scenario, task, table, current[m], last_pop[m], r, n_iter, n_free, rng
+                )
                 evaluations += res.evaluations
+                # not in the paper: a UAV that finds no conflict-free path may wait on the
+                # ground at its start and take off later (the same swarm seeding again)
+                for k in range(1, cfg.max_delays + 1):
+                    if res.feasible:
+                        break
+                    later = replace(task, start_time=task.start_time + k * cfg.delay_step)
+                    res2, pop2 = self._low_level(
+                        scenario, later, table, current[m], last_pop[m], r, n_iter, n_free, rng
+                    )
+                    evaluations += res2.evaluations
+                    if res2.feasible:
+                        res, pop = res2, pop2
+                        delayed[task.id] = later.start_time - task.start_time
                 results[m] = res
                 last_pop[m] = pop
                 current[m] = res.waypoints
@@ -324,12 +343,12 @@ class PrioritizedPlanner(FleetPlanner):
             restart_costs.append(np.inf if n_bad else total)
             key = (n_bad, total)
             if best is None or key < best[0]:
-                best = (key, finished, [tasks[m].id for m in priority], r)
+                best = (key, finished, [tasks[m].id for m in priority], r, dict(delayed))
             if stop:
                 break
             priority = list(order_rng.permutation(M))  # line 13: shuffle
         assert best is not None
-        (n_bad, total), chosen, prio, best_restart = best
+        (n_bad, total), chosen, prio, best_restart, delays = best
         results_t = tuple(chosen)
         info: dict[str, Any] = {
             "rrt_time": t_rrt,
@@ -338,6 +357,7 @@ class PrioritizedPlanner(FleetPlanner):
             "evaluations": int(evaluations),
             "n_infeasible": int(n_bad),
             "n_iter": n_iter,
+            "delayed": delays,
         }
         if cfg.smooth:
             t0 = time.perf_counter()
@@ -492,6 +512,7 @@ def smooth_fleet(
     for uid in priority:
         r = by_id[uid]
         task = next(t for t in scenario.tasks if t.id == uid)
+        task = replace(task, start_time=float(r.times[0]))  # a delayed take-off keeps its delay
         problem = PathProblem(scenario, task, strict_altitude=True)
         tried: list[tuple[list[str], FloatArray, FloatArray]] = []
         for variant in ("through", "corners"):
