@@ -62,6 +62,7 @@ def convergence_figure(
     fig, axes = _grid(len(scenarios))
     for ax, sc in zip(axes, scenarios, strict=True):
         sub = ok[ok["scenario"] == sc]
+        positive = False
         if normalized:
             finals = [_stack(g[history])[:, -1] for _, g in sub.groupby("algorithm")]
             lo, hi = normalization_bounds(np.concatenate(finals) if finals else np.zeros(0))
@@ -83,14 +84,16 @@ def convergence_figure(
                 med = np.nanmedian(np.where(np.isfinite(H), H, np.nan), axis=0)
                 q1 = np.nanpercentile(np.where(np.isfinite(H), H, np.nan), 25, axis=0)
                 q3 = np.nanpercentile(np.where(np.isfinite(H), H, np.nan), 75, axis=0)
+            positive = positive or bool(np.any(med > 0))
             line = ax.plot(x, med, lw=1.6, label=f"{alg} (n={len(H)})")[0]
             ax.fill_between(x, q1, q3, color=line.get_color(), alpha=0.2, lw=0)
         ax.set_title(str(sc))
         ax.set_xlabel("evaluations" if by_evals else "iteration")
         ax.set_ylabel("normalized best value" if normalized else "best cost so far")
-        if not normalized:
+        if not normalized and positive:  # nothing finite to draw (every run infeasible)
             ax.set_yscale("log")
-        ax.legend(fontsize=7)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
     fig.suptitle(
         "Convergence, median and 25-75 % over runs" + (" (normalized)" if normalized else "")
