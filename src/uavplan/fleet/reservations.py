@@ -411,17 +411,33 @@ class ReservationTable:
         return np.sqrt(self._run(paths, times, True))
 
     def min_distance_reference(self, points: FloatArray, times: FloatArray) -> float:
-        """Brute force over every reserved piece (tests compare :meth:`min_distance` with it)."""
-        p0, p1, t0, t1, _ = _split(
+        """Brute force over every reserved piece, in NumPy (tests compare :meth:`min_distance`
+        with it): every piece of the path against every reserved piece, exact."""
+        a0, a1, t0, t1, _ = _split(
             np.ascontiguousarray(points, dtype=np.float64),
             np.ascontiguousarray(times, dtype=np.float64),
             self.dt,
         )
-        best = np.inf
-        for i in range(len(t0)):
-            for r in range(self.n_pieces):
-                d2 = _piece_min_dist2(
-                    p0[i], p1[i], t0[i], t1[i], self._p0[r], self._p1[r], self._t0[r], self._t1[r]
-                )
-                best = min(best, d2)
-        return float(np.sqrt(best))
+        if not len(t0) or not self.n_pieces:
+            return float("inf")
+        b0, b1, s0, s1 = self._p0, self._p1, self._t0, self._t1
+        lo = np.maximum(t0[:, None], s0[None])
+        hi = np.minimum(t1[:, None], s1[None])
+        overlap = lo <= hi
+
+        def at(p: FloatArray, q: FloatArray, u0: FloatArray, u1: FloatArray, t: FloatArray,
+               row: bool) -> FloatArray:  # fmt: skip
+            if row:
+                f = (t - u0[:, None]) / (u1 - u0)[:, None]
+                return p[:, None] + f[..., None] * (q - p)[:, None]
+            f = (t - u0[None]) / (u1 - u0)[None]
+            return p[None] + f[..., None] * (q - p)[None]
+
+        r0 = at(a0, a1, t0, t1, lo, True) - at(b0, b1, s0, s1, lo, False)
+        dr = at(a0, a1, t0, t1, hi, True) - at(b0, b1, s0, s1, hi, False) - r0
+        dd = np.sum(dr * dr, axis=-1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            s = np.where(dd > 0, -np.sum(r0 * dr, axis=-1) / np.where(dd > 0, dd, 1.0), 0.0)
+        s = np.clip(s, 0.0, 1.0)
+        d2 = np.sum((r0 + s[..., None] * dr) ** 2, axis=-1)
+        return float(np.sqrt(np.min(np.where(overlap, d2, np.inf))))
