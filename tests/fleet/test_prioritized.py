@@ -191,3 +191,31 @@ def test_departure_delay_retries_until_a_later_take_off_is_clear(monkeypatch, fl
     assert b.times[0] == pytest.approx(10.0)
     d = FleetPlan(fleet3, "ppswarm", {}, 0, waited.results, waited).to_dict()
     assert verify_plan(d, fleet3).ok
+
+
+def test_graded_cost_keeps_f_for_feasible_and_orders_infeasible(fleet3: Scenario) -> None:
+    task = fleet3.tasks[0]
+    table = ReservationTable(fleet3.bounds.lo, fleet3.bounds.hi, fleet3.uav.s2)
+    inf_p = SeparatedPathProblem(fleet3, task, table)
+    graded = SeparatedPathProblem(fleet3, task, table, infeasible="graded")
+    rng = np.random.default_rng(0)
+    paths = np.linspace(task.start, task.goal, 8)[None].repeat(300, axis=0)
+    paths[:, 1:-1, :2] += rng.normal(0, 80, size=(300, 6, 2))
+    xy = paths[:, 1:-1, :2]
+    paths[:, 1:-1, 2] = fleet3.ground(xy[..., 0], xy[..., 1]) + rng.normal(150, 40, (300, 6))
+    a, b = inf_p.cost(paths), graded.cost(paths)
+    fin = np.isfinite(a)
+    np.testing.assert_array_equal(a[fin], b[fin])  # feasible: exactly F
+    assert np.all(np.isfinite(b)) and np.all(b[~fin] >= 1e7) and (~fin).sum() > 10
+    assert b[~fin].max() > b[~fin].min()  # infeasible ones are told apart
+    if fin.any():
+        assert b[fin].max() < b[~fin].min()
+
+
+def test_graded_baseline_finds_feasible_paths_where_inf_does_not(fleet3: Scenario) -> None:
+    opts = {"pop_size": 60, "n_iter": 25, "smooth": False}
+    a = get_planner("prioritized", **opts).plan_fleet(fleet3, seed=1)
+    b = get_planner("prioritized", **opts, infeasible="graded").plan_fleet(fleet3, seed=1)
+    n_a = sum(r.feasible for r in a.results)
+    n_b = sum(r.feasible for r in b.results)
+    assert n_b >= n_a and n_b >= 2

@@ -40,6 +40,14 @@ Choices where the paper is silent or vague (all parameters of :class:`Prioritize
   the sum over UAVs of each UAV's best cost after that many iterations of its own optimizer.
 * A UAV whose optimizer found no feasible path keeps its best (infeasible) path, which is still
   reserved so that later UAVs avoid it; the fleet is then infeasible.
+* **Graded infeasibility** (``infeasible="graded"``; the default ``"inf"`` is Sect. 2): with
+  every violation costing infinity, an optimizer started from uniform random paths sees no
+  difference between its particles until one happens to be feasible, and on our scenarios the
+  baselines then end with most UAVs infeasible. Graded, a feasible path still costs exactly F,
+  and an infeasible one ``1e7`` plus how badly it fails (metres inside cylinders and outside
+  the band at the waypoints, 100 per failed continuous check: terrain, band along segments,
+  bounds, separation), the usual feasibility-first rule of constrained evolutionary
+  optimization. Only the optimizer sees it; reported costs stay F (inf when infeasible).
 * **Departure delays** (not in the paper; off by default, ``max_delays = 0``): a UAV whose
   low level finds no conflict-free path may take off ``delay_step`` s later, up to
   ``max_delays`` times, each try a fresh low-level run; the delays are reported.
@@ -68,12 +76,17 @@ from uavplan.planners.base import (
     ProgressCallback,
 )
 from uavplan.problems.encoding import ENCODINGS, CartesianEncoding
-from uavplan.problems.path_problem import PRESETS, Context, PathProblem, Term
+from uavplan.problems.path_problem import PRESETS, Context, PathProblem, Term, _band_heights
 from uavplan.world.scenario import Scenario, Task
 
 FloatArray = NDArray[np.float64]
 
 ORDERS = ("lh", "sh", "rnd")
+INFEASIBLE = ("inf", "graded")
+#: ``infeasible="graded"``: an infeasible path's cost starts here (a feasible UAV path's F is
+#: a few thousand), and every failed continuous check adds this many.
+GRADED_BASE = 1e7
+GRADED_FLAG = 100.0
 SEEDINGS = ("rrt-star", "uniform")
 
 
@@ -88,10 +101,14 @@ class SeparatedPathProblem(PathProblem):
         table: ReservationTable | None,
         cost: str = "ppswarm",
         weights: dict[str, float] | None = None,
+        infeasible: str = "inf",
     ) -> None:
         if cost not in PRESETS:
             raise PlannerError(f"unknown cost preset {cost!r}")
+        if infeasible not in INFEASIBLE:
+            raise PlannerError(f"infeasible must be one of {INFEASIBLE}, got {infeasible!r}")
         self.table = table
+        self.infeasible = infeasible
         terms = (*PRESETS[cost], Term("separation", 1.0, self._t_separation))
         super().__init__(scenario, task, cost=terms, weights=weights, strict_altitude=True)
         self.cost_name = f"{cost}+separation"
@@ -105,6 +122,29 @@ class SeparatedPathProblem(PathProblem):
                 got = self.table.conflicts(ctx.paths, ctx.times)
             ctx._conflicts = got  # type: ignore[attr-defined]
         return np.asarray(got)
+
+    def _graded(self, ctx: Context, total: FloatArray) -> FloatArray:
+        """``infeasible="graded"``: a feasible path costs F; an infeasible one costs
+        ``GRADED_BASE`` plus how badly it fails (metres inside cylinders and outside the band at
+        the waypoints, plus ``GRADED_FLAG`` per failed continuous check), so that any feasible
+        path beats any infeasible one and infeasible ones still point towards feasibility."""
+        viol = PathProblem._violations(self, ctx)
+        bad = ~np.isfinite(total)
+        V = np.zeros(ctx.paths.shape[0])
+        for v in viol.values():
+            bad |= v
+            V += GRADED_FLAG * v
+        if self.table is not None and len(self.table):
+            sep = self._conflicts(ctx)
+            bad |= sep
+            V += GRADED_FLAG * sep
+        if len(self._cyl_radii):
+            V += np.sum(np.maximum(0.0, self._cyl_radii - ctx.cyl_dist), axis=(1, 2))
+        band = self.scenario.altitude
+        if band is not None:
+            h = _band_heights(ctx)
+            V += np.sum(np.maximum(0.0, band.min - h) + np.maximum(0.0, h - band.max), axis=1)
+        return np.where(bad, GRADED_BASE + V, total)
 
     def _t_separation(self, ctx: Context) -> FloatArray:
         return np.where(self._conflicts(ctx), np.inf, 0.0)
@@ -124,6 +164,8 @@ class SeparatedPathProblem(PathProblem):
         for t in self.terms:
             if t.name != "separation":
                 total = total + t.weight * np.asarray(t.fn(ctx), dtype=np.float64)
+        if self.infeasible == "graded":
+            return self._graded(ctx, total)
         idx = np.flatnonzero(np.isfinite(total))
         if idx.size:
             sub = Context(self, np.ascontiguousarray(p[idx]))
@@ -158,6 +200,7 @@ class PrioritizedConfig:
     cost: str = "ppswarm"
     weights: dict[str, float] | None = None
     dt: float = 1.0
+    infeasible: str = "inf"
     max_delays: int = 0
     delay_step: float = 5.0
     smooth: bool = True
@@ -174,6 +217,8 @@ class PrioritizedConfig:
             raise PlannerError(f"rho and alpha must be in [0, 1], got {self.rho}, {self.alpha}")
         if not self.dt > 0:
             raise PlannerError(f"dt must be positive, got {self.dt}")
+        if self.infeasible not in INFEASIBLE:
+            raise PlannerError(f"infeasible must be one of {INFEASIBLE}, got {self.infeasible!r}")
 
 
 def polyline_with_n_vertices(path: FloatArray, n: int) -> FloatArray:
@@ -437,7 +482,7 @@ class PrioritizedPlanner(FleetPlanner):
         rng: np.random.Generator,
     ) -> tuple[PlanResult, FloatArray]:
         cfg = self.config
-        problem = SeparatedPathProblem(scenario, task, table, cfg.cost, cfg.weights)
+        problem = SeparatedPathProblem(scenario, task, table, cfg.cost, cfg.weights, cfg.infeasible)
         enc_name = str(getattr(self.optimizer_cls, "encoding", "cartesian"))
         enc: Any = ENCODINGS[enc_name](problem, n_free)
         N_pop = self.opt_config.pop_size
