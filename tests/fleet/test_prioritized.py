@@ -219,3 +219,38 @@ def test_graded_baseline_finds_feasible_paths_where_inf_does_not(fleet3: Scenari
     n_a = sum(r.feasible for r in a.results)
     n_b = sum(r.feasible for r in b.results)
     assert n_b >= n_a and n_b >= 2
+
+
+def test_swarm_seeding_follows_eqs_15_and_16(fleet3: Scenario) -> None:
+    """Eq. 15: particle 1 is the RRT* path, the others (1 - alpha) P + alpha randpath; Eq. 16:
+    the first rho N_pop particles are random paths, the rest the previous positions."""
+    from uavplan.problems.encoding import CartesianEncoding
+
+    planner = get_planner("ppswarm", pop_size=20, alpha=0.1, rho=0.25)
+    seen: list[np.ndarray] = []
+    real = planner.optimizer_cls
+
+    class Spy(real):  # type: ignore[misc, valid-type]
+        def __init__(self, *a, init=None, **k):  # type: ignore[no-untyped-def]
+            seen.append(np.array(init))
+            super().__init__(*a, init=init, **k)
+
+    planner.optimizer_cls = Spy
+    task = fleet3.tasks[0]
+    table = ReservationTable(fleet3.bounds.lo, fleet3.bounds.hi, fleet3.uav.s2)
+    P = np.linspace(task.start, task.goal, 12)
+    P[1:-1, 2] = fleet3.ground(P[1:-1, 0], P[1:-1, 1]) + 150.0
+    rng = np.random.default_rng(0)
+    _, last = planner._low_level(fleet3, task, table, P, None, 0, 2, 10, rng)
+    enc = CartesianEncoding(SeparatedPathProblem(fleet3, task, table), 10)
+    P_gene = enc.encode(P[None])[0]
+    init = seen[0]
+    np.testing.assert_allclose(init[0], P_gene)
+    span = enc.upper - enc.lower
+    assert np.all(np.abs(init[1:] - P_gene) <= 0.1 * span + 1e-9)
+    assert np.all(np.abs(init[1:] - P_gene).max(axis=0) > 0.01 * span)  # really randomized
+    planner._low_level(fleet3, task, table, P, last, 1, 2, 10, rng)
+    init2 = seen[1]
+    n_rand = int(0.25 * 20)
+    np.testing.assert_array_equal(init2[n_rand:], last[n_rand:])
+    assert not np.any(np.all(init2[:n_rand] == last[:n_rand], axis=1))
