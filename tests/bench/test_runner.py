@@ -213,3 +213,16 @@ def test_shards_share_one_schema(tmp_path: Path) -> None:
     df = pd.read_parquet(tmp_path / "runs").sort_values("run_id")
     assert df.first_feasible_iteration.tolist()[1] == 7
     assert np.isnan(df.best_cost.tolist()[0]) and df.best_cost.tolist()[1] == 1.5
+
+
+def test_report_uses_the_runs_the_last_sweep_asked_for(tmp_path) -> None:
+    from uavplan.bench.plans import get_plan
+    from uavplan.bench.report import write_report
+    from uavplan.bench.runner import run_sweep
+
+    plan = get_plan("spso-small")
+    run_sweep(plan, tmp_path, scale="smoke", executor="serial", runs=2)
+    run_sweep(plan, tmp_path, scale="smoke", executor="serial", runs=1)
+    _, md = write_report(tmp_path)
+    text = md.read_text()
+    assert "| runs finished | 3 |" in text  # one run per cell of the three algorithms

@@ -178,6 +178,9 @@ def write_report(folder: str | Path) -> tuple[Path, Path]:
     manifest: dict[str, Any] = {}
     if (root / "manifest.json").exists():
         manifest = json.loads((root / "manifest.json").read_text())
+    if manifest.get("runs") and not df.empty and "run_index" in df:
+        # the last sweep asked for fewer runs per cell than the folder holds: report those
+        df = df[df["run_index"] < int(manifest["runs"])]
     figdir = root / "figures"
     figdir.mkdir(exist_ok=True)
     figures: list[tuple[str, str, bytes]] = []
