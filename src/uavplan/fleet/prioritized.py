@@ -269,9 +269,8 @@ class PrioritizedPlanner(FleetPlanner):
     def __init__(self, config: PrioritizedConfig | None = None, **options: Any) -> None:
         base = config or PrioritizedConfig()
         known = {f.name for f in fields(PrioritizedConfig)}
-        opt_known = {f.name for f in fields(optimizers.get(base.optimizer).Config)}
-        if "optimizer" in options:
-            opt_known = {f.name for f in fields(optimizers.get(options["optimizer"]).Config)}
+        opt_name = options.get("optimizer", base.optimizer)
+        opt_known = {f.name for f in fields(optimizers.get(opt_name).Config)}
         direct = {k: v for k, v in options.items() if k in known}
         routed = {k: v for k, v in options.items() if k not in known and k in opt_known}
         unknown = set(options) - set(direct) - set(routed) - {"track_feasibility"}
@@ -325,8 +324,7 @@ class PrioritizedPlanner(FleetPlanner):
         t0 = time.perf_counter()
         init_paths, rrt_found = self._initial_paths(scenario, n_free, s_rrt)
         t_rrt = time.perf_counter() - t0
-        lengths = np.array([float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in
-                            init_paths])  # fmt: skip
+        lengths = np.linalg.norm(np.diff(np.stack(init_paths), axis=1), axis=2).sum(axis=1)
         # line 4: priorities
         if cfg.order == "lh":
             priority = list(np.argsort(-lengths, kind="stable"))
@@ -337,8 +335,6 @@ class PrioritizedPlanner(FleetPlanner):
 
         lower = np.asarray(scenario.bounds.lo, dtype=np.float64)
         upper = np.asarray(scenario.bounds.hi, dtype=np.float64)
-        if lower.shape[0] == 2:  # pragma: no cover - 3-D checked above
-            raise PlannerError("3-D bounds needed")
         opt_seeds = s_opt.spawn(cfg.n_restart * M)
         current = [p.copy() for p in init_paths]  # P^m, as full paths
         last_pop: list[FloatArray | None] = [None] * M
@@ -559,7 +555,7 @@ def smooth_fleet(
         task = next(t for t in scenario.tasks if t.id == uid)
         task = replace(task, start_time=float(r.times[0]))  # a delayed take-off keeps its delay
         problem = PathProblem(scenario, task, strict_altitude=True)
-        tried: list[tuple[list[str], FloatArray, FloatArray]] = []
+        tried: list[tuple[list[str], FloatArray, FloatArray, str]] = []
         for variant in ("through", "corners"):
             try:
                 if variant == "through":  # Sect. 4.4: through every waypoint
@@ -575,15 +571,15 @@ def smooth_fleet(
             viol = [k for k, v in ev.violations.items() if v[0]]
             if len(table) and bool(table.conflicts(pts[None], times[None])[0]):
                 viol.append("separation")
-            tried.append((viol, pts, times))
+            tried.append((viol, pts, times, variant))
             if not viol:
                 break
         if not tried:
             failed.append(uid)
             out[uid] = r
             continue
-        viol, pts, times = min(tried, key=lambda x: len(x[0]))
-        if tried.index(min(tried, key=lambda x: len(x[0]))) == 1:
+        viol, pts, times, variant = min(tried, key=lambda x: len(x[0]))
+        if variant == "corners":
             corners.append(uid)
         table.add(uid, pts, times)
         if viol:

@@ -96,6 +96,15 @@ def _hash(key, mask):  # pragma: no cover - numba
 
 
 @njit(cache=True)
+def _cell_range(a, b, grow, origin, cell, n):  # pragma: no cover - numba
+    """First and last grid index (clamped to [0, n)) that the interval [min(a, b) - grow,
+    max(a, b) + grow] touches along one axis."""
+    lo = min(max(int(np.floor((min(a, b) - grow - origin) / cell)), 0), n - 1)
+    hi = min(max(int(np.floor((max(a, b) + grow - origin) / cell)), 0), n - 1)
+    return lo, hi
+
+
+@njit(cache=True)
 def _cell_keys(p0, p1, k, grow, origin, cell, dims):  # pragma: no cover - numba
     """(entry key, piece index) for every cell that each piece's box grown by ``grow`` touches."""
     m = p0.shape[0]
@@ -104,34 +113,16 @@ def _cell_keys(p0, p1, k, grow, origin, cell, dims):  # pragma: no cover - numba
     for i in range(m):
         c = 1
         for d in range(3):
-            lo = min(p0[i, d], p1[i, d]) - grow
-            hi = max(p0[i, d], p1[i, d]) + grow
-            a = min(max(int(np.floor((lo - origin[d]) / cell)), 0), dims[d] - 1)
-            b = min(max(int(np.floor((hi - origin[d]) / cell)), 0), dims[d] - 1)
+            a, b = _cell_range(p0[i, d], p1[i, d], grow, origin[d], cell, dims[d])
             c *= b - a + 1
         count += c
     keys = np.empty(count, dtype=np.int64)
     idx = np.empty(count, dtype=np.int64)
     e = 0
     for i in range(m):
-        ix0 = min(
-            max(int(np.floor((min(p0[i, 0], p1[i, 0]) - grow - origin[0]) / cell)), 0), nx - 1
-        )
-        ix1 = min(
-            max(int(np.floor((max(p0[i, 0], p1[i, 0]) + grow - origin[0]) / cell)), 0), nx - 1
-        )
-        iy0 = min(
-            max(int(np.floor((min(p0[i, 1], p1[i, 1]) - grow - origin[1]) / cell)), 0), ny - 1
-        )
-        iy1 = min(
-            max(int(np.floor((max(p0[i, 1], p1[i, 1]) + grow - origin[1]) / cell)), 0), ny - 1
-        )
-        iz0 = min(
-            max(int(np.floor((min(p0[i, 2], p1[i, 2]) - grow - origin[2]) / cell)), 0), nz - 1
-        )
-        iz1 = min(
-            max(int(np.floor((max(p0[i, 2], p1[i, 2]) + grow - origin[2]) / cell)), 0), nz - 1
-        )
+        ix0, ix1 = _cell_range(p0[i, 0], p1[i, 0], grow, origin[0], cell, nx)
+        iy0, iy1 = _cell_range(p0[i, 1], p1[i, 1], grow, origin[1], cell, ny)
+        iz0, iz1 = _cell_range(p0[i, 2], p1[i, 2], grow, origin[2], cell, nz)
         for ix in range(ix0, ix1 + 1):
             for iy in range(iy0, iy1 + 1):
                 for iz in range(iz0, iz1 + 1):
@@ -263,12 +254,9 @@ def _query(
                     for d in range(3):
                         a0[d] = paths[p, s, d] + fa * (paths[p, s + 1, d] - paths[p, s, d])
                         a1[d] = paths[p, s, d] + fb * (paths[p, s + 1, d] - paths[p, s, d])
-                    ix0 = min(max(int(np.floor((min(a0[0], a1[0]) - origin[0]) / cell)), 0), nx - 1)
-                    ix1 = min(max(int(np.floor((max(a0[0], a1[0]) - origin[0]) / cell)), 0), nx - 1)
-                    iy0 = min(max(int(np.floor((min(a0[1], a1[1]) - origin[1]) / cell)), 0), ny - 1)
-                    iy1 = min(max(int(np.floor((max(a0[1], a1[1]) - origin[1]) / cell)), 0), ny - 1)
-                    iz0 = min(max(int(np.floor((min(a0[2], a1[2]) - origin[2]) / cell)), 0), nz - 1)
-                    iz1 = min(max(int(np.floor((max(a0[2], a1[2]) - origin[2]) / cell)), 0), nz - 1)
+                    ix0, ix1 = _cell_range(a0[0], a1[0], 0.0, origin[0], cell, nx)
+                    iy0, iy1 = _cell_range(a0[1], a1[1], 0.0, origin[1], cell, ny)
+                    iz0, iz1 = _cell_range(a0[2], a1[2], 0.0, origin[2], cell, nz)
                     for ix in range(ix0, ix1 + 1):
                         for iy in range(iy0, iy1 + 1):
                             for iz in range(iz0, iz1 + 1):
