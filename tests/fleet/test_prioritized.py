@@ -125,6 +125,50 @@ def test_bad_options_and_2d() -> None:
         get_planner("ppswarm", order="tallest")
     with pytest.raises(PlannerError, match="2-D"):
         get_planner("ppswarm").plan_fleet(resolve("simple2d"))
+    with pytest.raises(PlannerError, match="smooth_timing"):
+        get_planner("ppswarm", smooth_timing="fast")
+    with pytest.raises(PlannerError, match="separation_margin"):
+        get_planner("ppswarm", separation_margin=-1.0)
+
+
+@pytest.mark.parametrize("timing", ["planned", "constant"])
+def test_smoothed_paths_keep_their_timing_and_agree_with_the_verifier(
+    fleet3: Scenario, timing: str
+) -> None:
+    r = get_planner("ppswarm", **SMALL, smooth_timing=timing).plan_fleet(fleet3, seed=5)
+    v = fleet3.uav.speed
+    for u in r.results:
+        t, p = np.asarray(u.smoothed_times), np.asarray(u.smoothed)
+        speed = np.linalg.norm(np.diff(p, axis=0), axis=1) / np.diff(t)
+        assert t[0] == pytest.approx(u.times[0])
+        if timing == "constant":
+            np.testing.assert_allclose(speed, v, rtol=1e-9)
+        else:  # never faster than the UAV, never earlier than planned at the goal
+            assert np.all(speed <= v * (1 + 1e-9))
+            assert t[-1] >= u.times[-1] - 1e-9
+    assert r.info["smoothing"]["timing"] == timing
+    d = FleetPlan(fleet3, "ppswarm", {}, 5, r.results, r).to_dict()
+    assert verify_plan(d, fleet3, smoothed=True).ok == all(u.smoothed_ok for u in r.results)
+
+
+def test_separation_margin_plans_wider_than_s2() -> None:
+    base = resolve("ppswarm1")
+    g = lambda x, y: (x, y, float(base.ground(np.array(x), np.array(y))) + 150.0)  # noqa: E731
+    # a head-on swap: the margin, not the optimizer, keeps them S2 + margin apart
+    tasks = (Task("a", g(60.0, 440.0), g(990.0, 440.0)), Task("b", g(990.0, 440.0), g(60.0, 440.0)))
+    sc = base.__class__(**{**base.__dict__, "tasks": tasks, "cylinders": ()})
+    seps = {}
+    for margin in (0.0, 100.0):
+        r = get_planner("ppswarm", **SMALL, separation_margin=margin, smooth=False).plan_fleet(
+            sc, seed=0
+        )
+        assert r.feasible
+        rep = verify_plan(FleetPlan(sc, "ppswarm", {}, 0, r.results, r).to_dict(), sc)
+        assert rep.ok
+        seps[margin] = rep.min_separation
+    assert seps[100.0] >= sc.uav.s2 + 100.0 - 1e-6
+    assert seps[0.0] < sc.uav.s2 + 100.0  # the margin is what made the difference
+
 
 
 def test_plan_and_verify_cli(tmp_path, fleet3: Scenario) -> None:

@@ -21,6 +21,7 @@ from uavplan.smoothing import (
     discrete_curvature,
     dubins_csc,
     max_discrete_curvature,
+    schedule,
     smooth_path,
     waypoint_headings,
 )
@@ -410,3 +411,31 @@ def test_smooth_path_degenerate_inputs():
         smooth_path([[0, 0, 0], [1, 0, 0]], 20.0, headings=[0.0])
     with pytest.raises(ValueError):
         smooth_path([[0, 0, 0], [math.nan, 0, 0]], 20.0)
+
+
+@SLOW
+@given(seed=SEEDS, n=st.integers(2, 10))
+def test_schedule_meets_pose_times_and_is_uniform_within_pieces(seed, n):
+    rng = np.random.default_rng(seed)
+    sp = smooth_path(random_waypoints(rng, n), 20.0, step=5.0)
+    k = len(sp.waypoints)
+    tp = np.cumsum(np.concatenate([[rng.uniform(0, 10)], rng.uniform(0, 30, k - 1)]))
+    t = schedule(sp, tp)
+    assert t.shape == (len(sp.points),)
+    assert np.array_equal(t[sp.waypoint_index], tp)
+    assert np.all(np.diff(t) >= -1e-12)
+    # constant speed within each piece: time is proportional to arc length of the samples
+    ds = np.linalg.norm(np.diff(sp.points, axis=0), axis=1)
+    for j, (a, b) in enumerate(zip(sp.waypoint_index[:-1], sp.waypoint_index[1:], strict=True)):
+        seg = ds[a:b]
+        want = tp[j] + (tp[j + 1] - tp[j]) * np.cumsum(seg) / seg.sum()
+        np.testing.assert_allclose(t[a + 1 : b + 1], want, rtol=0, atol=1e-9)
+
+
+def test_schedule_rejects_bad_times():
+    sp = smooth_path([[0, 0, 0], [100, 0, 0], [100, 100, 0]], 20.0)
+    with pytest.raises(ValueError, match="pose_times must be"):
+        schedule(sp, [0.0, 1.0])
+    with pytest.raises(ValueError, match="non-decreasing"):
+        schedule(sp, [0.0, 5.0, 4.0])
+

@@ -83,6 +83,7 @@ FloatArray = NDArray[np.float64]
 
 ORDERS = ("lh", "sh", "rnd")
 INFEASIBLE = ("inf", "graded")
+SMOOTH_TIMINGS = ("planned", "constant")
 #: ``infeasible="graded"``: an infeasible path's cost starts here (a feasible UAV path's F is
 #: a few thousand), and every failed continuous check adds this many.
 GRADED_BASE = 1e7
@@ -205,6 +206,8 @@ class PrioritizedConfig:
     delay_step: float = 5.0
     smooth: bool = True
     smooth_step: float = 5.0
+    smooth_timing: str = "planned"
+    separation_margin: float = 0.0
 
     def __post_init__(self) -> None:
         if self.order not in ORDERS:
@@ -219,6 +222,14 @@ class PrioritizedConfig:
             raise PlannerError(f"dt must be positive, got {self.dt}")
         if self.infeasible not in INFEASIBLE:
             raise PlannerError(f"infeasible must be one of {INFEASIBLE}, got {self.infeasible!r}")
+        if not (self.separation_margin >= 0.0 and np.isfinite(self.separation_margin)):
+            raise PlannerError(
+                f"separation_margin must be >= 0 m, got {self.separation_margin!r}"
+            )
+        if self.smooth_timing not in SMOOTH_TIMINGS:
+            raise PlannerError(
+                f"smooth_timing must be one of {SMOOTH_TIMINGS}, got {self.smooth_timing!r}"
+            )
 
 
 def polyline_with_n_vertices(path: FloatArray, n: int) -> FloatArray:
@@ -345,7 +356,9 @@ class PrioritizedPlanner(FleetPlanner):
         evaluations = 0
         stop = False
         for r in range(cfg.n_restart):
-            table = ReservationTable(lower, upper, scenario.uav.s2, dt=cfg.dt)
+            table = ReservationTable(
+                lower, upper, scenario.uav.s2 + cfg.separation_margin, dt=cfg.dt
+            )
             results: list[PlanResult | None] = [None] * M
             delayed: dict[str, float] = {}
             histories: list[FloatArray] = []
@@ -526,6 +539,19 @@ class PrioritizedPlanner(FleetPlanner):
         return res, np.asarray(X_last)
 
 
+def _pose_times(waypoints: FloatArray, times: FloatArray, variant: str) -> FloatArray:
+    """Planned times of the poses that :func:`smooth_fleet`'s ``variant`` smooths through: the
+    kept waypoints' own times ("through") or the start, the segment midpoints (the mean of
+    their ends' times) and the goal ("corners"), with the same duplicate dropping."""
+    from uavplan.smoothing.dubins import _drop_consecutive_duplicates
+
+    keep = _drop_consecutive_duplicates(waypoints, 1e-9)
+    t = np.asarray(times, dtype=np.float64)[keep]
+    if variant == "through" or t.shape[0] < 2:
+        return t
+    return np.concatenate([t[:1], 0.5 * (t[:-1] + t[1:]), t[-1:]])
+
+
 def smooth_fleet(
     scenario: Scenario,
     results: tuple[PlanResult, ...],
@@ -534,51 +560,75 @@ def smooth_fleet(
 ) -> tuple[tuple[PlanResult, ...], dict[str, Any]]:
     """Dubins-smooth every UAV's path (Sect. 4.4) and check the smoothed paths: against the world
     (the same continuous checks as planning) and against the UAVs smoothed before it in priority
-    order (separation S2, continuous time at the UAV's speed along the smoothed path).
+    order (separation S2, continuous time).
 
-    The paper's curves pass through every waypoint (headings bisecting the turns); where such a
-    path is not clear, the corner-cutting variant (:func:`midpoint_poses`) is tried, and the
-    one with fewer kinds of violation is kept. A path neither variant keeps clear is reported
-    (``smoothed_ok = False`` and its violations) and its planned polyline stays the plan."""
-    from uavplan.smoothing.dubins import midpoint_poses, smooth_path
+    Two variants are smoothed for each UAV: the paper's curves through every waypoint
+    (headings bisecting the turns) and the corner-cutting curves between segment midpoints
+    (:func:`midpoint_poses`); the one with the fewest kinds of violation is kept, the shorter
+    one on a tie (through-the-waypoint curves loop around sharp turns).
+
+    ``cfg.smooth_timing``: "planned" (default) keeps to the schedule the separation was planned
+    for: the UAV reaches each pose at its planned time, or, where the curve is longer than
+    the planned segment, as soon as it can at its speed (never faster; the largest lateness,
+    s, is reported as ``max_late``), flying each piece at a constant speed; "constant" flies
+    the smoothed path at the UAV's speed from its take-off time (the paper's model: every
+    curve longer than its segment delays everything after it). A scenario
+    with moving obstacles is smoothed with "constant" timing, the timing its world check uses.
+
+    A path neither variant keeps clear is reported (``smoothed_ok = False`` and its
+    violations) and its planned polyline stays the plan."""
+    from uavplan.smoothing.dubins import midpoint_poses, schedule, smooth_path
 
     by_id = {r.uav_id: r for r in results}
     lower = np.asarray(scenario.bounds.lo, dtype=np.float64)
     upper = np.asarray(scenario.bounds.hi, dtype=np.float64)
     table = ReservationTable(lower, upper, scenario.uav.s2, dt=cfg.dt)
+    speed = float(scenario.uav.speed)
     out: dict[str, PlanResult] = {}
     not_clear: list[str] = []
     failed: list[str] = []
     corners: list[str] = []
+    max_late = 0.0
+    timing = "constant" if scenario.moving_obstacles else cfg.smooth_timing
     for uid in priority:
         r = by_id[uid]
         task = next(t for t in scenario.tasks if t.id == uid)
         task = replace(task, start_time=float(r.times[0]))  # a delayed take-off keeps its delay
         problem = PathProblem(scenario, task, strict_altitude=True)
-        tried: list[tuple[list[str], FloatArray, FloatArray, str]] = []
+        tried: list[tuple[int, float, list[str], FloatArray, FloatArray, str, float]] = []
         for variant in ("through", "corners"):
             try:
                 if variant == "through":  # Sect. 4.4: through every waypoint
                     sm = smooth_path(r.waypoints, scenario.uav.turn_radius, cfg.smooth_step)
-                else:  # fallback: turn at the corners (see midpoint_poses)
+                else:  # turn at the corners (see midpoint_poses)
                     poses, heads = midpoint_poses(r.waypoints)
                     sm = smooth_path(poses, scenario.uav.turn_radius, cfg.smooth_step, heads)
             except ValueError:
                 continue
             pts = np.asarray(sm.points, dtype=np.float64)
             ev = problem.evaluate(pts[None])
-            times = problem.times(pts[None])[0]
+            late = 0.0
+            if timing == "planned":
+                tp = _pose_times(np.asarray(r.waypoints), np.asarray(r.times), variant)
+                if tp.shape != sm.waypoint_index.shape:  # not for distinct waypoints; be safe
+                    tp = problem.times(sm.waypoints[None])[0]
+                tk = tp.copy()  # reach each pose at its planned time, never above the speed
+                for k, length in enumerate(sm.piece_lengths, start=1):
+                    tk[k] = max(tp[k], tk[k - 1] + float(length) / speed)
+                late = float(np.max(tk - tp))
+                times = schedule(sm, tk)
+            else:
+                times = problem.times(pts[None])[0]
             viol = [k for k, v in ev.violations.items() if v[0]]
             if len(table) and bool(table.conflicts(pts[None], times[None])[0]):
                 viol.append("separation")
-            tried.append((viol, pts, times, variant))
-            if not viol:
-                break
+            tried.append((len(viol), sm.length, viol, pts, times, variant, late))
         if not tried:
             failed.append(uid)
             out[uid] = r
             continue
-        viol, pts, times, variant = min(tried, key=lambda x: len(x[0]))
+        _, _, viol, pts, times, variant, late = min(tried, key=lambda x: (x[0], x[1]))
+        max_late = max(max_late, late)
         if variant == "corners":
             corners.append(uid)
         table.add(uid, pts, times)
@@ -596,5 +646,7 @@ def smooth_fleet(
         "failed": failed,
         "corner_cut": corners,
         "checked": len(results),
+        "timing": timing,
+        "max_late": max_late,
     }
     return tuple(out[r.uav_id] for r in results), report

@@ -480,3 +480,28 @@ def midpoint_poses(waypoints: ArrayLike) -> tuple[FloatArray, FloatArray]:
     pts = np.concatenate([p[:1], mids, p[-1:]])
     heads = np.concatenate([seg_h[:1], seg_h, seg_h[-1:]])
     return pts, wrap_angle(heads)
+
+
+def schedule(smoothed: SmoothedPath, pose_times: ArrayLike) -> FloatArray:
+    """Times of ``smoothed.points`` for a UAV that reaches every pose at its time in
+    ``pose_times`` ((k,) s, one per ``smoothed.waypoints``, non-decreasing) and flies each piece
+    at a constant speed: within a piece the time grows linearly in 3-D arc length of the
+    samples. Returns (m,) seconds; ``times[waypoint_index] == pose_times`` exactly."""
+    tp = np.asarray(pose_times, dtype=np.float64).reshape(-1)
+    idx = smoothed.waypoint_index
+    if tp.shape != idx.shape or not np.all(np.isfinite(tp)):
+        raise ValueError(f"pose_times must be ({idx.shape[0]},) finite, got shape {tp.shape}")
+    if np.any(np.diff(tp) < 0):
+        raise ValueError("pose_times must be non-decreasing")
+    pts = smoothed.points
+    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    out = np.empty(pts.shape[0], dtype=np.float64)
+    out[0] = tp[0]
+    for j in range(idx.shape[0] - 1):
+        a, b = int(idx[j]), int(idx[j + 1])
+        s = np.cumsum(seg[a:b])
+        total = s[-1] if s.size else 0.0
+        frac = s / total if total > 0.0 else np.linspace(0.0, 1.0, b - a + 1)[1:]
+        out[a + 1 : b + 1] = tp[j] + (tp[j + 1] - tp[j]) * frac
+        out[b] = tp[j + 1]
+    return out
