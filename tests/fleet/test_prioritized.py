@@ -170,7 +170,6 @@ def test_separation_margin_plans_wider_than_s2() -> None:
     assert seps[0.0] < sc.uav.s2 + 100.0  # the margin is what made the difference
 
 
-
 def test_plan_and_verify_cli(tmp_path, fleet3: Scenario) -> None:
     from uavplan.io.scenario_file import save_scenario
 
@@ -298,3 +297,35 @@ def test_swarm_seeding_follows_eqs_15_and_16(fleet3: Scenario) -> None:
     n_rand = int(0.25 * 20)
     np.testing.assert_array_equal(init2[n_rand:], last[n_rand:])
     assert not np.any(np.all(init2[:n_rand] == last[:n_rand], axis=1))
+
+
+def test_shortcut_drops_waypoints_only_where_the_straight_segment_is_clear() -> None:
+    from uavplan.fleet.prioritized import _shortcut
+    from uavplan.fleet.reservations import ReservationTable
+    from uavplan.problems.path_problem import PathProblem
+
+    base = resolve("ppswarm1")
+    (cx, cy), rad = base.cylinders[0].center, base.cylinders[0].radius
+    xy = np.array([[cx - 2.5 * rad, cy], [cx - rad, cy + 1.6 * rad], [cx, cy + 1.8 * rad],
+                   [cx + rad, cy + 1.6 * rad], [cx + 2.5 * rad, cy]])  # fmt: skip
+    z = float(np.max(base.ground(xy[:, 0], xy[:, 1]))) + 120.0
+    wp = np.column_stack([xy, np.full(len(xy), z)])
+    tasks = (Task("a", tuple(wp[0]), tuple(wp[-1])),)
+    sc = base.__class__(**{**base.__dict__, "tasks": tasks})
+    problem = PathProblem(sc, tasks[0], strict_altitude=True)
+    assert problem.evaluate(wp[None]).feasible[0]  # the detour itself is clear
+    assert not problem.evaluate(wp[[0, -1]][None]).feasible[0]  # the straight line is not
+    t = np.cumsum(np.r_[0.0, np.linalg.norm(np.diff(wp, axis=0), axis=1)]) / sc.uav.speed
+    table = ReservationTable(np.asarray(sc.bounds.lo), np.asarray(sc.bounds.hi), sc.uav.s2)
+    w2, t2 = _shortcut(problem, table, wp, t)
+    assert np.array_equal(w2[0], wp[0]) and np.array_equal(w2[-1], wp[-1])
+    assert 2 < len(w2) < len(wp)  # the collinear-ish middle goes, the detour stays
+    assert problem.evaluate(w2[None]).feasible[0]
+    assert set(map(float, t2)) <= set(map(float, t))  # kept poses keep their planned times
+    # a UAV reserved on the shortcut's segment forbids it
+    mid = 0.5 * (w2[0] + w2[1])
+    tm = float(np.interp(0.5, [0, 1], t2[:2]))
+    up = np.array([0.0, 0.0, 50.0])
+    table.add("other", np.stack([mid - up, mid + up]), np.array([tm - 2.5, tm + 2.5]))
+    w3, _ = _shortcut(problem, table, wp, t)
+    assert not np.array_equal(w3[:2], w2[:2])

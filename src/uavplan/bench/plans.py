@@ -383,8 +383,8 @@ def _ppswarm_plans() -> list[ExperimentPlan]:
             algorithms=(
                 Algorithm("ppswarm-r1", "ppswarm", {"n_restart": 1}),
                 Algorithm("ppswarm-r5", "ppswarm", {"n_restart": 5}),
-                # ours, not the paper's: UAVs blocked at take-off may wait up to 4 x 5 s
-                Algorithm("ppswarm-r1-wait", "ppswarm", {"n_restart": 1, "max_delays": 4}),
+                # ours, not the paper's: UAVs blocked at take-off may wait up to 12 x 5 s
+                Algorithm("ppswarm-r1-wait", "ppswarm", {"n_restart": 1, "max_delays": 12}),
             ),
             scales={"smoke": smoke, "paper": Scale(runs=1, iterations=0, pop_size=300)},
             kind="fleet",

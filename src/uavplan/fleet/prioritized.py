@@ -58,6 +58,7 @@ Choices where the paper is silent or vague (all parameters of :class:`Prioritize
 
 from __future__ import annotations
 
+import itertools
 import time
 from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any
@@ -223,9 +224,7 @@ class PrioritizedConfig:
         if self.infeasible not in INFEASIBLE:
             raise PlannerError(f"infeasible must be one of {INFEASIBLE}, got {self.infeasible!r}")
         if not (self.separation_margin >= 0.0 and np.isfinite(self.separation_margin)):
-            raise PlannerError(
-                f"separation_margin must be >= 0 m, got {self.separation_margin!r}"
-            )
+            raise PlannerError(f"separation_margin must be >= 0 m, got {self.separation_margin!r}")
         if self.smooth_timing not in SMOOTH_TIMINGS:
             raise PlannerError(
                 f"smooth_timing must be one of {SMOOTH_TIMINGS}, got {self.smooth_timing!r}"
@@ -552,6 +551,29 @@ def _pose_times(waypoints: FloatArray, times: FloatArray, variant: str) -> Float
     return np.concatenate([t[:1], 0.5 * (t[:-1] + t[1:]), t[-1:]])
 
 
+def _shortcut(
+    problem: PathProblem, table: ReservationTable, waypoints: FloatArray, times: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Greedy line-of-sight shortcut of a timed polyline: from each kept waypoint, jump to the
+    farthest later one whose straight segment, flown between the two planned times (so never
+    faster than along the polyline), is feasible in the world and clear of ``table``.
+    Returns the kept waypoints and their planned times."""
+    wp = np.asarray(waypoints, dtype=np.float64)
+    t = np.asarray(times, dtype=np.float64)
+    n = wp.shape[0]
+    keep, a = [0], 0
+    while a < n - 1:
+        js = np.arange(n - 1, a, -1)  # farthest first
+        segs = np.stack([np.broadcast_to(wp[a], (js.size, wp.shape[1])), wp[js]], axis=1)
+        tt = np.column_stack([np.full(js.size, t[a]), t[js]])
+        ok = problem.evaluate(segs).feasible
+        if len(table):
+            ok &= ~table.conflicts(segs, tt)
+        a = int(js[int(np.argmax(ok))]) if ok.any() else a + 1
+        keep.append(a)
+    return wp[keep], t[keep]
+
+
 def smooth_fleet(
     scenario: Scenario,
     results: tuple[PlanResult, ...],
@@ -564,8 +586,11 @@ def smooth_fleet(
 
     Two variants are smoothed for each UAV: the paper's curves through every waypoint
     (headings bisecting the turns) and the corner-cutting curves between segment midpoints
-    (:func:`midpoint_poses`); the one with the fewest kinds of violation is kept, the shorter
-    one on a tie (through-the-waypoint curves loop around sharp turns).
+    (:func:`midpoint_poses`); with "planned" timing both also on the polyline shortcut by
+    line of sight (:func:`_shortcut`: fewer, gentler turns where the world and the UAVs
+    before it allow). The one with the fewest kinds of violation is kept, the shorter one on
+    a tie (through-the-waypoint curves loop around sharp turns); the report counts the
+    variants kept.
 
     ``cfg.smooth_timing``: "planned" (default) keeps to the schedule the separation was planned
     for: the UAV reaches each pose at its planned time, or, where the curve is longer than
@@ -575,8 +600,8 @@ def smooth_fleet(
     curve longer than its segment delays everything after it). A scenario
     with moving obstacles is smoothed with "constant" timing, the timing its world check uses.
 
-    A path neither variant keeps clear is reported (``smoothed_ok = False`` and its
-    violations) and its planned polyline stays the plan."""
+    A path no variant keeps clear is reported (``smoothed_ok = False`` and its violations)
+    and its planned polyline stays the plan: the UAVs after it are checked against that."""
     from uavplan.smoothing.dubins import midpoint_poses, schedule, smooth_path
 
     by_id = {r.uav_id: r for r in results}
@@ -587,7 +612,7 @@ def smooth_fleet(
     out: dict[str, PlanResult] = {}
     not_clear: list[str] = []
     failed: list[str] = []
-    corners: list[str] = []
+    variants: dict[str, int] = {}
     max_late = 0.0
     timing = "constant" if scenario.moving_obstacles else cfg.smooth_timing
     for uid in priority:
@@ -596,12 +621,18 @@ def smooth_fleet(
         task = replace(task, start_time=float(r.times[0]))  # a delayed take-off keeps its delay
         problem = PathProblem(scenario, task, strict_altitude=True)
         tried: list[tuple[int, float, list[str], FloatArray, FloatArray, str, float]] = []
-        for variant in ("through", "corners"):
+        bases = [(np.asarray(r.waypoints, dtype=np.float64), np.asarray(r.times), "")]
+        if timing == "planned":
+            short = _shortcut(problem, table, bases[0][0], bases[0][1])
+            if short[0].shape[0] < bases[0][0].shape[0]:
+                bases.append((short[0], short[1], "shortcut-"))
+        for (wps, wts, tag), kind in itertools.product(bases, ("through", "corners")):
+            variant = tag + kind
             try:
-                if variant == "through":  # Sect. 4.4: through every waypoint
-                    sm = smooth_path(r.waypoints, scenario.uav.turn_radius, cfg.smooth_step)
+                if kind == "through":  # Sect. 4.4: through every waypoint
+                    sm = smooth_path(wps, scenario.uav.turn_radius, cfg.smooth_step)
                 else:  # turn at the corners (see midpoint_poses)
-                    poses, heads = midpoint_poses(r.waypoints)
+                    poses, heads = midpoint_poses(wps)
                     sm = smooth_path(poses, scenario.uav.turn_radius, cfg.smooth_step, heads)
             except ValueError:
                 continue
@@ -609,7 +640,7 @@ def smooth_fleet(
             ev = problem.evaluate(pts[None])
             late = 0.0
             if timing == "planned":
-                tp = _pose_times(np.asarray(r.waypoints), np.asarray(r.times), variant)
+                tp = _pose_times(wps, wts, kind)
                 if tp.shape != sm.waypoint_index.shape:  # not for distinct waypoints; be safe
                     tp = problem.times(sm.waypoints[None])[0]
                 tk = tp.copy()  # reach each pose at its planned time, never above the speed
@@ -629,11 +660,12 @@ def smooth_fleet(
             continue
         _, _, viol, pts, times, variant, late = min(tried, key=lambda x: (x[0], x[1]))
         max_late = max(max_late, late)
-        if variant == "corners":
-            corners.append(uid)
-        table.add(uid, pts, times)
-        if viol:
+        variants[variant] = variants.get(variant, 0) + 1
+        if viol:  # the planned polyline stays this UAV's plan: later UAVs are checked against it
             not_clear.append(uid)
+            table.add(uid, np.asarray(r.waypoints, dtype=np.float64), np.asarray(r.times))
+        else:
+            table.add(uid, pts, times)
         out[uid] = replace(
             r,
             smoothed=pts,
@@ -644,7 +676,7 @@ def smooth_fleet(
     report = {
         "not_clear": not_clear,
         "failed": failed,
-        "corner_cut": corners,
+        "variants": variants,
         "checked": len(results),
         "timing": timing,
         "max_late": max_late,
