@@ -643,9 +643,10 @@ def smooth_fleet(
                 tp = _pose_times(wps, wts, kind)
                 if tp.shape != sm.waypoint_index.shape:  # not for distinct waypoints; be safe
                     tp = problem.times(sm.waypoints[None])[0]
-                tk = tp.copy()  # reach each pose at its planned time, never above the speed
-                for k, length in enumerate(sm.piece_lengths, start=1):
-                    tk[k] = max(tp[k], tk[k - 1] + float(length) / speed)
+                # reach each pose at its planned time, never above the speed: the recurrence
+                # tk[k] = max(tp[k], tk[k-1] + L_k / v) as a running maximum
+                c = np.concatenate([[0.0], np.cumsum(sm.piece_lengths / speed)])
+                tk = c + np.maximum.accumulate(tp - c)
                 late = float(np.max(tk - tp))
                 times = schedule(sm, tk)
             else:

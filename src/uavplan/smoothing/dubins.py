@@ -493,15 +493,7 @@ def schedule(smoothed: SmoothedPath, pose_times: ArrayLike) -> FloatArray:
         raise ValueError(f"pose_times must be ({idx.shape[0]},) finite, got shape {tp.shape}")
     if np.any(np.diff(tp) < 0):
         raise ValueError("pose_times must be non-decreasing")
-    pts = smoothed.points
-    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
-    out = np.empty(pts.shape[0], dtype=np.float64)
-    out[0] = tp[0]
-    for j in range(idx.shape[0] - 1):
-        a, b = int(idx[j]), int(idx[j + 1])
-        s = np.cumsum(seg[a:b])
-        total = s[-1] if s.size else 0.0
-        frac = s / total if total > 0.0 else np.linspace(0.0, 1.0, b - a + 1)[1:]
-        out[a + 1 : b + 1] = tp[j] + (tp[j + 1] - tp[j]) * frac
-        out[b] = tp[j + 1]
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(smoothed.points, axis=0), axis=1))])
+    out = np.interp(s, s[idx], tp)  # poses are distinct, so s[idx] increases strictly
+    out[idx] = tp
     return out
