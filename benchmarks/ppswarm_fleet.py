@@ -17,10 +17,11 @@ import time
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
-from uavplan.fleet.verify import verify_plan
+from uavplan.io.plan_file import plan_document
 from uavplan.planners import get_planner
-from uavplan.planning import FleetPlan
+from uavplan.planners.fleet_plan import FleetPlan
 from uavplan.scenarios import resolve
+from uavplan.verify.core import verify_plan
 from uavplan.world.fleet_tasks import with_fleet
 
 PAPER = {(40, 5): 149.9, (40, 1): 81.2, (100, 1): 419.6, (200, 1): 1468.6, (300, 1): 2458.2,
@@ -33,7 +34,7 @@ def one(n: int, restarts: int, seed: int, **opts: object) -> None:
     t0 = time.perf_counter()
     fr = planner.plan_fleet(sc, None, seed)
     wall = time.perf_counter() - t0
-    rep = verify_plan(FleetPlan(sc, planner.name, {}, seed, fr.results, fr).to_dict(), sc)
+    rep = verify_plan(plan_document(FleetPlan(sc, planner.name, {}, seed, fr.results, fr)), sc)
     bad = sum(not r.feasible for r in fr.results)
     paper = PAPER.get((n, restarts))
     print(

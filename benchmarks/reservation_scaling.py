@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from uavplan.fleet.reservations import ReservationTable, split_pieces
+from uavplan.world.reservations import ReservationTable, split_pieces
 
 LO = np.array([0.0, 0.0, 100.0])
 HI = np.array([1045.0, 879.0, 300.0])

@@ -19,7 +19,7 @@ import time
 from uavplan.bench.plans import Scale, get_plan
 from uavplan.bench.runner import run_sweep
 from uavplan.bench.store import ResultStore
-from uavplan.world.generators import SETTINGS
+from uavplan.scenarios.generators import SETTINGS
 
 
 def main() -> None:

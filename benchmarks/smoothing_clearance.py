@@ -24,11 +24,12 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import numpy as np
 
-from uavplan.fleet.prioritized import smooth_fleet
-from uavplan.fleet.verify import verify_plan
+from uavplan.io.plan_file import plan_document
 from uavplan.planners import get_planner
-from uavplan.planning import FleetPlan
+from uavplan.planners.fleet_plan import FleetPlan
+from uavplan.planners.prioritized import smooth_fleet
 from uavplan.scenarios import resolve
+from uavplan.verify.core import verify_plan
 from uavplan.world.fleet_tasks import with_fleet
 
 
@@ -58,11 +59,8 @@ def main() -> None:
                     counts.append(len(rep["not_clear"]))
                     kinds.update(k for r in res for k in r.smoothed_violations)
                     late.append(rep["max_late"])
-                    v = verify_plan(
-                        FleetPlan(sc, "ppswarm", {}, 0, res, replace(f, results=res)).to_dict(),
-                        sc,
-                        smoothed=True,
-                    )
+                    plan = FleetPlan(sc, "ppswarm", {}, 0, res, replace(f, results=res))
+                    v = verify_plan(plan_document(plan), sc, smoothed=True)
                     seps.append(v.min_separation)
                     agree += v.ok == all(r.smoothed_ok for r in res)
                 cost = np.mean([f.cost for f in feasible]) if feasible else float("nan")

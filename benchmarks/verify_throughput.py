@@ -22,7 +22,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from uavplan.fleet.verify import (
+from uavplan.verify.core import (
     Trajectory,
     candidate_pairs,
     check_separation,

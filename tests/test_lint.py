@@ -1,4 +1,4 @@
-"""ruff and mypy stay clean (skipped where the tools are not installed)."""
+"""ruff, mypy and the import layers stay clean (skipped where the tools are not installed)."""
 
 from __future__ import annotations
 
@@ -25,4 +25,12 @@ def test_mypy_clean() -> None:
     r = subprocess.run(
         [sys.executable, "-m", "mypy", "src/uavplan"], cwd=ROOT, capture_output=True, text=True
     )
+    assert r.returncode == 0, r.stdout + r.stderr
+
+
+@pytest.mark.skipif(shutil.which("lint-imports") is None, reason="import-linter not installed")
+def test_import_contracts_kept() -> None:
+    """The layers of docs/architecture.md and the verifier's independence (pyproject.toml's
+    ``[tool.importlinter]`` contracts)."""
+    r = subprocess.run(["lint-imports"], cwd=ROOT, capture_output=True, text=True)
     assert r.returncode == 0, r.stdout + r.stderr

@@ -645,7 +645,7 @@ def test_invalid_dict_is_not_written(tmp_path: Path) -> None:
 
 def test_resolve_generates_rgg_family_scenes() -> None:
     from uavplan.scenarios import resolve
-    from uavplan.world.generators import rgg_scenario
+    from uavplan.scenarios.generators import rgg_scenario
 
     s = resolve("rgg-n07-i042")
     t = rgg_scenario(7, 42)

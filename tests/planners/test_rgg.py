@@ -16,10 +16,9 @@ from uavplan.planners.rgg import (
     rgg_shortest_path,
 )
 from uavplan.problems import PathProblem
-from uavplan.problems.costs import cylinder_distances
 from uavplan.scenarios import load_builtin
 from uavplan.world import Bounds, Circle, Polygon, Scenario, Task
-from uavplan.world.geometry import segment_polygon_distance
+from uavplan.world.geometry import cylinder_distances, segment_polygon_distance
 
 from .test_planners import easy_3d
 

@@ -14,6 +14,7 @@ from matplotlib.path import Path as MplPath
 from uavplan.problems import CartesianEncoding, PathProblem
 from uavplan.problems import costs as C
 from uavplan.world import AltitudeBand, Cylinder, Scenario, Task, Terrain
+from uavplan.world import geometry as G
 from uavplan.world.geometry import pack_polygons
 from uavplan.world.scenario import Bounds
 
@@ -115,7 +116,7 @@ def test_threat_cost_end_to_end_with_infinite_cylinders(
     centers = rng.uniform(-20, 20, (J, 2))
     R = rng.uniform(1.0, 8.0, J)
     inf = np.full(J, np.inf)
-    dist = C.cylinder_distances(paths, centers, -inf, inf)
+    dist = G.cylinder_distances(paths, centers, -inf, inf)
     assert dist.shape == (4, N - 1, J)
     got = C.threat_cost(dist, R, S1)
     for q in range(4):
@@ -133,7 +134,7 @@ def test_threat_cost_end_to_end_with_infinite_cylinders(
     # 2-D paths are taken at z = 0 against the same infinitely tall cylinders
     if J:
         np.testing.assert_allclose(
-            C.cylinder_distances(paths[..., :2], centers, -inf, inf), dist, rtol=1e-12, atol=1e-12
+            G.cylinder_distances(paths[..., :2], centers, -inf, inf), dist, rtol=1e-12, atol=1e-12
         )
 
 

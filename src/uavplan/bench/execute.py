@@ -152,10 +152,11 @@ def fleet_scenario(ref: str) -> Any:
 
 def _run_fleet(spec: RunSpec) -> dict[str, Any]:
     """A fleet planner run, its plan checked by the independent verifier
-    (:mod:`uavplan.fleet.verify`), planned and smoothed paths both."""
-    from uavplan.fleet.verify import verify_plan
+    (:mod:`uavplan.verify.core`), planned and smoothed paths both."""
+    from uavplan.io.plan_file import plan_document
     from uavplan.planners import get_planner
-    from uavplan.planning import FleetPlan
+    from uavplan.planners.fleet_plan import FleetPlan
+    from uavplan.verify.core import verify_plan
 
     p = spec.params
     scenario = fleet_scenario(spec.scenario)
@@ -163,7 +164,7 @@ def _run_fleet(spec: RunSpec) -> dict[str, Any]:
     budget = int(p["iterations"]) if p.get("iterations") else None
     fr = planner.plan_fleet(scenario, budget, spec.seed)  # type: ignore[attr-defined]
     plan = FleetPlan(scenario, planner.name, planner.describe(), spec.seed, fr.results, fr)
-    d = plan.to_dict()
+    d = plan_document(plan)
     rep = verify_plan(d, scenario)
     smoothed = all(r.smoothed is not None for r in fr.results)
     rep_s = verify_plan(d, scenario, smoothed=True) if smoothed else None
@@ -287,7 +288,7 @@ def warm_up() -> None:
     terrain.min_clearance(np.full((1, 2, 3), 5.0))
     terrain.max_clearance(np.full((1, 2, 3), 5.0))
     terrain.stays_within(np.full((1, 2, 3), 5.0), 10.0)
-    from uavplan.fleet.reservations import ReservationTable
+    from uavplan.world.reservations import ReservationTable
 
     table = ReservationTable(np.zeros(3), np.full(3, 30.0), 1.0)
     table.add("a", np.array([[1.0, 1, 5], [29, 29, 5]]), np.array([0.0, 3.0]))

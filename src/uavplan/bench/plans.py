@@ -274,7 +274,7 @@ def builtin_plans() -> list[ExperimentPlan]:
 def _rggpso_plans() -> list[ExperimentPlan]:
     """RGG-PSO+ (Liu et al. 2024) Sect. 5: 1000 scenes x 10 runs, 100 particles, 200 iterations,
     N = 20 waypoints (the scenes' default); smoke scale: two scenes, one run, a small budget."""
-    from uavplan.world.generators import family_names
+    from uavplan.scenarios.generators import family_names
 
     paper_scenes = tuple(family_names())
     smoke_scenes = ("rgg-n05-i000", "rgg-n14-i000")
@@ -361,7 +361,7 @@ def _ppswarm_plans() -> list[ExperimentPlan]:
             scenarios=scen4,
             # graded infeasibility for every method: with the literal infinite costs of Sect. 2
             # the uniformly seeded baselines end with most UAVs infeasible (see
-            # uavplan.fleet.prioritized); feasible paths still cost exactly F
+            # uavplan.planners.prioritized); feasible paths still cost exactly F
             algorithms=(
                 Algorithm("ppswarm", "ppswarm", {"infeasible": "graded"}),
                 *(

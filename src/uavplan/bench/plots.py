@@ -130,8 +130,8 @@ def box_figure(df: pd.DataFrame, value: str = "best_cost") -> Figure | None:
 
 def best_paths_figure(df: pd.DataFrame) -> Figure | None:
     """The best run's path of each algorithm, per scenario, over the scenario's top view."""
-    from uavplan.plotting import draw_top
     from uavplan.scenarios import resolve
+    from uavplan.viz.figures import draw_top
 
     ok = _ok(df)
     if ok.empty or "waypoints" not in ok:

@@ -9,7 +9,7 @@
   populations, ``N_iter = 100``, ``N_pop = 300`` (Table 2), and any registered optimizer
   (``optimizer="de"`` ...) with its Table 2 parameters passed as options.
 
-The engine is :class:`uavplan.fleet.prioritized.PrioritizedPlanner`; see it for every choice
+The engine is :class:`uavplan.planners.prioritized.PrioritizedPlanner`; see it for every choice
 where the paper is silent.
 """
 
@@ -17,8 +17,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from uavplan.fleet.prioritized import PrioritizedConfig, PrioritizedPlanner
 from uavplan.planners.base import _REGISTRY, register_planner
+from uavplan.planners.prioritized import PrioritizedConfig, PrioritizedPlanner
 
 #: PPSwarm Table 1.
 PPSWARM = PrioritizedConfig(

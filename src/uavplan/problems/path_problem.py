@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.problems import costs as C
+from uavplan.world import geometry as G
 from uavplan.world.geometry import scene2d_batch
 from uavplan.world.scenario import Scenario, Task
 
@@ -77,7 +78,7 @@ class Context:
     @cached_property
     def cyl_dist(self) -> FloatArray:
         p = self.problem
-        return C.cylinder_distances(self.paths, p._cyl_centers, p._cyl_lo, p._cyl_hi)
+        return G.cylinder_distances(self.paths, p._cyl_centers, p._cyl_lo, p._cyl_hi)
 
     @cached_property
     def ground(self) -> FloatArray:

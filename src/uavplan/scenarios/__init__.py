@@ -74,7 +74,7 @@ def resolve(name_or_path: str | Path) -> Scenario:
         return load_builtin(text)
     m = re.fullmatch(r"rgg-n(\d+)-i(\d+)(?:-s(\d+))?", text)
     if m:  # a scene of the RGG-PSO+ family, generated deterministically
-        from uavplan.world.generators import rgg_scenario
+        from uavplan.scenarios.generators import rgg_scenario
 
         return rgg_scenario(int(m.group(1)), int(m.group(2)), int(m.group(3) or 0))
     path = Path(name_or_path)

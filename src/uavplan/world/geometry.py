@@ -98,6 +98,30 @@ def segment_cylinder_distance(paths, centers, z_lo, z_hi):  # pragma: no cover -
     return out
 
 
+def cylinder_distances(
+    paths: FloatArray, centers: FloatArray, z_lo: FloatArray, z_hi: FloatArray
+) -> FloatArray:
+    """Horizontal distance d_j from each threat axis to each segment, (pop, n - 1, J).
+
+    Only the part of the segment within the cylinder's heights counts (exact); 2-D paths are
+    taken at z = 0 against infinitely tall cylinders.
+    """
+    p = np.asarray(paths, dtype=np.float64)
+    if p.shape[-1] == 2:
+        p = np.concatenate([p, np.zeros((*p.shape[:-1], 1))], axis=-1)
+    J = len(centers)
+    if J == 0:
+        return np.zeros((p.shape[0], p.shape[1] - 1, 0))
+    return np.asarray(
+        segment_cylinder_distance(
+            np.ascontiguousarray(p),
+            np.ascontiguousarray(centers, dtype=np.float64),
+            np.ascontiguousarray(z_lo, dtype=np.float64),
+            np.ascontiguousarray(z_hi, dtype=np.float64),
+        )
+    )
+
+
 def segment_cylinder_distance_reference(
     paths: FloatArray, centers: FloatArray, z_lo: FloatArray, z_hi: FloatArray
 ) -> FloatArray:

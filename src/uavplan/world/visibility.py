@@ -56,8 +56,7 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from uavplan.problems.costs import cylinder_distances
-from uavplan.world.geometry import segment_polygon_distance
+from uavplan.world.geometry import cylinder_distances, segment_polygon_distance
 from uavplan.world.scenario import Scenario, Task
 
 FloatArray = NDArray[np.float64]

@@ -1,62 +1,35 @@
-"""Command line: ``uavplan plan | demo | scenario ...``."""
+"""``uavplan plan`` and ``uavplan demo``: plan every task of a scenario, write plan.json and
+plan.png, print a summary."""
 
 from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from uavplan.cli_bench import bench_app
-from uavplan.cli_bench import report as report_command
-from uavplan.cli_scenario import scenario_app
-from uavplan.cli_verify import verify as verify_command
+from uavplan.cli._common import err, fail, out, parse_params
 
-app = typer.Typer(
-    name="uavplan",
-    help="Plan safe, flyable UAV paths and compare planners.",
-    no_args_is_help=True,
-    add_completion=False,
-    pretty_exceptions_enable=False,
-)
-app.add_typer(scenario_app, name="scenario")
-app.add_typer(bench_app, name="bench")
-app.command("report")(report_command)
-app.command("verify")(verify_command)
-
-err = Console(stderr=True)
-out = Console()
+if TYPE_CHECKING:
+    from uavplan.planners.fleet_plan import FleetPlan
 
 
-def fail(lines: list[str] | str, code: int = 2) -> typer.Exit:
-    """Print problem lines to stderr and return the Exit to raise (no traceback)."""
-    for line in [lines] if isinstance(lines, str) else lines:
-        err.print(line, markup=False, highlight=False)
-    return typer.Exit(code)
+def write_plan(plan: FleetPlan, out: str | Path, figure: bool = True) -> list[Path]:
+    """Write ``out/plan.json`` (atomically) and ``out/plan.png``; returns the paths."""
+    from uavplan.io.plan_file import write_plan_file
 
+    d = Path(out)
+    d.mkdir(parents=True, exist_ok=True)
+    written = [write_plan_file(plan, d / "plan.json")]
+    if figure:
+        from uavplan.viz.figures import save_plan_figure
 
-def _parse_params(params: list[str]) -> dict[str, Any]:
-    parsed: dict[str, Any] = {}
-    for item in params:
-        if "=" not in item:
-            raise fail(f"--param {item!r}: expected NAME=VALUE")
-        k, v = item.split("=", 1)
-        value: Any = v
-        for conv in (int, float):
-            try:
-                value = conv(v)
-                break
-            except ValueError:
-                continue
-        if v.lower() in ("true", "false"):
-            value = v.lower() == "true"
-        parsed[k.strip()] = value
-    return parsed
-
+        title = f"{plan.scenario.name}: {plan.algorithm}, seed {plan.seed}"
+        written.append(save_plan_figure(plan.scenario, plan.results, d / "plan.png", title))
+    return written
 
 def _run_plan(
     scenario_ref: str,
@@ -73,14 +46,14 @@ def _run_plan(
     from uavplan.io.scenario_file import ScenarioFileError
     from uavplan.optimizers.base import Budget, OptimizerError
     from uavplan.planners import PlannerError, get_planner
-    from uavplan.planning import plan_all, write_plan
+    from uavplan.planners.fleet_plan import plan_all
     from uavplan.scenarios import resolve
 
     try:
         scenario = resolve(scenario_ref)
     except ScenarioFileError as exc:
         raise fail(getattr(exc, "problems", None) or [str(exc)]) from None
-    options: dict[str, Any] = _parse_params(params)
+    options: dict[str, Any] = parse_params(params)
     if pop_size is not None:
         options["pop_size"] = pop_size
     if waypoints is not None:
@@ -171,7 +144,6 @@ def _summary(plan: Any, elapsed: float, out_dir: Path) -> None:
     out.print(f"wrote {out_dir / 'plan.json'} and {out_dir / 'plan.png'} ({elapsed:.1f} s)")
 
 
-@app.command()
 def plan(
     scenario: Annotated[
         str, typer.Argument(help="A scenario file (.yaml/.json) or built-in name.")
@@ -194,7 +166,6 @@ def plan(
         raise typer.Exit(1)
 
 
-@app.command()
 def demo(
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Output folder.")] = Path(
         "uavplan-demo"
@@ -206,9 +177,3 @@ def demo(
     _summary(result, elapsed, out_dir)
 
 
-def main() -> None:
-    app()
-
-
-if __name__ == "__main__":  # pragma: no cover
-    main()

@@ -3,7 +3,7 @@ do the UAVs keep their distance from each other?
 
 This module is written apart from the planner's own cost and feasibility code on purpose: it
 does not import :mod:`uavplan.problems`, :mod:`uavplan.world.geometry`, the terrain kernels or
-``Terrain.clears / min_clearance / max_clearance``, nor :mod:`uavplan.fleet.reservations`. It
+``Terrain.clears / min_clearance / max_clearance``, nor :mod:`uavplan.world.reservations`. It
 reads the scenario only as data (bounds, obstacles, the DEM grid, the altitude band, UAV limits)
 and does its own geometry, so that a bug in the planner's geometry cannot hide itself.
 

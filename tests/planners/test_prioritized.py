@@ -10,18 +10,19 @@ import pytest
 from typer.testing import CliRunner
 
 from uavplan.cli import app
-from uavplan.fleet.prioritized import (
+from uavplan.io.plan_file import plan_document
+from uavplan.planners import PlannerError, get_planner
+from uavplan.planners.fleet_plan import FleetPlan, plan_all
+from uavplan.planners.prioritized import (
     SeparatedPathProblem,
     polyline_with_n_vertices,
     resample_by_length,
 )
-from uavplan.fleet.reservations import ReservationTable
-from uavplan.fleet.verify import verify_plan
-from uavplan.planners import PlannerError, get_planner
-from uavplan.planning import FleetPlan, plan_all
 from uavplan.scenarios import resolve
+from uavplan.verify.core import verify_plan
 from uavplan.world import Scenario, Task
 from uavplan.world.fleet_tasks import with_fleet
+from uavplan.world.reservations import ReservationTable
 
 SMALL = {"pop_size": 24, "n_iter": 6, "n_restart": 2, "rrt_iterations": 2000}
 
@@ -80,7 +81,7 @@ def test_small_fleet_is_feasible_verified_and_deterministic(fleet3: Scenario) ->
     assert a.cost == pytest.approx(sum(r.cost for r in a.results))
     assert len(a.restart_costs) == 2 and a.cost == pytest.approx(np.min(a.restart_costs))
     assert len(a.history) == 2 * SMALL["n_iter"]
-    d = FleetPlan(fleet3, "ppswarm", {}, 5, a.results, a).to_dict()
+    d = plan_document(FleetPlan(fleet3, "ppswarm", {}, 5, a.results, a))
     assert verify_plan(d, fleet3).ok
     # the planner's own judgement of the smoothed paths agrees with the verifier's
     rep = verify_plan(d, fleet3, smoothed=True)
@@ -96,7 +97,7 @@ def test_head_on_swap_is_separated() -> None:
     sc = base.__class__(**{**base.__dict__, "tasks": tasks, "cylinders": ()})
     r = get_planner("ppswarm", **SMALL).plan_fleet(sc, seed=0)
     assert r.feasible
-    d = FleetPlan(sc, "ppswarm", {}, 0, r.results, r).to_dict()
+    d = plan_document(FleetPlan(sc, "ppswarm", {}, 0, r.results, r))
     rep = verify_plan(d, sc)
     assert rep.ok and rep.min_separation >= sc.uav.s2
 
@@ -147,7 +148,7 @@ def test_smoothed_paths_keep_their_timing_and_agree_with_the_verifier(
             assert np.all(speed <= v * (1 + 1e-9))
             assert t[-1] >= u.times[-1] - 1e-9
     assert r.info["smoothing"]["timing"] == timing
-    d = FleetPlan(fleet3, "ppswarm", {}, 5, r.results, r).to_dict()
+    d = plan_document(FleetPlan(fleet3, "ppswarm", {}, 5, r.results, r))
     assert verify_plan(d, fleet3, smoothed=True).ok == all(u.smoothed_ok for u in r.results)
 
 
@@ -163,7 +164,7 @@ def test_separation_margin_plans_wider_than_s2() -> None:
             sc, seed=0
         )
         assert r.feasible
-        rep = verify_plan(FleetPlan(sc, "ppswarm", {}, 0, r.results, r).to_dict(), sc)
+        rep = verify_plan(plan_document(FleetPlan(sc, "ppswarm", {}, 0, r.results, r)), sc)
         assert rep.ok
         seps[margin] = rep.min_separation
     assert seps[100.0] >= sc.uav.s2 + 100.0 - 1e-6
@@ -189,7 +190,7 @@ def test_plan_and_verify_cli(tmp_path, fleet3: Scenario) -> None:
     assert res.exit_code == 0, res.output
     # the same fleet planned independently (no separation) is written too, never checked
     fp = plan_all(fleet3, get_planner("pso", pop_size=10), 2, 0)
-    assert fp.to_dict()["separation_checked"] is False
+    assert plan_document(fp)["separation_checked"] is False
 
 
 @pytest.mark.parametrize("name", ["ppswarm2", "ppswarm4"])
@@ -198,7 +199,7 @@ def test_every_feasible_fleet_passes_the_verifier(name: str, planner: str) -> No
     sc = with_fleet(resolve(name), 5, seed=2)
     opts = {**SMALL, "n_restart": 1} if planner == "ppswarm" else {"pop_size": 40, "n_iter": 8}
     r = get_planner(planner, **opts).plan_fleet(sc, seed=3)
-    d = FleetPlan(sc, planner, {}, 3, r.results, r).to_dict()
+    d = plan_document(FleetPlan(sc, planner, {}, 3, r.results, r))
     rep = verify_plan(d, sc)
     if r.feasible:
         assert rep.ok, [v.message for v in rep.violations]
@@ -210,7 +211,7 @@ def test_every_feasible_fleet_passes_the_verifier(name: str, planner: str) -> No
 
 def test_departure_delay_retries_until_a_later_take_off_is_clear(monkeypatch, fleet3) -> None:
     """A UAV whose low level finds nothing conflict-free tries later take-offs (max_delays)."""
-    from uavplan.fleet.prioritized import PrioritizedPlanner
+    from uavplan.planners.prioritized import PrioritizedPlanner
 
     real = PrioritizedPlanner._low_level
     calls: list[float] = []
@@ -232,7 +233,7 @@ def test_departure_delay_retries_until_a_later_take_off_is_clear(monkeypatch, fl
     assert sorted(calls) == [0.0, 0.0, 0.0, 5.0, 10.0]  # two refusals, then take-off at 10 s
     b = next(r for r in waited.results if r.uav_id == "uav1")
     assert b.times[0] == pytest.approx(10.0)
-    d = FleetPlan(fleet3, "ppswarm", {}, 0, waited.results, waited).to_dict()
+    d = plan_document(FleetPlan(fleet3, "ppswarm", {}, 0, waited.results, waited))
     assert verify_plan(d, fleet3).ok
 
 
@@ -300,9 +301,9 @@ def test_swarm_seeding_follows_eqs_15_and_16(fleet3: Scenario) -> None:
 
 
 def test_shortcut_drops_waypoints_only_where_the_straight_segment_is_clear() -> None:
-    from uavplan.fleet.prioritized import _shortcut
-    from uavplan.fleet.reservations import ReservationTable
+    from uavplan.planners.prioritized import _shortcut
     from uavplan.problems.path_problem import PathProblem
+    from uavplan.world.reservations import ReservationTable
 
     base = resolve("ppswarm1")
     (cx, cy), rad = base.cylinders[0].center, base.cylinders[0].radius

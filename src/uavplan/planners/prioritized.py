@@ -13,7 +13,7 @@ complex scenarios. *Drones* 8, 192.
   registered optimizer can replace it, which is how the paper's baselines run (Table 2: LH
   priorities, one pass, uniform random first populations).
 * **Collisions between UAVs** (Eqs. 11-12, Sect. 4.3, Alg. 5): the chosen paths of the UAVs
-  already planned are kept in a :class:`~uavplan.fleet.reservations.ReservationTable`; a
+  already planned are kept in a :class:`~uavplan.world.reservations.ReservationTable`; a
   candidate that comes closer than S2 to one of them at any instant costs infinity.
 
 Choices where the paper is silent or vague (all parameters of :class:`PrioritizedConfig`):
@@ -67,7 +67,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan import optimizers
-from uavplan.fleet.reservations import ReservationTable
 from uavplan.optimizers.base import Budget
 from uavplan.planners.base import (
     FleetPlanner,
@@ -78,6 +77,7 @@ from uavplan.planners.base import (
 )
 from uavplan.problems.encoding import ENCODINGS, CartesianEncoding
 from uavplan.problems.path_problem import PRESETS, Context, PathProblem, Term, _band_heights
+from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 
 FloatArray = NDArray[np.float64]

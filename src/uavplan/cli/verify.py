@@ -4,7 +4,7 @@ Prints every violation, then a summary (UAVs, pairs checked, minimum separation,
 kind). Exit codes: 0 no violation, 1 some violation, 2 bad input (a missing or unreadable file,
 invalid JSON, a missing or malformed field, mismatched lengths, an unusable scenario), reported on
 stderr as one line naming the file, the field and the value, without a traceback. What is checked:
-:mod:`uavplan.fleet.verify` and ``docs/verify.md``.
+:mod:`uavplan.verify.core` and ``docs/verify.md``.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import typer
 from rich.console import Console
 
 if TYPE_CHECKING:
-    from uavplan.fleet.verify import VerifyReport
+    from uavplan.verify.core import VerifyReport
 
 
 def _fail(lines: list[str] | str, code: int = 2) -> typer.Exit:
@@ -101,9 +101,9 @@ def verify(
     """Check PLAN_FILE against SCENARIO independently of the planner: UAV-UAV separation over
     continuous time, obstacles, terrain and altitude band along every segment, bounds, times and
     speed. Exit 0 if all pass, 1 on any violation, 2 on bad input."""
-    from uavplan.fleet.verify import PlanFormatError, parse_plan, verify_trajectories
     from uavplan.io.scenario_file import ScenarioFileError
     from uavplan.scenarios import resolve
+    from uavplan.verify.core import PlanFormatError, parse_plan, verify_trajectories
 
     data = _read_plan(plan_file)
     try:

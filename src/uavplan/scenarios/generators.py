@@ -269,7 +269,7 @@ def rgg_scenario(n_obstacles: int, index: int, root_seed: int = 0) -> Scenario:
         n_circ = kinds.count("circle")
         n_conv = kinds.count("convex")
         metadata: dict[str, Any] = {
-            "generator": "uavplan.world.generators.rgg_scenario",
+            "generator": "uavplan.scenarios.generators.rgg_scenario",
             "n_obstacles": n_obstacles,
             "index": index,
             "root_seed": root_seed,

@@ -11,10 +11,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from uavplan.io.scenario_file import load_scenario
-from uavplan.problems.costs import cylinder_distances
 from uavplan.problems.path_problem import PathProblem
-from uavplan.world import Circle, Polygon, Scenario
-from uavplan.world.generators import (
+from uavplan.scenarios.generators import (
     CLEARANCE,
     GAP,
     GOAL_BOX,
@@ -30,7 +28,8 @@ from uavplan.world.generators import (
     rgg_name,
     rgg_scenario,
 )
-from uavplan.world.geometry import segment_polygon_distance
+from uavplan.world import Circle, Polygon, Scenario
+from uavplan.world.geometry import cylinder_distances, segment_polygon_distance
 from uavplan.world.visibility import shortest_path
 
 CASES = [(5, 0), (5, 1), (9, 4), (12, 7), (14, 0), (14, 3)]

@@ -1,4 +1,4 @@
-"""The independent fleet verifier (``uavplan.fleet.verify``) and ``uavplan verify``.
+"""The independent fleet verifier (``uavplan.verify.core``) and ``uavplan verify``.
 
 References are brute force: dense sampling of positions in time and of the bilinear terrain
 along segments (``Terrain.height``, the plain lookup), never the planner's geometry kernels.
@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from uavplan.cli import app
-from uavplan.fleet.verify import (
+from uavplan.verify.core import (
     KINDS,
     PlanFormatError,
     Trajectory,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from uavplan.fleet.reservations import ReservationTable, split_pieces
+from uavplan.world.reservations import ReservationTable, split_pieces
 
 LO = np.array([0.0, 0.0, 0.0])
 HI = np.array([400.0, 400.0, 100.0])

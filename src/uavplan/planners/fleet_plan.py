@@ -1,17 +1,14 @@
-"""Plan every task of a scenario and write ``plan.json`` / ``plan.png`` (used by the CLI)."""
+"""Plan every task of a scenario: one by one with a single-UAV planner, or together with a fleet
+planner (:func:`plan_all`); the plans of all tasks as one :class:`FleetPlan`."""
 
 from __future__ import annotations
 
-import platform
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from uavplan import __version__
-from uavplan.io.atomic import write_json_atomic
 from uavplan.optimizers.base import Budget
 from uavplan.planners.base import FleetPlanner, FleetResult, Planner, PlanResult, ProgressCallback
 from uavplan.world.scenario import Scenario
@@ -35,21 +32,6 @@ class FleetPlan:
         if self.fleet is not None:
             return bool(self.fleet.feasible)
         return all(r.feasible for r in self.results)
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "format": "uavplan.plan/1",
-            "scenario": self.scenario.name,
-            "algorithm": self.algorithm,
-            "config": self.config,
-            "seed": self.seed,
-            "version": __version__,
-            "python": platform.python_version(),
-            "frame": "local ENU metres: x east, y north, z up (absolute altitude)",
-            "separation_checked": self.fleet is not None,
-            **({"fleet": self.fleet.to_dict()} if self.fleet is not None else {}),
-            "uavs": [r.to_dict() for r in self.results],
-        }
 
 
 def task_seeds(seed: int | None, n: int) -> list[int | None]:
@@ -79,16 +61,3 @@ def plan_all(
         cb = progress(task.id) if progress else None
         results.append(planner.plan(scenario, task, budget, s, cb))
     return FleetPlan(scenario, planner.name, planner.describe(), seed, tuple(results))
-
-
-def write_plan(plan: FleetPlan, out: str | Path, figure: bool = True) -> list[Path]:
-    """Write ``out/plan.json`` (atomically) and ``out/plan.png``; returns the paths."""
-    d = Path(out)
-    d.mkdir(parents=True, exist_ok=True)
-    written = [write_json_atomic(d / "plan.json", plan.to_dict())]
-    if figure:
-        from uavplan.plotting import save_plan_figure
-
-        title = f"{plan.scenario.name}: {plan.algorithm}, seed {plan.seed}"
-        written.append(save_plan_figure(plan.scenario, plan.results, d / "plan.png", title))
-    return written

@@ -1,0 +1,39 @@
+"""Command line: ``uavplan plan | demo | verify | scenario ... | bench ... | report``.
+
+One module per command group: :mod:`uavplan.cli.plan` (``plan``, ``demo``),
+:mod:`uavplan.cli.scenario`, :mod:`uavplan.cli.bench` (``bench``, ``report``),
+:mod:`uavplan.cli.verify`.
+"""
+
+from __future__ import annotations
+
+import typer
+
+from uavplan.cli.bench import bench_app
+from uavplan.cli.bench import report as report_command
+from uavplan.cli.plan import demo as demo_command
+from uavplan.cli.plan import plan as plan_command
+from uavplan.cli.scenario import scenario_app
+from uavplan.cli.verify import verify as verify_command
+
+app = typer.Typer(
+    name="uavplan",
+    help="Plan safe, flyable UAV paths and compare planners.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+app.command("plan")(plan_command)
+app.command("demo")(demo_command)
+app.add_typer(scenario_app, name="scenario")
+app.add_typer(bench_app, name="bench")
+app.command("report")(report_command)
+app.command("verify")(verify_command)
+
+
+def main() -> None:
+    app()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

@@ -1,0 +1,5 @@
+"""``python -m uavplan.cli``."""
+
+from uavplan.cli import main
+
+main()

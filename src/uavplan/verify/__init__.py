@@ -1,0 +1,1 @@
+"""The independent plan verifier (see :mod:`uavplan.verify.core`)."""

@@ -1,0 +1,1 @@
+"""Figures of scenarios and plans (Agg backend)."""
