@@ -11,13 +11,15 @@ from typer.testing import CliRunner
 
 from uavplan.cli import app
 from uavplan.io.plan_file import plan_document
+from uavplan.optimizers.constraints import Constrained
 from uavplan.planners import PlannerError, get_planner
 from uavplan.planners.fleet_plan import FleetPlan, plan_all
 from uavplan.planners.prioritized import (
-    SeparatedPathProblem,
+    fleet_problem,
     polyline_with_n_vertices,
     resample_by_length,
 )
+from uavplan.problems.encoding import CartesianEncoding
 from uavplan.scenarios import resolve
 from uavplan.verify.core import verify_plan
 from uavplan.world import Scenario, Task
@@ -55,16 +57,22 @@ def test_fast_cost_equals_full_evaluation(fleet3: Scenario) -> None:
     other = fleet3.tasks[1]
     line = np.linspace(other.start, other.goal, 6)
     table.add(other.id, line, np.linspace(0, 40, 6))
-    problem = SeparatedPathProblem(fleet3, task, table)
+    problem = fleet_problem(fleet3, task, table)
     paths = np.linspace(task.start, task.goal, 8)[None].repeat(200, axis=0)
     paths[:, 1:-1, :2] += rng.normal(0, 60, size=(200, 6, 2))
     xy = paths[:, 1:-1, :2]
     paths[:, 1:-1, 2] = fleet3.ground(xy[..., 0], xy[..., 1]) + rng.normal(150, 25, (200, 6))
     ev = problem.evaluate(paths)
-    fast = problem.cost(paths)
+    fast, cv = problem.evaluate_cv(paths, exact=False)
     want = np.where(ev.feasible, ev.cost, np.inf)
     np.testing.assert_array_equal(fast, want)
     assert 0 < np.isfinite(fast).sum() < 200
+    np.testing.assert_array_equal(cv > 0, ~ev.feasible & np.isfinite(problem.cost(paths)))
+    # the exact form: the same cost where feasible, a graded violation for the others
+    f, cv_exact = problem.evaluate_cv(paths, exact=True)
+    np.testing.assert_array_equal(f[ev.feasible], ev.cost[ev.feasible])
+    np.testing.assert_array_equal(cv_exact, ev.cv)
+    assert np.all(cv_exact[ev.feasible] == 0) and np.all(cv_exact[~ev.feasible] >= 100)
 
 
 def test_small_fleet_is_feasible_verified_and_deterministic(fleet3: Scenario) -> None:
@@ -240,14 +248,16 @@ def test_departure_delay_retries_until_a_later_take_off_is_clear(monkeypatch, fl
 def test_graded_cost_keeps_f_for_feasible_and_orders_infeasible(fleet3: Scenario) -> None:
     task = fleet3.tasks[0]
     table = ReservationTable(fleet3.bounds.lo, fleet3.bounds.hi, fleet3.uav.s2)
-    inf_p = SeparatedPathProblem(fleet3, task, table)
-    graded = SeparatedPathProblem(fleet3, task, table, infeasible="graded")
+    problem = fleet_problem(fleet3, task, table)
+    enc = CartesianEncoding(problem, 6)
+    inf_p, graded = Constrained(enc, "inf"), Constrained(enc, "feasibility-first")
     rng = np.random.default_rng(0)
     paths = np.linspace(task.start, task.goal, 8)[None].repeat(300, axis=0)
     paths[:, 1:-1, :2] += rng.normal(0, 80, size=(300, 6, 2))
     xy = paths[:, 1:-1, :2]
     paths[:, 1:-1, 2] = fleet3.ground(xy[..., 0], xy[..., 1]) + rng.normal(150, 40, (300, 6))
-    a, b = inf_p.cost(paths), graded.cost(paths)
+    genes = enc.encode(paths)
+    a, b = inf_p.evaluate(genes), graded.evaluate(genes)
     fin = np.isfinite(a)
     np.testing.assert_array_equal(a[fin], b[fin])  # feasible: exactly F
     assert np.all(np.isfinite(b)) and np.all(b[~fin] >= 1e7) and (~fin).sum() > 10
@@ -259,7 +269,8 @@ def test_graded_cost_keeps_f_for_feasible_and_orders_infeasible(fleet3: Scenario
 def test_graded_baseline_finds_feasible_paths_where_inf_does_not(fleet3: Scenario) -> None:
     opts = {"pop_size": 60, "n_iter": 25, "smooth": False}
     a = get_planner("prioritized", **opts).plan_fleet(fleet3, seed=1)
-    b = get_planner("prioritized", **opts, infeasible="graded").plan_fleet(fleet3, seed=1)
+    graded = get_planner("prioritized", **opts, constraints="feasibility-first")
+    b = graded.plan_fleet(fleet3, seed=1)
     n_a = sum(r.feasible for r in a.results)
     n_b = sum(r.feasible for r in b.results)
     assert n_b >= n_a and n_b >= 2
@@ -268,7 +279,6 @@ def test_graded_baseline_finds_feasible_paths_where_inf_does_not(fleet3: Scenari
 def test_swarm_seeding_follows_eqs_15_and_16(fleet3: Scenario) -> None:
     """Eq. 15: particle 1 is the RRT* path, the others (1 - alpha) P + alpha randpath; Eq. 16:
     the first rho N_pop particles are random paths, the rest the previous positions."""
-    from uavplan.problems.encoding import CartesianEncoding
 
     planner = get_planner("ppswarm", pop_size=20, alpha=0.1, rho=0.25)
     seen: list[np.ndarray] = []
@@ -286,7 +296,7 @@ def test_swarm_seeding_follows_eqs_15_and_16(fleet3: Scenario) -> None:
     P[1:-1, 2] = fleet3.ground(P[1:-1, 0], P[1:-1, 1]) + 150.0
     rng = np.random.default_rng(0)
     _, last = planner._low_level(fleet3, task, table, P, None, 0, 2, 10, rng)
-    enc = CartesianEncoding(SeparatedPathProblem(fleet3, task, table), 10)
+    enc = CartesianEncoding(fleet_problem(fleet3, task, table), 10)
     P_gene = enc.encode(P[None])[0]
     init = seen[0]
     np.testing.assert_allclose(init[0], P_gene)
@@ -301,8 +311,8 @@ def test_swarm_seeding_follows_eqs_15_and_16(fleet3: Scenario) -> None:
 
 
 def test_shortcut_drops_waypoints_only_where_the_straight_segment_is_clear() -> None:
-    from uavplan.planners.prioritized import _shortcut
     from uavplan.problems.path_problem import PathProblem
+    from uavplan.problems.validity import greedy_shortcut
     from uavplan.world.reservations import ReservationTable
 
     base = resolve("ppswarm1")
@@ -313,12 +323,13 @@ def test_shortcut_drops_waypoints_only_where_the_straight_segment_is_clear() -> 
     wp = np.column_stack([xy, np.full(len(xy), z)])
     tasks = (Task("a", tuple(wp[0]), tuple(wp[-1])),)
     sc = base.__class__(**{**base.__dict__, "tasks": tasks})
-    problem = PathProblem(sc, tasks[0], strict_altitude=True)
+    table = ReservationTable(np.asarray(sc.bounds.lo), np.asarray(sc.bounds.hi), sc.uav.s2)
+    problem = PathProblem(sc, tasks[0], strict_altitude=True, reservations=table)
     assert problem.evaluate(wp[None]).feasible[0]  # the detour itself is clear
     assert not problem.evaluate(wp[[0, -1]][None]).feasible[0]  # the straight line is not
     t = np.cumsum(np.r_[0.0, np.linalg.norm(np.diff(wp, axis=0), axis=1)]) / sc.uav.speed
-    table = ReservationTable(np.asarray(sc.bounds.lo), np.asarray(sc.bounds.hi), sc.uav.s2)
-    w2, t2 = _shortcut(problem, table, wp, t)
+    w2, t2, _ = greedy_shortcut(problem.validator, wp, t)
+    assert t2 is not None
     assert np.array_equal(w2[0], wp[0]) and np.array_equal(w2[-1], wp[-1])
     assert 2 < len(w2) < len(wp)  # the collinear-ish middle goes, the detour stays
     assert problem.evaluate(w2[None]).feasible[0]
@@ -328,5 +339,5 @@ def test_shortcut_drops_waypoints_only_where_the_straight_segment_is_clear() -> 
     tm = float(np.interp(0.5, [0, 1], t2[:2]))
     up = np.array([0.0, 0.0, 50.0])
     table.add("other", np.stack([mid - up, mid + up]), np.array([tm - 2.5, tm + 2.5]))
-    w3, _ = _shortcut(problem, table, wp, t)
+    w3, _, _ = greedy_shortcut(problem.validator, wp, t)
     assert not np.array_equal(w3[:2], w2[:2])

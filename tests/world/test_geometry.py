@@ -452,30 +452,31 @@ def test_fused_scene_kernel_matches_the_separate_kernels() -> None:
         P = rng.uniform(0, 100, (300, 8, 2))
         P[:, 0], P[:, -1] = pp.start, pp.goal
         P[::5, 3] = P[::5, 2]  # zero-length segments
-        verts, starts = pp._polys
+        w = pp.validator.world
+        verts, starts = w.poly_verts, w.poly_starts
         P[::7, 4] = -1.0  # some nodes out of the box
         length, inside, circle_hit, polygon_hit, outside = scene2d_batch(
             np.ascontiguousarray(P),
-            pp._circ_centers,
-            pp._circ_radii,
+            w.circ_centers,
+            w.circ_radii,
             verts,
             starts,
-            pp._poly_margin,
-            pp._lo2,
-            pp._hi2,
+            w.poly_margin,
+            w.lo2,
+            w.hi2,
         )
         np.testing.assert_allclose(length, C.segment_lengths(P).sum(axis=1), rtol=1e-12)
         assert np.array_equal(outside, ~np.all(pp.scenario.bounds.contains(P), axis=1))
         assert outside.any() and not outside.all()
-        ref = C.inside_length_2d(P, pp._circ_centers, pp._circ_radii, verts, starts)
+        ref = C.inside_length_2d(P, w.circ_centers, w.circ_radii, verts, starts)
         np.testing.assert_allclose(inside, ref, rtol=1e-12, atol=1e-9)
         P3 = np.concatenate([P, np.zeros((*P.shape[:2], 1))], axis=-1)
-        J = len(pp._circ_radii)
-        d = segment_cylinder_distance(P3, pp._circ_centers, np.full(J, -np.inf), np.full(J, np.inf))
-        assert np.array_equal(circle_hit, np.any(d < pp._circ_radii, axis=(1, 2)))
+        J = len(w.circ_radii)
+        d = segment_cylinder_distance(P3, w.circ_centers, np.full(J, -np.inf), np.full(J, np.inf))
+        assert np.array_equal(circle_hit, np.any(d < w.circ_radii, axis=(1, 2)))
         dp = segment_polygon_distance(P3, verts, starts)
         assert np.array_equal(
-            polygon_hit, np.any((dp <= 0.0) | (dp < pp._poly_margin), axis=(1, 2))
+            polygon_hit, np.any((dp <= 0.0) | (dp < w.poly_margin), axis=(1, 2))
         )
 
 

@@ -363,9 +363,9 @@ def _ppswarm_plans() -> list[ExperimentPlan]:
             # the uniformly seeded baselines end with most UAVs infeasible (see
             # uavplan.planners.prioritized); feasible paths still cost exactly F
             algorithms=(
-                Algorithm("ppswarm", "ppswarm", {"infeasible": "graded"}),
+                Algorithm("ppswarm", "ppswarm", {"constraints": "feasibility-first"}),
                 *(
-                    Algorithm(k, "prioritized", {**v, "infeasible": "graded"})
+                    Algorithm(k, "prioritized", {**v, "constraints": "feasibility-first"})
                     for k, v in table2.items()
                 ),
             ),

@@ -40,14 +40,15 @@ Choices where the paper is silent or vague (all parameters of :class:`Prioritize
   the sum over UAVs of each UAV's best cost after that many iterations of its own optimizer.
 * A UAV whose optimizer found no feasible path keeps its best (infeasible) path, which is still
   reserved so that later UAVs avoid it; the fleet is then infeasible.
-* **Graded infeasibility** (``infeasible="graded"``; the default ``"inf"`` is Sect. 2): with
-  every violation costing infinity, an optimizer started from uniform random paths sees no
-  difference between its particles until one happens to be feasible, and on our scenarios the
-  baselines then end with most UAVs infeasible. Graded, a feasible path still costs exactly F,
-  and an infeasible one ``1e7`` plus how badly it fails (metres inside cylinders and outside
-  the band at the waypoints, 100 per failed continuous check: terrain, band along segments,
-  bounds, separation), the usual feasibility-first rule of constrained evolutionary
-  optimization. Only the optimizer sees it; reported costs stay F (inf when infeasible).
+* **Constraints** (``constraints``, :mod:`uavplan.optimizers.constraints`): the default
+  ``"inf"`` is Sect. 2 (every violation costs infinity). With it, an optimizer started from
+  uniform random paths sees no difference between its particles until one happens to be
+  feasible, and on our scenarios the baselines then end with most UAVs infeasible;
+  ``"feasibility-first"`` (Deb's rule) keeps a feasible path's cost exactly F and gives an
+  infeasible one ``1e7`` plus how badly it fails (the problem's graded violation: metres
+  inside cylinders and outside the band at the waypoints, 100 per failed continuous check:
+  terrain, band along segments, bounds, separation). Only the optimizer sees it; reported
+  costs stay F (inf when infeasible).
 * **Departure delays** (not in the paper; off by default, ``max_delays = 0``): a UAV whose
   low level finds no conflict-free path may take off ``delay_step`` s later, up to
   ``max_delays`` times, each try a fresh low-level run; the delays are reported.
@@ -68,6 +69,7 @@ from numpy.typing import NDArray
 
 from uavplan import optimizers
 from uavplan.optimizers.base import Budget
+from uavplan.optimizers.constraints import RULES, Constrained
 from uavplan.planners.base import (
     FleetPlanner,
     FleetResult,
@@ -76,110 +78,40 @@ from uavplan.planners.base import (
     ProgressCallback,
 )
 from uavplan.problems.encoding import ENCODINGS, CartesianEncoding
-from uavplan.problems.path_problem import PRESETS, Context, PathProblem, Term, _band_heights
+from uavplan.problems.path_problem import PRESETS, SEPARATION_TERM, PathProblem
+from uavplan.problems.validity import greedy_shortcut
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 
 FloatArray = NDArray[np.float64]
 
 ORDERS = ("lh", "sh", "rnd")
-INFEASIBLE = ("inf", "graded")
 SMOOTH_TIMINGS = ("planned", "constant")
-#: ``infeasible="graded"``: an infeasible path's cost starts here (a feasible UAV path's F is
-#: a few thousand), and every failed continuous check adds this many.
-GRADED_BASE = 1e7
-GRADED_FLAG = 100.0
 SEEDINGS = ("rrt-star", "uniform")
 
 
-class SeparatedPathProblem(PathProblem):
-    """A UAV's :class:`PathProblem` plus F5 (Eqs. 11-12) against a reservation table, with every
-    continuous-constraint violation costed as infinity (Sect. 2)."""
-
-    def __init__(
-        self,
-        scenario: Scenario,
-        task: Task,
-        table: ReservationTable | None,
-        cost: str = "ppswarm",
-        weights: dict[str, float] | None = None,
-        infeasible: str = "inf",
-    ) -> None:
-        if cost not in PRESETS:
-            raise PlannerError(f"unknown cost preset {cost!r}")
-        if infeasible not in INFEASIBLE:
-            raise PlannerError(f"infeasible must be one of {INFEASIBLE}, got {infeasible!r}")
-        self.table = table
-        self.infeasible = infeasible
-        terms = (*PRESETS[cost], Term("separation", 1.0, self._t_separation))
-        super().__init__(scenario, task, cost=terms, weights=weights, strict_altitude=True)
-        self.cost_name = f"{cost}+separation"
-
-    def _conflicts(self, ctx: Context) -> NDArray[np.bool_]:
-        got = getattr(ctx, "_conflicts", None)
-        if got is None:
-            if self.table is None or len(self.table) == 0:
-                got = np.zeros(ctx.paths.shape[0], dtype=bool)
-            else:
-                got = self.table.conflicts(ctx.paths, ctx.times)
-            ctx._conflicts = got  # type: ignore[attr-defined]
-        return np.asarray(got)
-
-    def _graded(self, ctx: Context, total: FloatArray) -> FloatArray:
-        """``infeasible="graded"``: a feasible path costs F; an infeasible one costs
-        ``GRADED_BASE`` plus how badly it fails (metres inside cylinders and outside the band at
-        the waypoints, plus ``GRADED_FLAG`` per failed continuous check), so that any feasible
-        path beats any infeasible one and infeasible ones still point towards feasibility."""
-        viol = PathProblem._violations(self, ctx)
-        bad = ~np.isfinite(total)
-        V = np.zeros(ctx.paths.shape[0])
-        for v in viol.values():
-            bad |= v
-            V += GRADED_FLAG * v
-        if self.table is not None and len(self.table):
-            sep = self._conflicts(ctx)
-            bad |= sep
-            V += GRADED_FLAG * sep
-        if len(self._cyl_radii):
-            V += np.sum(np.maximum(0.0, self._cyl_radii - ctx.cyl_dist), axis=(1, 2))
-        band = self.scenario.altitude
-        if band is not None:
-            h = _band_heights(ctx)
-            V += np.sum(np.maximum(0.0, band.min - h) + np.maximum(0.0, h - band.max), axis=1)
-        return np.where(bad, GRADED_BASE + V, total)
-
-    def _t_separation(self, ctx: Context) -> FloatArray:
-        return np.where(self._conflicts(ctx), np.inf, 0.0)
-
-    def _violations(self, ctx: Context) -> dict[str, NDArray[np.bool_]]:
-        out = super()._violations(ctx)
-        out["separation"] = self._conflicts(ctx)
-        return out
-
-    def cost(self, paths: FloatArray) -> FloatArray:
-        """Total cost, inf where any check fails: the cost terms first, then the continuous
-        world checks only for paths still finite, then separation only for those left (the
-        same result as ``evaluate``'s cost where feasible, inf elsewhere; tests compare)."""
-        p = self._check(paths)
-        ctx = Context(self, p)
-        total = np.zeros(p.shape[0])
-        for t in self.terms:
-            if t.name != "separation":
-                total = total + t.weight * np.asarray(t.fn(ctx), dtype=np.float64)
-        if self.infeasible == "graded":
-            return self._graded(ctx, total)
-        idx = np.flatnonzero(np.isfinite(total))
-        if idx.size:
-            sub = Context(self, np.ascontiguousarray(p[idx]))
-            bad = np.zeros(idx.size, dtype=bool)
-            for v in PathProblem._violations(self, sub).values():
-                bad |= v
-            total[idx[bad]] = np.inf
-            idx = idx[~bad]
-        if idx.size and self.table is not None and len(self.table):
-            sub = Context(self, np.ascontiguousarray(p[idx]))
-            total[idx[self._conflicts(sub)]] = np.inf
-        return total
+def fleet_problem(
+    scenario: Scenario,
+    task: Task,
+    table: ReservationTable | None,
+    cost: str = "ppswarm",
+    weights: dict[str, float] | None = None,
+) -> PathProblem:
+    """A UAV's problem in the fleet: the cost preset plus F5 (Eqs. 11-12, the ``separation``
+    term) against the reservation table of the UAVs planned before it, with the continuous
+    checks of the band along whole segments (``strict_altitude``)."""
+    if cost not in PRESETS:
+        raise PlannerError(f"unknown cost preset {cost!r}")
+    return PathProblem(
+        scenario,
+        task,
+        cost=(*PRESETS[cost], SEPARATION_TERM),
+        weights=weights,
+        strict_altitude=True,
+        reservations=table,
+        lookup="bilinear",
+        name=f"{cost}+separation",
+    )
 
 
 @dataclass(frozen=True)
@@ -202,7 +134,7 @@ class PrioritizedConfig:
     cost: str = "ppswarm"
     weights: dict[str, float] | None = None
     dt: float = 1.0
-    infeasible: str = "inf"
+    constraints: str = "inf"
     max_delays: int = 0
     delay_step: float = 5.0
     smooth: bool = True
@@ -221,8 +153,10 @@ class PrioritizedConfig:
             raise PlannerError(f"rho and alpha must be in [0, 1], got {self.rho}, {self.alpha}")
         if not self.dt > 0:
             raise PlannerError(f"dt must be positive, got {self.dt}")
-        if self.infeasible not in INFEASIBLE:
-            raise PlannerError(f"infeasible must be one of {INFEASIBLE}, got {self.infeasible!r}")
+        if self.constraints not in RULES:
+            raise PlannerError(f"constraints must be one of {RULES}, got {self.constraints!r}")
+        if self.cost not in PRESETS:
+            raise PlannerError(f"unknown cost preset {self.cost!r}; choose from {sorted(PRESETS)}")
         if not (self.separation_margin >= 0.0 and np.isfinite(self.separation_margin)):
             raise PlannerError(f"separation_margin must be >= 0 m, got {self.separation_margin!r}")
         if self.smooth_timing not in SMOOTH_TIMINGS:
@@ -455,7 +389,12 @@ class PrioritizedPlanner(FleetPlanner):
             goal = np.asarray(task.goal, dtype=np.float64)
             path: FloatArray | None = None
             if cfg.seeding == "rrt-star":
-                from uavplan.planners.rrt_star import RRTStarConfig, rrt_star, shortcut_path
+                from uavplan.planners.rrt_star import (
+                    RRTStarConfig,
+                    rrt_star,
+                    shortcut_path,
+                    validity_problem,
+                )
 
                 rc = RRTStarConfig(**cfg.rrt_params)
                 res = rrt_star(
@@ -463,8 +402,7 @@ class PrioritizedPlanner(FleetPlanner):
                 )
                 path = res.path
                 if path is not None and path.shape[0] > n_free + 2:
-                    problem = PathProblem(scenario, task, strict_altitude=True)
-                    path = shortcut_path(problem, path)
+                    path = shortcut_path(validity_problem(scenario, task), path)
             found.append(path is not None)
             if path is None:
                 path = np.stack([start, goal])
@@ -490,9 +428,10 @@ class PrioritizedPlanner(FleetPlanner):
         rng: np.random.Generator,
     ) -> tuple[PlanResult, FloatArray]:
         cfg = self.config
-        problem = SeparatedPathProblem(scenario, task, table, cfg.cost, cfg.weights, cfg.infeasible)
+        problem = fleet_problem(scenario, task, table, cfg.cost, cfg.weights)
         enc_name = str(getattr(self.optimizer_cls, "encoding", "cartesian"))
         enc: Any = ENCODINGS[enc_name](problem, n_free)
+        objective = Constrained(enc, cfg.constraints)
         N_pop = self.opt_config.pop_size
         lo, hi = enc.lower, enc.upper
         rand = rng.uniform(lo, hi, size=(N_pop, enc.dim))  # randpath(T_m)
@@ -508,12 +447,12 @@ class PrioritizedPlanner(FleetPlanner):
             init = np.array(x_last, copy=True)
             n_rand = int(np.floor(cfg.rho * N_pop))
             init[:n_rand] = rand[:n_rand]
-        opt = self.optimizer_cls(enc, self.opt_config, seed=rng, init=init)
+        opt = self.optimizer_cls(objective, self.opt_config, seed=rng, init=init)
         t0 = time.perf_counter()
         X_last = init
         for _ in range(n_iter):
             X = opt.ask()
-            f = enc.evaluate(X)
+            f = objective.evaluate(X)
             opt.tell(X, f)
             X_last = X
         assert opt.best_x is not None
@@ -551,29 +490,6 @@ def _pose_times(waypoints: FloatArray, times: FloatArray, variant: str) -> Float
     return np.concatenate([t[:1], 0.5 * (t[:-1] + t[1:]), t[-1:]])
 
 
-def _shortcut(
-    problem: PathProblem, table: ReservationTable, waypoints: FloatArray, times: FloatArray
-) -> tuple[FloatArray, FloatArray]:
-    """Greedy line-of-sight shortcut of a timed polyline: from each kept waypoint, jump to the
-    farthest later one whose straight segment, flown between the two planned times (so never
-    faster than along the polyline), is feasible in the world and clear of ``table``.
-    Returns the kept waypoints and their planned times."""
-    wp = np.asarray(waypoints, dtype=np.float64)
-    t = np.asarray(times, dtype=np.float64)
-    n = wp.shape[0]
-    keep, a = [0], 0
-    while a < n - 1:
-        js = np.arange(n - 1, a, -1)  # farthest first
-        segs = np.stack([np.broadcast_to(wp[a], (js.size, wp.shape[1])), wp[js]], axis=1)
-        tt = np.column_stack([np.full(js.size, t[a]), t[js]])
-        ok = problem.evaluate(segs).feasible
-        if len(table):
-            ok &= ~table.conflicts(segs, tt)
-        a = int(js[int(np.argmax(ok))]) if ok.any() else a + 1
-        keep.append(a)
-    return wp[keep], t[keep]
-
-
 def smooth_fleet(
     scenario: Scenario,
     results: tuple[PlanResult, ...],
@@ -587,10 +503,10 @@ def smooth_fleet(
     Two variants are smoothed for each UAV: the paper's curves through every waypoint
     (headings bisecting the turns) and the corner-cutting curves between segment midpoints
     (:func:`midpoint_poses`); with "planned" timing both also on the polyline shortcut by
-    line of sight (:func:`_shortcut`: fewer, gentler turns where the world and the UAVs
-    before it allow). The one with the fewest kinds of violation is kept, the shorter one on
-    a tie (through-the-waypoint curves loop around sharp turns); the report counts the
-    variants kept.
+    line of sight (:func:`~uavplan.problems.validity.greedy_shortcut`: fewer, gentler turns
+    where the world and the UAVs before it allow). The one with the fewest kinds of violation
+    is kept, the shorter one on a tie (through-the-waypoint curves loop around sharp turns);
+    the report counts the variants kept.
 
     ``cfg.smooth_timing``: "planned" (default) keeps to the schedule the separation was planned
     for: the UAV reaches each pose at its planned time, or, where the curve is longer than
@@ -619,13 +535,14 @@ def smooth_fleet(
         r = by_id[uid]
         task = next(t for t in scenario.tasks if t.id == uid)
         task = replace(task, start_time=float(r.times[0]))  # a delayed take-off keeps its delay
-        problem = PathProblem(scenario, task, strict_altitude=True)
+        problem = PathProblem(scenario, task, strict_altitude=True, reservations=table)
         tried: list[tuple[int, float, list[str], FloatArray, FloatArray, str, float]] = []
         bases = [(np.asarray(r.waypoints, dtype=np.float64), np.asarray(r.times), "")]
         if timing == "planned":
-            short = _shortcut(problem, table, bases[0][0], bases[0][1])
-            if short[0].shape[0] < bases[0][0].shape[0]:
-                bases.append((short[0], short[1], "shortcut-"))
+            short, short_t, _ = greedy_shortcut(problem.validator, bases[0][0], bases[0][1])
+            if short.shape[0] < bases[0][0].shape[0]:
+                assert short_t is not None
+                bases.append((short, short_t, "shortcut-"))
         for (wps, wts, tag), kind in itertools.product(bases, ("through", "corners")):
             variant = tag + kind
             try:
@@ -637,7 +554,6 @@ def smooth_fleet(
             except ValueError:
                 continue
             pts = np.asarray(sm.points, dtype=np.float64)
-            ev = problem.evaluate(pts[None])
             late = 0.0
             if timing == "planned":
                 tp = _pose_times(wps, wts, kind)
@@ -651,9 +567,8 @@ def smooth_fleet(
                 times = schedule(sm, tk)
             else:
                 times = problem.times(pts[None])[0]
+            ev = problem.evaluate(pts[None], times[None])
             viol = [k for k, v in ev.violations.items() if v[0]]
-            if len(table) and bool(table.conflicts(pts[None], times[None])[0]):
-                viol.append("separation")
             tried.append((len(viol), sm.length, viol, pts, times, variant, late))
         if not tried:
             failed.append(uid)

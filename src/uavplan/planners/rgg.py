@@ -57,6 +57,7 @@ from scipy.spatial import cKDTree
 from uavplan.optimizers.base import Budget
 from uavplan.planners.base import Planner, PlannerError, PlanResult, ProgressCallback
 from uavplan.problems.path_problem import LOOKUP, PathProblem
+from uavplan.problems.validity import MotionValidator
 from uavplan.world.scenario import Scenario, Task
 
 FloatArray = NDArray[np.float64]
@@ -66,8 +67,6 @@ IntArray = NDArray[np.int64]
 DEFAULT_GAMMA = 1.5
 #: Default number of samples of one graph.
 DEFAULT_SAMPLES = 100
-#: Segments checked per batch (bounds the memory of one kernel call).
-EDGE_CHUNK = 65536
 
 
 def prm_star_gamma(dim: int) -> float:
@@ -90,32 +89,19 @@ def feasibility_problem(
     task: Task | str | int | None = None,
     strict_altitude: bool = False,
     lookup: str | None = None,
-) -> PathProblem:
-    """A :class:`PathProblem` with no cost terms: ``evaluate`` only decides feasibility.
+) -> MotionValidator:
+    """The validator of the graph's nodes and edges.
 
     ``lookup``: how terrain heights are read for the altitude band at the nodes (default: as
     the scenario's cost preset reads them, e.g. ``nearest`` for ``spso``), so that a node the
     graph accepts is feasible for the planner's problem too.
     """
-    feas = PathProblem(scenario, task, cost=(), strict_altitude=strict_altitude)
-    feas.lookup = lookup if lookup is not None else LOOKUP.get(scenario.cost, "bilinear")
-    return feas
-
-
-def segments_feasible(feas: PathProblem, a: FloatArray, b: FloatArray) -> NDArray[np.bool_]:
-    """Feasibility of the segments ``a[i] -> b[i]`` ((E, d) each), in batches, (E,) bool."""
-    a = np.asarray(a, dtype=np.float64)
-    b = np.asarray(b, dtype=np.float64)
-    out = np.zeros(len(a), dtype=bool)
-    for s in range(0, len(a), EDGE_CHUNK):
-        seg = np.stack([a[s : s + EDGE_CHUNK], b[s : s + EDGE_CHUNK]], axis=1)
-        out[s : s + EDGE_CHUNK] = feas.evaluate(seg).feasible
-    return out
-
-
-def points_feasible(feas: PathProblem, points: FloatArray) -> NDArray[np.bool_]:
-    """Feasibility of single points (as zero-length segments), (P,) bool."""
-    return segments_feasible(feas, points, points)
+    return MotionValidator(
+        scenario,
+        task,
+        strict_altitude=strict_altitude,
+        lookup=lookup if lookup is not None else LOOKUP.get(scenario.cost, "bilinear"),
+    )
 
 
 @dataclass(frozen=True)
@@ -154,7 +140,7 @@ class SamplingRegion:
 
 
 def sample_free(
-    feas: PathProblem,
+    feas: MotionValidator,
     n: int,
     rng: np.random.Generator,
     region: SamplingRegion | None = None,
@@ -174,7 +160,7 @@ def sample_free(
             break
         m = max(32, math.ceil(1.2 * (n - have) / max(rate, 0.02)))
         p = region.draw(feas.scenario, m, rng, feas.lookup)
-        ok = points_feasible(feas, p)
+        ok = feas.is_valid(p)
         rate = max(float(ok.mean()), 1e-3)
         found.append(p[ok])
         have += int(ok.sum())
@@ -208,15 +194,17 @@ class RGG:
         self.feas = feasibility_problem(scenario, task, strict_altitude, lookup)
         self.scenario = scenario
         self.task = self.feas.task
+        start = np.asarray(self.task.start, dtype=np.float64)
+        goal = np.asarray(self.task.goal, dtype=np.float64)
         self.gamma = float(gamma)
         self.region = SamplingRegion.of(scenario)
         self.dim = scenario.dim
-        self.nodes: FloatArray = np.stack([self.feas.start, self.feas.goal])
+        self.nodes: FloatArray = np.stack([start, goal])
         self.edges: IntArray = np.zeros((0, 2), dtype=np.int64)
         self.lengths: FloatArray = np.zeros(0)
         self.radius = 0.0
         self.edge_checks = 1
-        if bool(segments_feasible(self.feas, self.nodes[:1], self.nodes[1:])[0]):
+        if bool(self.feas.segments_valid(self.nodes[:1], self.nodes[1:])[0]):
             self._add_edges(np.array([[0, 1]], dtype=np.int64))
 
     @property
@@ -243,7 +231,7 @@ class RGG:
         pairs = np.sort(pairs, axis=1)
         pairs = pairs[(pairs[:, 1] >= n_old) & ~((pairs[:, 0] == 0) & (pairs[:, 1] == 1))]
         if len(pairs):
-            ok = segments_feasible(self.feas, self.nodes[pairs[:, 0]], self.nodes[pairs[:, 1]])
+            ok = self.feas.segments_valid(self.nodes[pairs[:, 0]], self.nodes[pairs[:, 1]])
             self.edge_checks += len(pairs)
             self._add_edges(pairs[ok])
         return len(new)

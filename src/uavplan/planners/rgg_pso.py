@@ -91,10 +91,10 @@ from uavplan.planners.rgg import (
     RGGPlanner,
     feasibility_problem,
     rgg_candidates,
-    segments_feasible,
 )
 from uavplan.problems.encoding import CartesianEncoding
 from uavplan.problems.path_problem import PathProblem
+from uavplan.problems.validity import MotionValidator
 from uavplan.world.scenario import Scenario, Task
 
 FloatArray = NDArray[np.float64]
@@ -252,7 +252,7 @@ class VariableLengthEncoding(CartesianEncoding):
 
 # ------------------------------------------------------------------------------ candidates
 def shortcut(
-    path: FloatArray, max_interior: int, feas: PathProblem
+    path: FloatArray, max_interior: int, feas: MotionValidator
 ) -> tuple[FloatArray | None, int]:
     """The shortest sub-sequence of ``path``'s nodes (first and last kept) whose segments are
     all feasible and which has at most ``max_interior`` interior nodes (exact DP over the
@@ -260,7 +260,7 @@ def shortcut(
     p = np.asarray(path, dtype=np.float64)
     K = len(p)
     i, j = np.triu_indices(K, k=1)
-    ok = segments_feasible(feas, p[i], p[j])
+    ok = feas.segments_valid(p[i], p[j])
     W = np.full((K, K), np.inf)
     W[i[ok], j[ok]] = np.linalg.norm(p[j[ok]] - p[i[ok]], axis=1)
     # f[c, v]: shortest chain 0 -> v visiting c nodes after 0 (v included)
@@ -283,7 +283,7 @@ def shortcut(
     return np.asarray(p[out[::-1]]), len(i)
 
 
-def fit_interior(path: FloatArray, n: int, feas: PathProblem) -> tuple[FloatArray, int]:
+def fit_interior(path: FloatArray, n: int, feas: MotionValidator) -> tuple[FloatArray, int]:
     """The interior nodes (k <= n, d) that Alg. 1 turns into a particle for candidate ``path``
     (start and goal included); see the module docstring. Returns them and the segment checks."""
     p = np.asarray(path, dtype=np.float64)

@@ -121,6 +121,7 @@ from uavplan.planners.base import (
     register_planner,
 )
 from uavplan.problems.path_problem import LOOKUP, PathProblem
+from uavplan.problems.validity import MotionValidator, greedy_shortcut
 from uavplan.world.scenario import Scenario, Task
 
 FloatArray = NDArray[np.float64]
@@ -133,8 +134,6 @@ SAMPLE_BLOCK = 256
 MAX_CELLS = 1 << 21
 #: A rewire must shorten the cost-to-come by more than this (metres): no churn on round-off.
 REWIRE_TOL = 1e-9
-#: Segments per batched check in :func:`shortcut_path`.
-EDGE_CHUNK = 65536
 
 
 # ------------------------------------------------------------------------------ configuration
@@ -567,45 +566,18 @@ def serial_numba() -> Iterator[None]:
         numba.set_num_threads(prev)
 
 
-def validity_problem(scenario: Scenario, task: Task | str | int | None = None) -> PathProblem:
-    """The segment checker of the tree: strict-altitude feasibility, no cost terms, node heights
-    read as the scenario's cost preset reads them (see the module docstring)."""
-    problem = PathProblem(scenario, task, cost=(), strict_altitude=True)
-    problem.lookup = LOOKUP.get(scenario.cost, "bilinear")
-    return problem
+def validity_problem(scenario: Scenario, task: Task | str | int | None = None) -> MotionValidator:
+    """The segment checker of the tree: strict-altitude validity, node heights read as the
+    scenario's cost preset reads them (see the module docstring)."""
+    return MotionValidator(
+        scenario, task, strict_altitude=True, lookup=LOOKUP.get(scenario.cost, "bilinear")
+    )
 
 
-def _segments_ok(problem: PathProblem, a: FloatArray, b: FloatArray) -> BoolArray:
-    out = np.zeros(len(a), dtype=bool)
-    for s in range(0, len(a), EDGE_CHUNK):
-        seg = np.stack([a[s : s + EDGE_CHUNK], b[s : s + EDGE_CHUNK]], axis=1)
-        out[s : s + EDGE_CHUNK] = problem.evaluate(seg).feasible
-    return out
-
-
-def _shortcut(problem: PathProblem, path: FloatArray) -> tuple[FloatArray, int]:
-    p = np.asarray(path, dtype=np.float64)
-    n = len(p)
-    if n <= 2:
-        return p.copy(), 0
-    i, j = np.triu_indices(n, k=2)
-    ok = np.zeros((n, n), dtype=bool)
-    ok[i, j] = _segments_ok(problem, p[i], p[j])
-    keep = [0]
-    cur = 0
-    while cur < n - 1:
-        later = np.flatnonzero(ok[cur, cur + 2 :])
-        cur = cur + 2 + int(later[-1]) if len(later) else cur + 1
-        keep.append(cur)
-    return np.asarray(p[keep]), len(i)
-
-
-def shortcut_path(problem: PathProblem, path: FloatArray) -> FloatArray:
-    """Greedy shortcutting: from each kept node jump to the farthest later node whose straight
-    segment is feasible for ``problem`` (all node pairs checked in one batched call); the next
-    node is kept when no later one is reachable. Never longer than ``path``; start and goal
-    kept. Not in the paper."""
-    return _shortcut(problem, path)[0]
+def shortcut_path(validator: MotionValidator, path: FloatArray) -> FloatArray:
+    """Greedy line-of-sight shortcutting (:func:`uavplan.problems.validity.greedy_shortcut`):
+    never longer than ``path``; start and goal kept. Not in the paper."""
+    return greedy_shortcut(validator, path)[0]
 
 
 # ------------------------------------------------------------------------------ the tree
@@ -624,7 +596,7 @@ class RRTStarTree:
         scenario, task: the world and the task (start = root, goal).
         config: :class:`RRTStarConfig`.
         rng: the only source of randomness.
-        problem: the segment checker (default :func:`validity_problem`).
+        validator: the segment checker (default :func:`validity_problem`).
     """
 
     def __init__(
@@ -633,13 +605,13 @@ class RRTStarTree:
         task: Task | str | int | None,
         config: RRTStarConfig,
         rng: np.random.Generator,
-        problem: PathProblem | None = None,
+        validator: MotionValidator | None = None,
     ) -> None:
         self.scenario = scenario
         self.task = task if isinstance(task, Task) else scenario.task(task)
         self.config = config
         self.rng = rng
-        self.problem = problem if problem is not None else validity_problem(scenario, self.task)
+        self.validator = validator or validity_problem(scenario, self.task)
         self.dim = scenario.dim
         self.start = np.asarray(self.task.start, dtype=np.float64)
         self.goal = np.asarray(self.task.goal, dtype=np.float64)
@@ -760,7 +732,7 @@ class RRTStarTree:
         if want_goal:
             edges[k, 0] = x_new[:d]
             edges[k, 1] = self.goal
-        ok = self.problem.evaluate(edges).feasible
+        ok = self.validator.paths_valid(edges)
         self.edge_checks += len(edges)
         if not ok[pos]:
             return False
@@ -850,7 +822,7 @@ def rrt_star(
     checks = tree.edge_checks
     if path is not None and config.shortcut:
         with serial_numba():
-            path, k = _shortcut(tree.problem, path)
+            path, _, k = greedy_shortcut(tree.validator, path)
         checks += k
     return RRTStarResult(
         path=path,
@@ -954,7 +926,7 @@ class RRTStarPlanner(Planner):
                         last = idx
                         path = tree.path_of(idx)
                         if cfg.shortcut:
-                            path, k = _shortcut(tree.problem, path)
+                            path, _, k = greedy_shortcut(tree.validator, path)
                             shortcut_checks += k
                         ev = problem.evaluate(path[None])
                         path_evaluations += 1

@@ -90,6 +90,11 @@ class CartesianEncoding:
         self.feasible_history.append(min(prev, best))
         return ev.cost
 
+    def evaluate_cv(self, X: FloatArray, exact: bool = True) -> tuple[FloatArray, FloatArray]:
+        """Cost and constraint violation apart (see :meth:`PathProblem.evaluate_cv`)."""
+        self.evaluations += len(X)
+        return self.problem.evaluate_cv(self.decode(X), exact)
+
     def evaluate_full(self, X: FloatArray) -> Evaluation:
         return self.problem.evaluate(self.decode(X))
 
@@ -206,6 +211,10 @@ class SphericalEncoding:
     def evaluate(self, X: FloatArray) -> FloatArray:
         self.evaluations += len(X)
         return self.cart.evaluate(self.to_cartesian_genes(X))
+
+    def evaluate_cv(self, X: FloatArray, exact: bool = True) -> tuple[FloatArray, FloatArray]:
+        self.evaluations += len(X)
+        return self.cart.evaluate_cv(self.to_cartesian_genes(X), exact)
 
     def evaluate_full(self, X: FloatArray) -> Evaluation:
         return self.problem.evaluate(self.decode(X))

@@ -13,26 +13,25 @@ are named presets:
 * ``length2d``: RGG-PSO+'s path length with the penalty L (1 + 100 V) for the fraction V of the
   path inside obstacles.
 
-Feasibility is decided separately from the cost, on continuous segments: inside the bounds; clear
-of cylinders, circles, polygons and revealed uncertain areas (exact); above the terrain along
-every segment (exact for the bilinear DEM); the altitude band at every waypoint (PPSwarm Eq. 7
-and SPSO check it there; ``strict_altitude=True`` checks it along segments too); clear of moving
-obstacles over continuous time.
+Feasibility is decided apart from the cost, on continuous segments, by the problem's
+:class:`~uavplan.problems.validity.MotionValidator` (bounds, obstacles, terrain, altitude band,
+moving obstacles, other UAVs): see that module. :meth:`PathProblem.evaluate_cv` returns the cost
+and the constraint violation apart, for the constraint rules of
+:mod:`uavplan.optimizers.constraints`.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import cached_property
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.problems import costs as C
-from uavplan.world import geometry as G
-from uavplan.world.geometry import scene2d_batch
+from uavplan.problems.validity import Batch, MotionValidator
+from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 
 FloatArray = NDArray[np.float64]
@@ -42,12 +41,15 @@ BoolArray = NDArray[np.bool_]
 @dataclass(frozen=True)
 class Evaluation:
     """Costs of a batch of paths: ``cost`` (pop,), ``terms`` name -> (pop,) weighted-before-sum
-    raw values, ``feasible`` (pop,) bool, ``violations`` name -> (pop,) bool."""
+    raw values, ``feasible`` (pop,) bool, ``violations`` name -> (pop,) bool, ``cv`` (pop,) the
+    graded constraint violation (0 where feasible with a finite cost; see
+    :meth:`PathProblem.evaluate_cv`)."""
 
     cost: FloatArray
     terms: dict[str, FloatArray]
     feasible: BoolArray
     violations: dict[str, BoolArray] = field(default_factory=dict)
+    cv: FloatArray = field(default_factory=lambda: np.zeros(0))
 
     def row(self, i: int) -> dict[str, Any]:
         return {
@@ -57,148 +59,82 @@ class Evaluation:
         }
 
 
-class Context:
-    """Lazily computed quantities shared by the terms of one evaluation."""
-
-    def __init__(self, problem: PathProblem, paths: FloatArray) -> None:
-        self.problem = problem
-        self.scenario = problem.scenario
-        self.paths = paths
-
-    @cached_property
-    def seg_len(self) -> FloatArray:
-        return C.segment_lengths(self.paths)
-
-    @cached_property
-    def length(self) -> FloatArray:
-        if self.problem.dim == 2:  # the fused 2-D pass measures it anyway
-            return self.scene2d[0]
-        return np.asarray(self.seg_len.sum(axis=1))
-
-    @cached_property
-    def cyl_dist(self) -> FloatArray:
-        p = self.problem
-        return G.cylinder_distances(self.paths, p._cyl_centers, p._cyl_lo, p._cyl_hi)
-
-    @cached_property
-    def ground(self) -> FloatArray:
-        sc = self.scenario
-        if sc.terrain is None:
-            return np.zeros(self.paths.shape[:2])
-        return sc.terrain.lookup(self.paths[..., 0], self.paths[..., 1], self.problem.lookup)
-
-    @cached_property
-    def times(self) -> FloatArray:
-        sc = self.scenario
-        return C.path_times(self.paths, sc.uav.speed, self.problem.task.start_time)
-
-    @cached_property
-    def moving_dist(self) -> FloatArray:
-        obs = self.scenario.moving_obstacles
-        if not obs:
-            return np.zeros((self.paths.shape[0], self.paths.shape[1] - 1, 0))
-        return np.stack([o.min_distance(self.paths, self.times) for o in obs], axis=-1)
-
-    @cached_property
-    def scene2d(self) -> tuple[FloatArray, FloatArray, BoolArray, BoolArray, BoolArray]:
-        """xy length, length inside circles and polygons, circle hit, polygon hit, node out of
-        the box: (pop,) each, from one fused pass (:func:`uavplan.world.geometry.scene2d_batch`).
-        """
-        p = self.problem
-        verts, starts = p._polys
-        length, inside, circle_hit, polygon_hit, outside = scene2d_batch(
-            self.paths,
-            p._circ_centers,
-            p._circ_radii,
-            verts,
-            starts,
-            p._poly_margin,
-            p._lo2,
-            p._hi2,
-        )
-        return length, inside, circle_hit, polygon_hit, outside
-
-    @cached_property
-    def inside_2d(self) -> FloatArray:
-        return self.scene2d[1]
-
-
-TermFn = Callable[[Context], FloatArray]
+TermFn = Callable[[Batch], FloatArray]
 
 
 @dataclass(frozen=True)
 class Term:
-    """A named, weighted cost term."""
+    """A named, weighted cost term.
+
+    ``check``: the name of a :class:`~uavplan.problems.validity.MotionValidator` check that
+    this term mirrors (it is infinite exactly when that check fails, 0 otherwise, as PPSwarm's
+    F5 and the separation check): :meth:`PathProblem.evaluate_cv` leaves such a term out of the
+    cost, since the check (the constraint) decides it.
+    """
 
     name: str
     weight: float
     fn: TermFn
+    check: str | None = None
 
 
 # ---------------------------------------------------------------------------- term functions
-def _t_length(ctx: Context) -> FloatArray:
+def _t_length(ctx: Batch) -> FloatArray:
     return ctx.length
 
 
-def _t_threat(ctx: Context) -> FloatArray:
-    p = ctx.problem
-    out = C.threat_cost(ctx.cyl_dist, p._cyl_radii, ctx.scenario.uav.s1)
+def _t_threat(ctx: Batch) -> FloatArray:
+    out = C.threat_cost(ctx.cyl_dist, ctx.world.cyl_radii, ctx.scenario.uav.s1)
     if ctx.scenario.moving_obstacles:
         radii = np.array([o.radius for o in ctx.scenario.moving_obstacles])
         out = out + C.moving_threat_cost(ctx.moving_dist, radii, ctx.scenario.uav.s1)
     return out
 
 
-def _t_threat_spso(ctx: Context) -> FloatArray:
+def _t_threat_spso(ctx: Batch) -> FloatArray:
     # SPSO adds drone_size itself: use the bare radii; each cylinder's margin is the drone size.
-    p = ctx.problem
-    return C.threat_cost_spso(ctx.cyl_dist, p._cyl_radii - p._cyl_margin, p._cyl_margin)
+    w = ctx.world
+    return C.threat_cost_spso(ctx.cyl_dist, w.cyl_radii - w.cyl_margin, w.cyl_margin)
 
 
-def _band_heights(ctx: Context) -> FloatArray:
-    band = ctx.scenario.altitude
-    z = ctx.paths[..., 2]
-    return z - ctx.ground if band is not None and band.reference == "ground" else z
-
-
-def _t_altitude(ctx: Context) -> FloatArray:
+def _t_altitude(ctx: Batch) -> FloatArray:
     band = ctx.scenario.altitude
     if band is None:
         return np.zeros(ctx.paths.shape[0])
-    return C.altitude_cost(_band_heights(ctx), band.min, band.max)
+    return C.altitude_cost(ctx.band_heights, band.min, band.max)
 
 
-def _t_altitude_spso(ctx: Context) -> FloatArray:
+def _t_altitude_spso(ctx: Batch) -> FloatArray:
     band = ctx.scenario.altitude
     lo, hi = (band.min, band.max) if band is not None else (0.0, 0.0)
     z_rel = (ctx.paths[..., 2] - ctx.ground)[:, 1:-1]  # free nodes only, as MyCost.m
     return C.altitude_cost_spso(z_rel, lo, hi)
 
 
-def _t_smooth(ctx: Context) -> FloatArray:
+def _t_smooth(ctx: Batch) -> FloatArray:
     return C.smoothness_cost(ctx.paths, 1.0, 1.0)
 
 
-def _t_smooth_spso(ctx: Context) -> FloatArray:
+def _t_smooth_spso(ctx: Batch) -> FloatArray:
     return C.smoothness_cost_spso(ctx.paths)
 
 
-def _t_hrmaga_altitude(ctx: Context) -> FloatArray:
+def _t_hrmaga_altitude(ctx: Batch) -> FloatArray:
     terrain = ctx.scenario.terrain
     if terrain is None:
         return np.zeros(ctx.paths.shape[0])
     return C.hrmaga_altitude_cost(terrain.mean_height(ctx.paths))
 
 
-def _t_danger(ctx: Context) -> FloatArray:
+def _t_danger(ctx: Batch) -> FloatArray:
     areas = ctx.scenario.danger_areas
     centers = np.array([a.center for a in areas]).reshape(-1, 2)
     radii = np.array([a.radius for a in areas])
     return C.danger_length_cost(ctx.paths, centers, radii)
 
 
-def _t_length2d(ctx: Context) -> FloatArray:
-    return C.penalized_length_cost(ctx.length, ctx.inside_2d, 100.0)
+def _t_length2d(ctx: Batch) -> FloatArray:
+    return C.penalized_length_cost(ctx.length, ctx.scene2d[1], 100.0)
 
 
 PRESETS: dict[str, tuple[Term, ...]] = {
@@ -230,6 +166,15 @@ def cost_presets() -> list[str]:
     return sorted(PRESETS)
 
 
+def _t_separation(ctx: Batch) -> FloatArray:
+    return np.where(ctx.conflicts, np.inf, 0.0)
+
+
+#: PPSwarm's F5 (Eqs. 11-12): infinite when the path comes closer than S2 to a UAV of the
+#: reservation table at some instant (the ``separation`` check), else 0.
+SEPARATION_TERM = Term("separation", 1.0, _t_separation, check="separation")
+
+
 class PathProblem:
     """Costs and feasibility of paths for one task of a scenario.
 
@@ -239,6 +184,14 @@ class PathProblem:
         cost: a preset name (default: the scenario's), or a sequence of :class:`Term`.
         weights: override preset weights by term name.
         strict_altitude: check the altitude band along segments, not only at waypoints.
+        reservations: other UAVs' timed trajectories to keep clear of (the ``separation``
+            check; see :class:`~uavplan.problems.validity.MotionValidator`).
+        lookup: how terrain heights under waypoints are read (default: as the preset reads
+            them, :data:`LOOKUP`; ``"bilinear"`` for custom terms).
+        name: the cost model's name (default: the preset's, ``"custom"`` for terms).
+
+    Feasibility is the :attr:`validator`'s verdict; the cost terms and the checks of one
+    evaluation share one :class:`~uavplan.problems.validity.Batch`.
     """
 
     def __init__(
@@ -248,111 +201,125 @@ class PathProblem:
         cost: str | tuple[Term, ...] | None = None,
         weights: dict[str, float] | None = None,
         strict_altitude: bool = False,
+        reservations: ReservationTable | None = None,
+        lookup: str | None = None,
+        name: str | None = None,
     ) -> None:
         self.scenario = scenario
         self.task = task if isinstance(task, Task) else scenario.task(task)
-        name = cost if cost is not None else scenario.cost
-        if isinstance(name, str):
-            if name not in PRESETS:
-                raise ValueError(f"unknown cost preset {name!r}; choose from {cost_presets()}")
-            self.cost_name = name
-            terms = PRESETS[name]
+        preset = cost if cost is not None else scenario.cost
+        if isinstance(preset, str):
+            if preset not in PRESETS:
+                raise ValueError(f"unknown cost preset {preset!r}; choose from {cost_presets()}")
+            self.cost_name = preset
+            terms = PRESETS[preset]
         else:
             self.cost_name = "custom"
-            terms = tuple(name)
+            terms = tuple(preset)
         if weights:
             unknown = set(weights) - {t.name for t in terms}
             if unknown:
                 raise ValueError(f"unknown cost term(s) {sorted(unknown)} for {self.cost_name}")
-            terms = tuple(Term(t.name, weights.get(t.name, t.weight), t.fn) for t in terms)
+            terms = tuple(
+                Term(t.name, weights.get(t.name, t.weight), t.fn, t.check) for t in terms
+            )
         self.terms = terms
-        self.lookup = LOOKUP.get(self.cost_name, "bilinear")
-        self.strict_altitude = strict_altitude
+        self.lookup = lookup if lookup is not None else LOOKUP.get(self.cost_name, "bilinear")
+        if name is not None:
+            self.cost_name = name
+        self.validator = MotionValidator(
+            scenario,
+            self.task,
+            strict_altitude=strict_altitude,
+            lookup=self.lookup,
+            reservations=reservations,
+        )
         self.dim = scenario.dim
         self.start = np.asarray(self.task.start, dtype=np.float64)
         self.goal = np.asarray(self.task.goal, dtype=np.float64)
-        cyl = scenario.cylinders
-        self._cyl_centers = np.array([c.center for c in cyl], dtype=np.float64).reshape(-1, 2)
-        self._cyl_radii = np.array([c.effective_radius for c in cyl], dtype=np.float64)
-        self._cyl_margin = np.array([c.margin for c in cyl], dtype=np.float64)
-        self._cyl_lo = np.array([c.z_min - c.margin for c in cyl], dtype=np.float64)
-        self._cyl_hi = np.array([c.z_max + c.margin for c in cyl], dtype=np.float64)
-        circ = scenario.circles
-        self._circ_centers = np.array([c.center for c in circ], dtype=np.float64).reshape(-1, 2)
-        self._circ_radii = np.array([c.effective_radius for c in circ], dtype=np.float64)
-        self._polys = scenario.packed_polygons()
-        self._poly_margin = np.array([p.margin for p in scenario.no_fly_polygons], dtype=np.float64)
-        self._lo2 = np.ascontiguousarray(scenario.bounds.lo[:2], dtype=np.float64)
-        self._hi2 = np.ascontiguousarray(scenario.bounds.hi[:2], dtype=np.float64)
+
+    @property
+    def strict_altitude(self) -> bool:
+        return self.validator.strict_altitude
 
     # ------------------------------------------------------------------ evaluation
-    def _check(self, paths: FloatArray) -> FloatArray:
-        p = np.asarray(paths, dtype=np.float64)
-        if p.ndim == 2:
-            p = p[None]
-        if p.ndim != 3 or p.shape[-1] != self.dim or p.shape[1] < 2:
-            raise ValueError(
-                f"paths must be (pop, n_points >= 2, {self.dim}), got shape {np.shape(paths)}"
-            )
-        return np.ascontiguousarray(p)
+    def _total(self, b: Batch, checks_too: bool = True) -> FloatArray:
+        total = np.zeros(b.paths.shape[0])
+        for t in self.terms:
+            if checks_too or t.check is None:
+                total = total + t.weight * np.asarray(t.fn(b), dtype=np.float64)
+        return total
 
-    def evaluate(self, paths: FloatArray) -> Evaluation:
-        """Total cost, terms and feasibility of ``paths`` (pop, n_points, dim)."""
-        p = self._check(paths)
-        ctx = Context(self, p)
-        terms = {t.name: np.asarray(t.fn(ctx), dtype=np.float64) for t in self.terms}
-        total = np.zeros(p.shape[0])
+    def evaluate(self, paths: FloatArray, times: FloatArray | None = None) -> Evaluation:
+        """Total cost, terms, feasibility and graded violation of ``paths`` (pop, n_points,
+        dim), flown at ``times`` (pop, n_points) seconds (default: the UAV's speed from the
+        task's start time)."""
+        b = self.validator.batch(paths, times)
+        terms = {t.name: np.asarray(t.fn(b), dtype=np.float64) for t in self.terms}
+        total = np.zeros(b.paths.shape[0])
         for t in self.terms:
             total = total + t.weight * terms[t.name]
-        violations = self._violations(ctx)
-        feasible = np.ones(p.shape[0], dtype=bool)
+        violations = self.validator.violations(b)
+        feasible = np.ones(b.paths.shape[0], dtype=bool)
         for v in violations.values():
             feasible &= ~v
-        return Evaluation(total, terms, feasible, violations)
+        cv = self._cv(b, violations, feasible, total)
+        return Evaluation(total, terms, feasible, violations, cv)
+
+    def _cv(
+        self, b: Batch, violations: dict[str, BoolArray], feasible: BoolArray, f: FloatArray
+    ) -> FloatArray:
+        """The graded violation of the paths that fail a check or cost infinity, else 0."""
+        bad = ~feasible | ~np.isfinite(f)
+        if not bad.any():
+            return np.zeros(b.paths.shape[0])
+        return np.where(bad, self.validator.graded_violation(b, violations), 0.0)
 
     def cost(self, paths: FloatArray) -> FloatArray:
         """Total cost only, (pop,)."""
-        p = self._check(paths)
-        ctx = Context(self, p)
-        total = np.zeros(p.shape[0])
-        for t in self.terms:
-            total = total + t.weight * np.asarray(t.fn(ctx), dtype=np.float64)
-        return total
+        return self._total(self.validator.batch(paths))
+
+    def evaluate_cv(self, paths: FloatArray, exact: bool = True) -> tuple[FloatArray, FloatArray]:
+        """Cost and constraint violation apart (pymoo's ``F`` and ``G``): ``(f, cv)``, (pop,)
+        each, ``cv >= 0`` and 0 for a path that passes every check.
+
+        ``f`` leaves out the terms that mirror a check (:attr:`Term.check`). With ``exact``,
+        ``cv`` is the graded violation (:meth:`MotionValidator.graded_violation`) of every path
+        that fails a check or has an infinite cost, 0 otherwise. Without, ``cv`` only tells
+        apart (1 = fails a check; ``f`` is then set to inf, which is what the "inf" rule
+        needs), and the checks stop early: the world's checks only for paths whose cost is
+        finite, then separation only for those left.
+        """
+        b = self.validator.batch(paths)
+        total = self._total(b, checks_too=False)
+        if exact:
+            violations = self.validator.violations(b)
+            feasible = np.ones(b.paths.shape[0], dtype=bool)
+            for v in violations.values():
+                feasible &= ~v
+            return total, self._cv(b, violations, feasible, total)
+        cv = np.zeros(b.paths.shape[0])
+        idx = np.flatnonzero(np.isfinite(total))
+        if idx.size:
+            sub = b.subset(idx)
+            bad = np.zeros(idx.size, dtype=bool)
+            for v in self.validator.violations(sub, skip=("separation",)).values():
+                bad |= v
+            cv[idx[bad]] = 1.0
+            idx = idx[~bad]
+        table = self.validator.reservations
+        if idx.size and table is not None and len(table):
+            cv[idx[b.subset(idx).conflicts]] = 1.0
+        total[cv > 0] = np.inf
+        return total, cv
 
     def feasible(self, paths: FloatArray) -> BoolArray:
-        return self.evaluate(paths).feasible
-
-    def _violations(self, ctx: Context) -> dict[str, BoolArray]:
-        sc = self.scenario
-        p = ctx.paths
-        # in 2-D the fused scene pass tests the box too
-        inbox = ~ctx.scene2d[4] if self.dim == 2 else np.all(sc.bounds.contains(p), axis=1)
-        out: dict[str, BoolArray] = {"bounds": ~inbox}
-        if len(self._cyl_radii):
-            out["cylinders"] = np.any(ctx.cyl_dist < self._cyl_radii, axis=(1, 2))
-        if len(self._circ_radii):
-            out["circles"] = ctx.scene2d[2]
-        if len(self._polys[1]) > 1:
-            out["polygons"] = ctx.scene2d[3]
-        if sc.dim == 3 and sc.terrain is not None:
-            band = sc.altitude
-            need = 0.0
-            if self.strict_altitude and band is not None and band.reference == "ground":
-                need = max(need, band.min)
-            out["terrain"] = ~np.all(sc.terrain.clears(p, need), axis=1)
-        if sc.dim == 3 and sc.altitude is not None:
-            band = sc.altitude
-            h = _band_heights(ctx)
-            bad = np.any((h < band.min - 1e-9) | (h > band.max + 1e-9), axis=1)
-            if self.strict_altitude and band.reference == "ground" and sc.terrain is not None:
-                bad |= ~np.all(sc.terrain.stays_within(p, band.max + 1e-9), axis=1)
-            out["altitude"] = bad
-        if sc.moving_obstacles:
-            radii = np.array([o.radius for o in sc.moving_obstacles])
-            out["moving"] = np.any(ctx.moving_dist < radii, axis=(1, 2))
-        return out
+        return self.validator.paths_valid(paths)
 
     # ------------------------------------------------------------------ helpers
+    def _check(self, paths: FloatArray) -> FloatArray:
+        return self.validator.check_paths(paths)
+
     def with_endpoints(self, free: FloatArray) -> FloatArray:
         """Insert the task's start and goal around free waypoints (pop, n_free, dim)."""
         f = np.asarray(free, dtype=np.float64)

@@ -1,0 +1,485 @@
+"""The motion validator: is a point, a segment or a timed path clear of the world?
+
+OMPL splits validity into a ``StateValidityChecker`` (is this state valid) and a
+``MotionValidator`` (is the motion between two states valid); :class:`MotionValidator` answers
+both, for whole batches, and is the only validity path of uavplan: the cost problems
+(:class:`~uavplan.problems.path_problem.PathProblem`), RRT*, the RGG, the RGG-PSO+ merge, the
+shortcut routines and the fleet engine all ask it. Every question is batched: points ``(m,
+dim)``, segments ``a (m, dim) -> b (m, dim)`` with optional times, paths ``(pop, n, dim)`` with
+optional times ``(pop, n)``.
+
+**Checks**, in the order they are reported (each one only when the world has what it checks):
+
+* ``bounds``: every waypoint inside the scenario's box (the box is convex, so whole segments).
+* ``cylinders``: no segment passes closer than ``radius + margin`` to a cylinder's axis within
+  its heights (exact).
+* ``circles``, ``polygons`` (no-fly polygons and revealed uncertain areas): in 2-D and 3-D the
+  ground track stays out of them (exact; polygons may be non-convex).
+* ``terrain``: every point of every segment above the bilinear DEM (exact); with
+  ``strict_altitude`` and a band above ground, at least the band's minimum above it.
+* ``altitude``: the altitude band at every waypoint (PPSwarm Eq. 7 and SPSO check it there,
+  heights above ground read as ``lookup`` says); with ``strict_altitude`` and a band above
+  ground, along the whole segment too.
+* ``moving``: no moving obstacle closer than its radius over continuous time, the path flown at
+  its times (by default at the UAV's speed from the task's start time).
+* ``separation``: with a :class:`~uavplan.world.reservations.ReservationTable` of other UAVs'
+  timed trajectories, no reserved UAV closer than the table's separation at any instant.
+
+A point is valid when the zero-length segment at it is; a segment without times is flown from
+the task's start time at the UAV's speed.
+
+:class:`Batch` holds the quantities an evaluation shares between the cost terms and the checks
+(segment lengths, cylinder distances, ground heights, times, moving-obstacle distances, the
+fused 2-D scene pass, separation conflicts), each computed once and only when asked for.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import NDArray
+
+from uavplan.problems import costs as C
+from uavplan.world import geometry as G
+from uavplan.world.reservations import ReservationTable
+from uavplan.world.scenario import Scenario, Task
+from uavplan.world.tolerances import BAND_TOL
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+#: Every check, in report order.
+CHECKS = (
+    "bounds",
+    "cylinders",
+    "circles",
+    "polygons",
+    "terrain",
+    "altitude",
+    "moving",
+    "separation",
+)
+#: Segments checked per kernel call by :meth:`MotionValidator.segments_valid` (bounds memory).
+SEGMENT_CHUNK = 65536
+#: :meth:`MotionValidator.graded_violation`: what one failed check adds to the violation.
+CHECK_WEIGHT = 100.0
+
+
+@dataclass(frozen=True)
+class PackedWorld:
+    """The scenario's obstacles as contiguous arrays for the batched kernels.
+
+    Cylinders: ``cyl_centers`` (J, 2), ``cyl_radii`` (J,) radius + margin, ``cyl_margin`` (J,),
+    ``cyl_lo``/``cyl_hi`` (J,) heights grown by the margin. Circles: ``circ_centers`` (C, 2),
+    ``circ_radii`` (C,) radius + margin. Polygons (no-fly polygons and revealed uncertain
+    areas): ``poly_verts``/``poly_starts`` (packed, see :func:`uavplan.world.geometry.
+    pack_polygons`), ``poly_margin`` (K,). ``lo2``/``hi2``: the box's x, y range.
+    """
+
+    cyl_centers: FloatArray
+    cyl_radii: FloatArray
+    cyl_margin: FloatArray
+    cyl_lo: FloatArray
+    cyl_hi: FloatArray
+    circ_centers: FloatArray
+    circ_radii: FloatArray
+    poly_verts: FloatArray
+    poly_starts: NDArray[np.int64]
+    poly_margin: FloatArray
+    lo2: FloatArray
+    hi2: FloatArray
+
+    @classmethod
+    def of(cls, scenario: Scenario) -> PackedWorld:
+        cyl = scenario.cylinders
+        circ = scenario.circles
+        verts, starts = scenario.packed_polygons()
+        return cls(
+            cyl_centers=np.array([c.center for c in cyl], dtype=np.float64).reshape(-1, 2),
+            cyl_radii=np.array([c.effective_radius for c in cyl], dtype=np.float64),
+            cyl_margin=np.array([c.margin for c in cyl], dtype=np.float64),
+            cyl_lo=np.array([c.z_min - c.margin for c in cyl], dtype=np.float64),
+            cyl_hi=np.array([c.z_max + c.margin for c in cyl], dtype=np.float64),
+            circ_centers=np.array([c.center for c in circ], dtype=np.float64).reshape(-1, 2),
+            circ_radii=np.array([c.effective_radius for c in circ], dtype=np.float64),
+            poly_verts=verts,
+            poly_starts=starts,
+            poly_margin=np.array([p.margin for p in scenario.no_fly_polygons], dtype=np.float64),
+            lo2=np.ascontiguousarray(scenario.bounds.lo[:2], dtype=np.float64),
+            hi2=np.ascontiguousarray(scenario.bounds.hi[:2], dtype=np.float64),
+        )
+
+    @property
+    def n_polygons(self) -> int:
+        return len(self.poly_starts) - 1
+
+
+class Batch:
+    """A batch of paths ``(pop, n, dim)`` (and their times) being evaluated, with the lazily
+    computed quantities that cost terms and checks share.
+
+    Args:
+        validator: whose world, task and settings apply.
+        paths: (pop, n >= 2, dim) metres, C-contiguous float64.
+        times: (pop, n) seconds, or None for the UAV's speed from the task's start time.
+    """
+
+    def __init__(
+        self, validator: MotionValidator, paths: FloatArray, times: FloatArray | None = None
+    ) -> None:
+        self.validator = validator
+        self.scenario = validator.scenario
+        self.world = validator.world
+        self.paths = paths
+        if times is not None:
+            self.times = np.asarray(np.broadcast_to(times, paths.shape[:2]), dtype=np.float64)
+
+    def subset(self, rows: NDArray[np.intp]) -> Batch:
+        """The batch of the paths ``rows`` (same times)."""
+        t = self.__dict__.get("times")
+        return Batch(
+            self.validator,
+            np.ascontiguousarray(self.paths[rows]),
+            None if t is None else np.asarray(t)[rows],
+        )
+
+    @cached_property
+    def seg_len(self) -> FloatArray:
+        """(pop, n - 1) metres."""
+        return C.segment_lengths(self.paths)
+
+    @cached_property
+    def length(self) -> FloatArray:
+        """(pop,) metres."""
+        if self.validator.dim == 2:  # the fused 2-D pass measures it anyway
+            return self.scene2d[0]
+        return np.asarray(self.seg_len.sum(axis=1))
+
+    @cached_property
+    def cyl_dist(self) -> FloatArray:
+        """(pop, n - 1, J): horizontal distance from each segment to each cylinder's axis,
+        within its heights (inf if the segment never is)."""
+        w = self.world
+        return G.cylinder_distances(self.paths, w.cyl_centers, w.cyl_lo, w.cyl_hi)
+
+    @cached_property
+    def ground(self) -> FloatArray:
+        """(pop, n) terrain height under each waypoint, read as the validator's ``lookup``."""
+        sc = self.scenario
+        if sc.terrain is None:
+            return np.zeros(self.paths.shape[:2])
+        return sc.terrain.lookup(self.paths[..., 0], self.paths[..., 1], self.validator.lookup)
+
+    @cached_property
+    def band_heights(self) -> FloatArray:
+        """(pop, n) heights in the altitude band's reference (above ground, or absolute)."""
+        band = self.scenario.altitude
+        z = self.paths[..., 2]
+        return z - self.ground if band is not None and band.reference == "ground" else z
+
+    @cached_property
+    def times(self) -> FloatArray:
+        """(pop, n) seconds: at the UAV's speed from the task's start time unless given."""
+        return C.path_times(self.paths, self.scenario.uav.speed, self.validator.task.start_time)
+
+    @cached_property
+    def moving_dist(self) -> FloatArray:
+        """(pop, n - 1, K): exact minimum distance over time to each moving obstacle."""
+        obs = self.scenario.moving_obstacles
+        if not obs:
+            return np.zeros((self.paths.shape[0], self.paths.shape[1] - 1, 0))
+        return np.stack([o.min_distance(self.paths, self.times) for o in obs], axis=-1)
+
+    @cached_property
+    def scene2d(self) -> tuple[FloatArray, FloatArray, BoolArray, BoolArray, BoolArray]:
+        """xy length, length inside circles and polygons, circle hit, polygon hit, node out of
+        the box: (pop,) each, from one fused pass (:func:`uavplan.world.geometry.scene2d_batch`).
+        """
+        w = self.world
+        length, inside, circle_hit, polygon_hit, outside = G.scene2d_batch(
+            self.paths,
+            w.circ_centers,
+            w.circ_radii,
+            w.poly_verts,
+            w.poly_starts,
+            w.poly_margin,
+            w.lo2,
+            w.hi2,
+        )
+        return length, inside, circle_hit, polygon_hit, outside
+
+    @cached_property
+    def paths3(self) -> FloatArray:
+        """The paths with z = 0 added in 2-D (the reservation table is 3-D)."""
+        if self.paths.shape[-1] == 3:
+            return self.paths
+        return np.concatenate([self.paths, np.zeros((*self.paths.shape[:-1], 1))], axis=-1)
+
+    @cached_property
+    def conflicts(self) -> BoolArray:
+        """(pop,) whether each path comes closer than the separation to a reserved UAV."""
+        table = self.validator.reservations
+        if table is None or len(table) == 0:
+            return np.zeros(self.paths.shape[0], dtype=bool)
+        return table.conflicts(self.paths3, self.times)
+
+
+class MotionValidator:
+    """Validity of points, segments and timed paths for one task of a scenario.
+
+    Args:
+        scenario: the world.
+        task: the task (for its start time; default: the scenario's first).
+        strict_altitude: check the altitude band (and the band's floor above the terrain)
+            along whole segments, not only at the waypoints.
+        lookup: how terrain heights under waypoints are read for the band check
+            (``"bilinear"``, or ``"nearest"`` as SPSO's cost reads them).
+        reservations: other UAVs' timed trajectories to keep clear of (``separation``).
+    """
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        task: Task | str | int | None = None,
+        *,
+        strict_altitude: bool = False,
+        lookup: str = "bilinear",
+        reservations: ReservationTable | None = None,
+    ) -> None:
+        self.scenario = scenario
+        self.task = task if isinstance(task, Task) else scenario.task(task)
+        self.dim = scenario.dim
+        self.strict_altitude = bool(strict_altitude)
+        self.lookup = lookup
+        self.reservations = reservations
+        self.world = PackedWorld.of(scenario)
+
+    # ------------------------------------------------------------------ batches
+    def check_paths(self, paths: FloatArray) -> FloatArray:
+        """``paths`` as a C-contiguous (pop, n >= 2, dim) float64 array (a single (n, dim)
+        path becomes a batch of one); ValueError naming the shape otherwise."""
+        p = np.asarray(paths, dtype=np.float64)
+        if p.ndim == 2:
+            p = p[None]
+        if p.ndim != 3 or p.shape[-1] != self.dim or p.shape[1] < 2:
+            raise ValueError(
+                f"paths must be (pop, n_points >= 2, {self.dim}), got shape {np.shape(paths)}"
+            )
+        return np.ascontiguousarray(p)
+
+    def batch(self, paths: FloatArray, times: FloatArray | None = None) -> Batch:
+        return Batch(self, self.check_paths(paths), times)
+
+    def checks(self) -> tuple[str, ...]:
+        """The checks that apply to this world (see the module docstring), in report order."""
+        sc = self.scenario
+        w = self.world
+        out = ["bounds"]
+        if len(w.cyl_radii):
+            out.append("cylinders")
+        if len(w.circ_radii):
+            out.append("circles")
+        if w.n_polygons > 0:
+            out.append("polygons")
+        if sc.dim == 3 and sc.terrain is not None:
+            out.append("terrain")
+        if sc.dim == 3 and sc.altitude is not None:
+            out.append("altitude")
+        if sc.moving_obstacles:
+            out.append("moving")
+        if self.reservations is not None:
+            out.append("separation")
+        return tuple(out)
+
+    # ------------------------------------------------------------------ the checks
+    def violations(self, b: Batch, skip: Iterable[str] = ()) -> dict[str, BoolArray]:
+        """Each applicable check's failures, (pop,) bool per check name, in report order."""
+        skipped = set(skip)
+        return {c: self._check(c, b) for c in self.checks() if c not in skipped}
+
+    def _check(self, name: str, b: Batch) -> BoolArray:
+        sc = self.scenario
+        p = b.paths
+        band = sc.altitude
+        if name == "bounds":  # in 2-D the fused scene pass tests the box too
+            inbox = ~b.scene2d[4] if self.dim == 2 else np.all(sc.bounds.contains(p), axis=1)
+            return np.asarray(~inbox)
+        if name == "cylinders":
+            return np.asarray(np.any(b.cyl_dist < self.world.cyl_radii, axis=(1, 2)))
+        if name == "circles":
+            return b.scene2d[2]
+        if name == "polygons":
+            return b.scene2d[3]
+        if name == "terrain":
+            assert sc.terrain is not None
+            need = 0.0
+            if self.strict_altitude and band is not None and band.reference == "ground":
+                need = max(need, band.min)
+            return np.asarray(~np.all(sc.terrain.clears(p, need), axis=1))
+        if name == "altitude":
+            assert band is not None
+            h = b.band_heights
+            bad = np.any((h < band.min - BAND_TOL) | (h > band.max + BAND_TOL), axis=1)
+            if self.strict_altitude and band.reference == "ground" and sc.terrain is not None:
+                bad |= ~np.all(sc.terrain.stays_within(p, band.max + BAND_TOL), axis=1)
+            return np.asarray(bad)
+        if name == "moving":
+            radii = np.array([o.radius for o in sc.moving_obstacles])
+            return np.asarray(np.any(b.moving_dist < radii, axis=(1, 2)))
+        if name == "separation":
+            return b.conflicts
+        raise ValueError(f"unknown check {name!r}; checks: {CHECKS}")
+
+    def graded_violation(self, b: Batch, violations: dict[str, BoolArray]) -> FloatArray:
+        """How badly each path fails, (pop,) >= 0: :data:`CHECK_WEIGHT` per failed check, plus
+        the metres inside cylinders (summed over segments and cylinders) and outside the
+        altitude band at the waypoints. A measure for feasibility-first selection: it is 0
+        only for paths that pass every check (near the band's edges, within its tolerance,
+        the metres outside may be tiny but non-zero on a valid path: callers keep it for the
+        paths that fail)."""
+        V = np.zeros(b.paths.shape[0])
+        for v in violations.values():
+            V += CHECK_WEIGHT * v
+        w = self.world
+        if len(w.cyl_radii):
+            V += np.sum(np.maximum(0.0, w.cyl_radii - b.cyl_dist), axis=(1, 2))
+        band = self.scenario.altitude
+        if band is not None and self.dim == 3:
+            h = b.band_heights
+            V += np.sum(np.maximum(0.0, band.min - h) + np.maximum(0.0, h - band.max), axis=1)
+        return V
+
+    # ------------------------------------------------------------------ questions
+    def paths_valid(self, paths: FloatArray, times: FloatArray | None = None) -> BoolArray:
+        """Whether each path (pop, n, dim), flown at ``times`` (pop, n), passes every check."""
+        b = self.batch(paths, times)
+        ok = np.ones(b.paths.shape[0], dtype=bool)
+        for v in self.violations(b).values():
+            ok &= ~v
+        return ok
+
+    def segments_valid(
+        self,
+        a: FloatArray,
+        b: FloatArray,
+        t0: FloatArray | float | None = None,
+        t1: FloatArray | float | None = None,
+    ) -> BoolArray:
+        """Whether each segment ``a[i] -> b[i]`` ((m, dim) each) is valid, (m,) bool; flown
+        from ``t0`` to ``t1`` (seconds, (m,) or scalars), by default from the task's start time
+        at the UAV's speed. Checked in chunks of :data:`SEGMENT_CHUNK`."""
+        A = np.asarray(a, dtype=np.float64).reshape(-1, self.dim)
+        B = np.asarray(b, dtype=np.float64).reshape(-1, self.dim)
+        if A.shape != B.shape:
+            raise ValueError(f"segment ends differ in shape: {A.shape} and {B.shape}")
+        timed = t0 is not None or t1 is not None
+        if timed:
+            if t0 is None or t1 is None:
+                raise ValueError("give both t0 and t1, or neither")
+            T = np.stack(np.broadcast_arrays(np.asarray(t0, float), np.asarray(t1, float)), -1)
+            T = np.broadcast_to(T, (len(A), 2))
+        out = np.zeros(len(A), dtype=bool)
+        for s in range(0, len(A), SEGMENT_CHUNK):
+            seg = np.stack([A[s : s + SEGMENT_CHUNK], B[s : s + SEGMENT_CHUNK]], axis=1)
+            out[s : s + SEGMENT_CHUNK] = self.paths_valid(
+                seg, T[s : s + SEGMENT_CHUNK] if timed else None
+            )
+        return out
+
+    def is_valid(self, points: FloatArray, t: FloatArray | float | None = None) -> BoolArray:
+        """Whether each point (m, dim) is valid (at time ``t``): the zero-length segment at it."""
+        P = np.asarray(points, dtype=np.float64).reshape(-1, self.dim)
+        return self.segments_valid(P, P, t, t) if t is not None else self.segments_valid(P, P)
+
+    def clearance(
+        self, paths: FloatArray, times: FloatArray | None = None
+    ) -> dict[str, FloatArray]:
+        """How much room each path (pop, n, dim) keeps, per applicable check, (pop,) metres:
+        positive when clear, 0 or negative when touching or violating.
+
+        ``bounds``: the least distance of a waypoint inside the box; ``cylinders``,
+        ``circles``: the least distance from the axis (centre) minus radius and margin;
+        ``polygons``: the least distance to a polygon minus its margin (0 when a path enters
+        one: inside, the depth is not measured); ``terrain``: the least height above the
+        terrain (minus the band's floor when ``strict_altitude`` requires it); ``altitude``:
+        the least distance of a waypoint inside the band; ``moving``: the least distance over
+        time minus the obstacle's radius; ``separation``: the least distance to a reserved
+        UAV minus the separation (inf when none comes within the separation's search radius).
+        """
+        b = self.batch(paths, times)
+        sc = self.scenario
+        w = self.world
+        p = b.paths
+        out: dict[str, FloatArray] = {}
+        for c in self.checks():
+            if c == "bounds":
+                gap = np.minimum(p - sc.bounds.lo, sc.bounds.hi - p)
+                out[c] = np.asarray(gap.min(axis=(1, 2)))
+            elif c == "cylinders":
+                out[c] = np.asarray((b.cyl_dist - w.cyl_radii).min(axis=(1, 2)))
+            elif c == "circles":
+                n = len(w.circ_radii)
+                d = G.cylinder_distances(p, w.circ_centers, np.full(n, -np.inf), np.full(n, np.inf))
+                out[c] = np.asarray((d - w.circ_radii).min(axis=(1, 2)))
+            elif c == "polygons":
+                d = G.segment_polygon_distance(
+                    np.ascontiguousarray(p[..., :2]), w.poly_verts, w.poly_starts
+                )
+                out[c] = np.asarray((d - w.poly_margin).min(axis=(1, 2)))
+            elif c == "terrain":
+                assert sc.terrain is not None
+                band = sc.altitude
+                need = 0.0
+                if self.strict_altitude and band is not None and band.reference == "ground":
+                    need = band.min
+                out[c] = np.asarray(sc.terrain.min_clearance(p).min(axis=1) - need)
+            elif c == "altitude":
+                band = sc.altitude
+                assert band is not None
+                h = b.band_heights
+                out[c] = np.asarray(np.minimum(h - band.min, band.max - h).min(axis=1))
+            elif c == "moving":
+                radii = np.array([o.radius for o in sc.moving_obstacles])
+                out[c] = np.asarray((b.moving_dist - radii).min(axis=(1, 2)))
+            elif c == "separation":
+                table = self.reservations
+                assert table is not None
+                if len(table) == 0:
+                    out[c] = np.full(p.shape[0], np.inf)
+                else:
+                    out[c] = table.min_distance(b.paths3, b.times) - table.separation
+        return out
+
+
+def greedy_shortcut(
+    validator: MotionValidator, path: FloatArray, times: FloatArray | None = None
+) -> tuple[FloatArray, FloatArray | None, int]:
+    """Shortcut a polyline by line of sight: from each kept vertex jump to the farthest later
+    vertex whose straight segment is valid (flown between the two planned ``times`` when given,
+    so never faster than along the polyline), the next vertex when none is. Start and goal are
+    kept; never longer than ``path``.
+
+    Args:
+        validator: decides every segment.
+        path: (n, dim) metres; times: (n,) seconds or None (the validator's default timing).
+    Returns:
+        The kept vertices, their times (None without ``times``), and the segments checked.
+    """
+    wp = np.asarray(path, dtype=np.float64)
+    t = None if times is None else np.asarray(times, dtype=np.float64)
+    n = wp.shape[0]
+    keep, a, checks = [0], 0, 0
+    while a < n - 1:
+        js = np.arange(n - 1, a, -1)  # farthest first
+        A = np.broadcast_to(wp[a], (js.size, wp.shape[1]))
+        if t is None:
+            ok = validator.segments_valid(A, wp[js])
+        else:
+            ok = validator.segments_valid(A, wp[js], np.full(js.size, t[a]), t[js])
+        checks += js.size
+        a = int(js[int(np.argmax(ok))]) if ok.any() else a + 1
+        keep.append(a)
+    return wp[keep], (None if t is None else t[keep]), checks

@@ -1,0 +1,191 @@
+"""The motion validator: the one validity path (points, segments, timed paths, reservations)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from uavplan.problems import PathProblem
+from uavplan.problems.validity import CHECKS, MotionValidator, greedy_shortcut
+from uavplan.scenarios import resolve
+from uavplan.world import (
+    AltitudeBand,
+    Bounds,
+    Circle,
+    Cylinder,
+    MovingObstacle,
+    Polygon,
+    Scenario,
+    Task,
+    Terrain,
+)
+from uavplan.world.reservations import ReservationTable
+
+
+def world3() -> Scenario:
+    x = np.arange(0, 201, 10.0)
+    H = np.tile(x * 0.2, (21, 1)) + 5 * np.sin(x / 30)[:, None]
+    t = Terrain(H, 0.0, 0.0, 10.0, 10.0, "bumps")
+    mover = MovingObstacle(8.0, np.array([0.0, 20.0]), np.array([[60.0, 20, 70], [60, 180, 70]]))
+    return Scenario(
+        "w3",
+        Bounds((0.0, 0.0, 0.0), (200.0, 200.0, 200.0)),
+        (Task("a", (10.0, 100.0, 60.0), (190.0, 100.0, 90.0)),),
+        terrain=t,
+        cylinders=(Cylinder((100.0, 100.0), 20.0), Cylinder((150.0, 60.0), 10.0, 0.0, 50.0)),
+        polygons=(Polygon(((120.0, 140.0), (160.0, 140.0), (140.0, 170.0))),),
+        moving_obstacles=(mover,),
+        altitude=AltitudeBand(20.0, 80.0, "ground"),
+    )
+
+
+def world2() -> Scenario:
+    return Scenario(
+        "w2",
+        Bounds((0.0, 0.0), (100.0, 100.0)),
+        (Task("a", (5.0, 50.0), (95.0, 50.0)),),
+        circles=(Circle((50.0, 50.0), 10.0),),
+        polygons=(Polygon(((20.0, 10.0), (40.0, 10.0), (40.0, 30.0), (30.0, 15.0), (20.0, 30.0))),),
+    )
+
+
+def random_segments(sc: Scenario, m: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    lo, hi = sc.bounds.lo - 5, sc.bounds.hi + 5
+    a = rng.uniform(lo, hi, (m, sc.dim))
+    b = a + rng.normal(0, 30, (m, sc.dim))
+    if sc.dim == 3:
+        a[:, 2] = sc.ground(a[:, 0], a[:, 1]) + rng.uniform(-10, 100, m)
+        b[:, 2] = sc.ground(b[:, 0], b[:, 1]) + rng.uniform(-10, 100, m)
+    return a, b
+
+
+@pytest.mark.parametrize("make", [world2, world3], ids=["2d", "3d"])
+@pytest.mark.parametrize("strict", [False, True])
+def test_segments_valid_is_the_cost_free_problems_verdict(make, strict: bool) -> None:
+    sc = make()
+    v = MotionValidator(sc, strict_altitude=strict)
+    a, b = random_segments(sc, 3000, 1)
+    got = v.segments_valid(a, b)
+    ref = PathProblem(sc, cost=(), strict_altitude=strict).evaluate(np.stack([a, b], 1)).feasible
+    np.testing.assert_array_equal(got, ref)
+    assert 0.05 < got.mean() < 0.95  # both answers happen
+    # the checks that apply to each world, in report order
+    assert v.checks() == tuple(c for c in CHECKS if c in v.checks())
+    assert ("terrain" in v.checks()) == (sc.dim == 3)
+
+
+def test_points_are_zero_length_segments_and_agree_with_point_problems() -> None:
+    sc = world3()
+    v = MotionValidator(sc)
+    rng = np.random.default_rng(0)
+    p = rng.uniform(sc.bounds.lo, sc.bounds.hi, (2000, 3))
+    p[:, 2] = sc.ground(p[:, 0], p[:, 1]) + rng.uniform(-5, 90, 2000)
+    ok = v.is_valid(p)
+    np.testing.assert_array_equal(ok, v.segments_valid(p, p))
+    # where no moving obstacle is involved, the scenario's own point check agrees
+    static = MotionValidator(
+        Scenario(**{**sc.__dict__, "moving_obstacles": (), "metadata": {}}),
+    )
+    want = np.array([not sc.__class__.point_problems(static.scenario, q) for q in p])
+    np.testing.assert_array_equal(static.is_valid(p), want)
+
+
+def test_timed_segments_see_moving_obstacles_and_reserved_uavs() -> None:
+    sc = world3()
+    table = ReservationTable(sc.bounds.lo, sc.bounds.hi, 10.0)
+    table.add("b", np.array([[100.0, 20, 120], [100, 180, 120]]), np.array([0.0, 16.0]))
+    v = MotionValidator(sc, reservations=table)
+    assert v.checks()[-2:] == ("moving", "separation")
+    # crossing b's track at 120 m: clear when we pass before it arrives, not when we meet it
+    a = np.array([[90.0, 100, 120]])
+    b = np.array([[110.0, 100, 120]])
+    open_sky = {"altitude": None, "cylinders": (), "polygons": (), "metadata": {}}
+    band = MotionValidator(Scenario(**{**sc.__dict__, **open_sky}), reservations=table)
+    assert band.paths_valid(np.stack([a, b], 1))[0] != band.segments_valid(a, b, 7.5, 8.5)[0]
+    assert band.segments_valid(a, b, 0.0, 1.0)[0]  # b is at y = 20..30 then
+    assert not band.segments_valid(a, b, 7.5, 8.5)[0]  # b passes y = 100 at t = 8 s
+    # the mover crosses x = 60 from y = 20 to y = 180 during 0..20 s
+    a2, b2 = np.array([[50.0, 100, 70]]), np.array([[70.0, 100, 70]])
+    ok = band.segments_valid(a2, b2, np.array([9.5]), np.array([10.5]))
+    assert not ok[0]
+    assert band.segments_valid(a2, b2, 30.0, 31.0)[0]  # long gone (it holds its last point)
+    with pytest.raises(ValueError, match="both"):
+        v.segments_valid(a, b, 0.0, None)
+
+
+@pytest.mark.parametrize("make", [world2, world3], ids=["2d", "3d"])
+def test_clearance_sign_matches_the_violations(make) -> None:
+    sc = make()
+    v = MotionValidator(sc)
+    a, b = random_segments(sc, 1500, 4)
+    paths = np.stack([a, b], 1)
+    batch = v.batch(paths)
+    viol = v.violations(batch)
+    clear = v.clearance(paths)
+    assert set(clear) == set(viol)
+    for kind in ("bounds", "cylinders", "circles", "terrain", "moving"):
+        if kind in clear:
+            assert np.all(clear[kind][viol[kind]] <= 1e-9), kind
+            assert np.all(~viol[kind][clear[kind] > 1e-9]), kind
+    if "polygons" in clear:
+        assert np.all(clear["polygons"][viol["polygons"]] <= 1e-9)
+    if "altitude" in clear:  # at the waypoints (not strict)
+        assert np.array_equal(clear["altitude"] < -1e-9, viol["altitude"])
+
+
+def test_graded_violation_is_zero_only_where_valid() -> None:
+    sc = world3()
+    v = MotionValidator(sc)
+    a, b = random_segments(sc, 1000, 2)
+    batch = v.batch(np.stack([a, b], 1))
+    viol = v.violations(batch)
+    V = v.graded_violation(batch, viol)
+    bad = np.zeros(len(a), dtype=bool)
+    for x in viol.values():
+        bad |= x
+    assert np.all(V[bad] >= 100.0) and np.all(V >= 0)
+    # more failed checks weigh more
+    n_failed = sum(x.astype(int) for x in viol.values())
+    assert np.all(100.0 * n_failed <= V)
+
+
+def _all_pairs_shortcut(v: MotionValidator, p: np.ndarray) -> np.ndarray:
+    """The RRT* shortcut as it was (all pairs first, then greedy): the reference."""
+    n = len(p)
+    i, j = np.triu_indices(n, k=2)
+    ok = np.zeros((n, n), dtype=bool)
+    ok[i, j] = v.segments_valid(p[i], p[j])
+    keep, cur = [0], 0
+    while cur < n - 1:
+        later = np.flatnonzero(ok[cur, cur + 2 :])
+        cur = cur + 2 + int(later[-1]) if len(later) else cur + 1
+        keep.append(cur)
+    return p[keep]
+
+
+def test_greedy_shortcut_is_valid_never_longer_and_matches_the_all_pairs_form() -> None:
+    from uavplan.planners.rrt_star import RRTStarConfig, rrt_star, validity_problem
+
+    sc = resolve("spso")
+    v = validity_problem(sc)
+    for seed in range(4):
+        r = rrt_star(sc, None, RRTStarConfig(), np.random.default_rng(seed))
+        assert r.path is not None
+        s, t, checks = greedy_shortcut(v, r.path)
+        assert t is None and checks > 0
+        assert np.array_equal(s, _all_pairs_shortcut(v, r.path))
+        assert v.paths_valid(s[None])[0]
+        assert np.array_equal(s[0], r.path[0]) and np.array_equal(s[-1], r.path[-1])
+        L = lambda q: float(np.linalg.norm(np.diff(q, axis=0), axis=1).sum())  # noqa: E731
+        assert L(s) <= L(r.path) + 1e-9
+
+
+def test_bad_shapes_are_refused() -> None:
+    v = MotionValidator(world2())
+    with pytest.raises(ValueError, match="paths must be"):
+        v.paths_valid(np.zeros((3, 1, 2)))
+    with pytest.raises(ValueError, match="paths must be"):
+        v.paths_valid(np.zeros((3, 4, 3)))
+    with pytest.raises(ValueError, match="differ in shape"):
+        v.segments_valid(np.zeros((3, 2)), np.zeros((4, 2)))
