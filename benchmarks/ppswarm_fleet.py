@@ -21,7 +21,7 @@ from uavplan.io.plan_file import plan_document
 from uavplan.planners import get_planner
 from uavplan.planners.fleet_plan import FleetPlan
 from uavplan.scenarios import resolve
-from uavplan.verify.core import verify_plan
+from uavplan.verify import verify_plan
 from uavplan.world.fleet_tasks import with_fleet
 
 PAPER = {(40, 5): 149.9, (40, 1): 81.2, (100, 1): 419.6, (200, 1): 1468.6, (300, 1): 2458.2,

@@ -33,14 +33,8 @@ import numba
 import numpy as np
 from numba import njit
 
-from uavplan.planners.rrt_star import (
-    GridIndex,
-    RRTStarConfig,
-    RRTStarTree,
-    near_brute,
-    nearest_brute,
-    rrt_star,
-)
+from uavplan.planners.grid_index import GridIndex, near_brute, nearest_brute
+from uavplan.planners.rrt_star import RRTStarConfig, RRTStarTree, rrt_star
 from uavplan.scenarios import load_builtin
 
 

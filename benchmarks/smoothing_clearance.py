@@ -29,7 +29,7 @@ from uavplan.planners import get_planner
 from uavplan.planners.fleet_plan import FleetPlan
 from uavplan.planners.prioritized import smooth_fleet
 from uavplan.scenarios import resolve
-from uavplan.verify.core import verify_plan
+from uavplan.verify import verify_plan
 from uavplan.world.fleet_tasks import with_fleet
 
 

@@ -22,12 +22,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from uavplan.verify.core import (
-    Trajectory,
-    candidate_pairs,
-    check_separation,
-    verify_trajectories,
-)
+from uavplan.verify import Trajectory, verify_trajectories
+from uavplan.verify.separation import candidate_pairs, check_separation
 from uavplan.world import UAV, Bounds, Scenario, Task
 
 

@@ -1,11 +1,27 @@
-"""Contract tests over every registered planner, and the PlanResult record."""
+"""Contract tests over every registered planner (OMPL's PlannerTest, pymoo's deterministic
+tests): each solves an easy case, is deterministic per seed and differs across seeds, reports
+what a fresh evaluation of its path says, describes itself, stops when asked, and refuses
+malformed input with a PlannerError that says why."""
 
 from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import fields
+from typing import Any
 
 import numpy as np
 import pytest
 
-from uavplan.planners import PlannerError, PlanResult, available_planners, get_planner
+from uavplan.planners import (
+    FleetPlanner,
+    Planner,
+    PlannerError,
+    PlanResult,
+    available_planners,
+    get_planner,
+    planner_entry,
+)
 from uavplan.problems import PathProblem
 from uavplan.world import UAV, AltitudeBand, Bounds, Circle, Cylinder, Scenario, Task, Terrain
 
@@ -43,19 +59,30 @@ def easy_3d() -> Scenario:
 
 
 PLANNERS = available_planners()
+SINGLE = [n for n in PLANNERS if not planner_entry(n).fleet]
+
+
+def quick(name: str, **extra: Any) -> Planner:
+    """The planner with a small population, where it has one."""
+    small = {"pop_size": 40} if "pop_size" in get_planner(name).option_names() else {}
+    return get_planner(name, **small, **extra)
+
+
+def scenario_for(name: str) -> Scenario:
+    return easy_2d() if 2 in get_planner(name).dims else easy_3d()
 
 
 @pytest.mark.parametrize("name", PLANNERS)
 @pytest.mark.parametrize("make", [easy_2d, easy_3d], ids=["2d", "3d"])
-def test_planner_solves_easy_scenario(name: str, make) -> None:
+def test_planner_solves_easy_scenario(name: str, make: Callable[[], Scenario]) -> None:
     sc = make()
-    planner = get_planner(name, pop_size=40)
+    planner = quick(name)
     if sc.dim not in planner.dims:
         with pytest.raises(PlannerError, match=f"{sc.dim}-D"):
             planner.plan(sc, budget=60, seed=1)
         return
     r = planner.plan(sc, budget=60, seed=1)
-    assert isinstance(r, PlanResult)
+    assert isinstance(r, PlanResult) and r.algorithm == name
     assert r.feasible, (name, r.violations, r.cost)
     assert np.isfinite(r.cost)
     assert np.allclose(r.waypoints[0], sc.tasks[0].start)
@@ -70,32 +97,110 @@ def test_planner_solves_easy_scenario(name: str, make) -> None:
     seg = np.linalg.norm(np.diff(r.waypoints, axis=0), axis=1)
     assert np.allclose(np.diff(r.times), seg / sc.uav.speed)
     assert r.evaluations > 0 and r.iterations == 60 and len(r.history) == 60
-    assert np.all(np.diff(r.history) <= 0)
+    assert np.all(r.history[1:] <= r.history[:-1])  # inf until a first path, then falling
+    eh = np.asarray(r.evaluations_history)
+    assert len(eh) == 60 and np.all(np.diff(eh) >= 0) and eh[-1] <= r.evaluations
 
 
 @pytest.mark.parametrize("name", PLANNERS)
 def test_planner_deterministic_per_seed(name: str) -> None:
-    sc = easy_2d() if 2 in get_planner(name).dims else easy_3d()
-    a = get_planner(name, pop_size=20).plan(sc, budget=10, seed=7)
-    b = get_planner(name, pop_size=20).plan(sc, budget=10, seed=7)
-    c = get_planner(name, pop_size=20).plan(sc, budget=10, seed=8)
+    sc = scenario_for(name)
+    a = quick(name).plan(sc, budget=10, seed=7)
+    b = quick(name).plan(sc, budget=10, seed=7)
+    c = quick(name).plan(sc, budget=10, seed=8)
     assert np.array_equal(a.waypoints, b.waypoints)
     assert np.array_equal(a.history, b.history)
     assert not np.array_equal(a.waypoints, c.waypoints)
 
 
-def test_unknown_planner_and_parameter() -> None:
-    with pytest.raises(PlannerError, match="unknown planner"):
+@pytest.mark.parametrize("name", PLANNERS)
+def test_describe_is_generated_from_the_config(name: str) -> None:
+    p = get_planner(name)
+    d = p.describe()
+    assert d["name"] == name == p.name
+    for f in fields(p.config):
+        assert f.name in d
+    json.dumps(d)  # JSON-ready (plan.json's config)
+    assert planner_entry(name).summary  # `uavplan planners` lists it with one line
+
+
+@pytest.mark.parametrize("name", SINGLE)
+def test_callback_stops_the_run(name: str) -> None:
+    sc = scenario_for(name)
+    seen: list[tuple[int, float]] = []
+
+    def cb(it: int, best: float) -> bool:
+        seen.append((it, best))
+        return it >= 3
+
+    r = quick(name).plan(sc, budget=50, seed=0, callback=cb)
+    assert r.iterations == 3 and [s[0] for s in seen] == [1, 2, 3]
+    assert seen[-1][1] >= r.history[-1]  # the last iteration may fold in a final result
+
+
+# ------------------------------------------------------------------------ malformed input
+@pytest.mark.parametrize("name", PLANNERS)
+def test_unknown_option_is_refused_naming_the_valid_ones(name: str) -> None:
+    with pytest.raises(PlannerError, match=r"unknown option\(s\) \['bogus'\]; it takes") as e:
+        get_planner(name, bogus=1)
+    assert all(o in str(e.value) for o in get_planner(name).option_names())
+
+
+@pytest.mark.parametrize("name", PLANNERS)
+def test_out_of_range_options_are_refused(name: str) -> None:
+    p = get_planner(name)
+    checked = 0
+    for f in fields(p.config):
+        m = f.metadata
+        bad: list[Any] = []
+        if m.get("low") is not None:
+            bad.append(m["low"] if m.get("low_open") else m["low"] - 1)
+        if m.get("high") is not None:
+            bad.append(m["high"] if m.get("high_open") else m["high"] + 1)
+        if m.get("choices") is not None:
+            bad.append("no-such-choice")
+        for v in bad:
+            with pytest.raises(PlannerError, match=f"option {f.name} must be"):
+                get_planner(name, **{f.name: v})
+            checked += 1
+    if "pop_size" in p.option_names():  # the inner optimizer's options are checked too
+        with pytest.raises(PlannerError, match="pop_size"):
+            get_planner(name, pop_size=0)
+    with pytest.raises(PlannerError, match="must be"):  # a wrong type
+        get_planner(name, **{p.option_names()[0]: object()})
+    assert checked > 0 or name in ("rgg",)
+
+
+@pytest.mark.parametrize("name", PLANNERS)
+def test_malformed_tasks_and_budgets_are_refused(name: str) -> None:
+    sc = scenario_for(name)
+    p = quick(name)
+    outside = Task("out", tuple(np.array(sc.tasks[0].start) - 1000.0), sc.tasks[0].goal)
+    with pytest.raises(PlannerError, match="outside the bounds"):
+        p.plan(sc, outside, budget=5, seed=0)
+    with pytest.raises(PlannerError, match="no task 'nope'"):
+        p.plan(sc, "nope", budget=5, seed=0)
+    with pytest.raises(PlannerError, match="budget"):
+        p.plan(sc, budget=0, seed=0)
+    if isinstance(p, FleetPlanner):
+        with pytest.raises(PlannerError, match="outside the bounds"):
+            p.plan_fleet(Scenario(**{**sc.__dict__, "tasks": (outside,), "metadata": {}}))
+
+
+def test_named_configurations_share_one_class() -> None:
+    """PPSwarm's baselines are configurations of one engine, as every optimizer planner is of
+    the optimizer planner (nevergrad's ConfiguredOptimizer)."""
+    a, b = planner_entry("ppswarm"), planner_entry("prioritized")
+    assert a.cls is b.cls and a.options != b.options
+    assert planner_entry("pso").cls is planner_entry("de").cls
+    assert get_planner("prioritized", optimizer="de").optimizer_config.__class__.__name__ == (
+        "DEConfig"
+    )
+    # another optimizer drops the configuration's PSO parameters
+    assert get_planner("prioritized", optimizer="de").config.optimizer_options == {}
+    assert get_planner("prioritized").config.optimizer_options["w"] == 0.8
+
+
+def test_unknown_planner() -> None:
+    with pytest.raises(PlannerError, match="unknown planner 'nope'; available"):
         get_planner("nope")
-    with pytest.raises(PlannerError, match="unknown parameter"):
-        get_planner("pso", bogus=1)
-
-
-def test_plan_result_json_ready() -> None:
-    sc = easy_2d()
-    r = get_planner("pso", pop_size=10).plan(sc, budget=3, seed=0)
-    d = r.to_dict()
-    assert d["id"] == "uav0"
-    assert len(d["waypoints"]) == len(d["times"]) == 5
-    assert set(d["terms"]) == {"length"}
-    assert isinstance(d["feasible"], bool)

@@ -21,7 +21,7 @@ from uavplan.planners.prioritized import (
 )
 from uavplan.problems.encoding import CartesianEncoding
 from uavplan.scenarios import resolve
-from uavplan.verify.core import verify_plan
+from uavplan.verify import verify_plan
 from uavplan.world import Scenario, Task
 from uavplan.world.fleet_tasks import with_fleet
 from uavplan.world.reservations import ReservationTable

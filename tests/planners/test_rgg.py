@@ -152,10 +152,10 @@ def test_disconnected_graph() -> None:
     sc = walled_scene()
     assert rgg_shortest_path(sc, np.random.default_rng(0), n_samples=50, max_doublings=1) is None
     assert rgg_candidates(sc, np.random.default_rng(0), n_samples=50, max_doublings=1).paths == []
-    r = get_planner("rgg", pop_size=30).plan(sc, budget=3, seed=0)
+    r = get_planner("rgg", samples=30).plan(sc, budget=3, seed=0)
     assert not r.feasible
     assert "disconnected" in r.violations
-    assert "not connected" in r.config["run"]["reason"]
+    assert "not connected" in r.info["reason"]
     assert r.first_feasible_iteration is None
     assert np.all(np.isinf(r.history))
     assert len(r.history) == 3
@@ -163,13 +163,13 @@ def test_disconnected_graph() -> None:
 
 def test_rgg_planner_anytime() -> None:
     sc = load_builtin("simple2d")
-    r = get_planner("rgg", pop_size=50).plan(sc, budget=8, seed=4)
+    r = get_planner("rgg", samples=50).plan(sc, budget=8, seed=4)
     assert r.feasible and r.iterations == 8 and len(r.evaluations_history) == 8
     assert np.all(np.diff(r.history) <= 0)
     assert r.first_feasible_iteration == 1
-    assert r.config["run"]["n_samples"] == 400
+    assert r.info["n_samples"] == 400
     assert r.evaluations == r.evaluations_history[-1]
-    again = get_planner("rgg", pop_size=50).plan(sc, budget=8, seed=4)
+    again = get_planner("rgg", samples=50).plan(sc, budget=8, seed=4)
     assert np.array_equal(r.waypoints, again.waypoints)
 
 
@@ -189,7 +189,7 @@ def test_rgg_graph_grows_and_keeps_edges() -> None:
 
 
 def test_rgg_bad_parameters() -> None:
-    with pytest.raises(PlannerError, match="unknown parameter"):
+    with pytest.raises(PlannerError, match="unknown option"):
         get_planner("rgg", bogus=1)
     with pytest.raises(PlannerError):
         get_planner("rgg", gamma=0.0)

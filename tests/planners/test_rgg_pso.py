@@ -9,17 +9,15 @@ from hypothesis import strategies as st
 
 from uavplan.planners import PlannerError, get_planner
 from uavplan.planners.rgg import feasibility_problem, rgg_candidates
-from uavplan.planners.rgg_pso import (
+from uavplan.planners.rgg_pso import conquer, fit_interior, initial_swarm
+from uavplan.problems import PathProblem
+from uavplan.problems.validity import shortest_subsequence
+from uavplan.problems.variable_length import (
     VariableLengthEncoding,
-    conquer,
     evaluate_paths,
-    fit_interior,
-    initial_swarm,
     particle_to_path,
     path_to_particle,
-    shortcut,
 )
-from uavplan.problems import PathProblem
 from uavplan.scenarios import load_builtin
 from uavplan.world import Bounds, Circle, Scenario, Task
 
@@ -109,7 +107,7 @@ def test_shortcut_fits_long_candidates() -> None:
     cands = rgg_candidates(sc, np.random.default_rng(0), n_candidates=3, n_samples=400)
     path = max(cands.paths, key=len)
     assert len(path) - 2 > 2
-    short, checks = shortcut(path, 2, feas)
+    short, checks = shortest_subsequence(feas, path, 2)
     assert checks > 0
     if short is not None:
         assert len(short) - 2 <= 2
@@ -204,7 +202,7 @@ def test_planners_simple2d(name: str) -> None:
     assert np.isfinite(a.feasible_history[0])
     assert a.cost == pytest.approx(a.length)  # feasible under length2d: cost = length
     assert a.cost >= a.history[-1] - 1e-9
-    assert a.config["run"]["edge_checks"] > 0
+    assert a.info["edge_checks"] > 0
     assert len(a.waypoints) <= sc.n_waypoints + 2
     assert not np.any(np.all(a.waypoints[1:] == a.waypoints[:-1], axis=1))
 
@@ -216,7 +214,7 @@ def test_rgg_pso_plus_no_worse_than_pre_divide() -> None:
         r = get_planner("rgg-pso+", pop_size=30, n_samples=100, max_doublings=3).plan(
             sc, budget=30, seed=seed
         )
-        run = r.config["run"]
+        run = r.info
         assert run["pre_divide_feasible"] and run["divided_at"] == 15
         assert r.feasible
         assert r.cost <= run["pre_divide_cost"] + 1e-9
@@ -230,13 +228,13 @@ def test_rgg_pso_plus_depth_and_early_stop() -> None:
     sc = load_builtin("simple2d")
     r = get_planner("rgg-pso+", pop_size=20, depth=2).plan(sc, budget=20, seed=1)
     assert r.feasible and r.iterations == 20
-    assert r.cost <= r.config["run"]["pre_divide_cost"] + 1e-9
-    assert 3 <= len(r.config["run"]["rgg_samples"]) <= 7  # 1 + 2 (+ up to 4) swarms
+    assert r.cost <= r.info["pre_divide_cost"] + 1e-9
+    assert 3 <= len(r.info["rgg_samples"]) <= 7  # 1 + 2 (+ up to 4) swarms
     from uavplan.optimizers import Budget
 
     # an evaluation budget plans T = 500 / (20 * 1.5) = 16 iterations, divided at 8
     s = get_planner("rgg-pso+", pop_size=20).plan(sc, budget=Budget(max_evaluations=500), seed=1)
-    assert s.feasible and s.iterations <= 16 and s.config["run"]["divided_at"] == 8
+    assert s.feasible and s.iterations <= 16 and s.info["divided_at"] == 8
     assert s.evaluations == s.evaluations_history[-1]
     stop = get_planner("rgg-pso+", pop_size=20).plan(
         sc, budget=40, seed=1, callback=lambda it, best: it >= 25
@@ -247,31 +245,31 @@ def test_rgg_pso_plus_depth_and_early_stop() -> None:
 def test_disconnected_falls_back_to_uniform_swarm() -> None:
     sc = walled_scene()
     r = get_planner("rgg-pso", pop_size=10, n_samples=30).plan(sc, budget=3, seed=0)
-    assert not r.feasible and r.config["run"]["uniform_seeded"] == ["uav0"]
+    assert not r.feasible and r.info["uniform_seeded"] == ["uav0"]
     assert r.iterations == 3
 
 
 def test_parameters() -> None:
-    with pytest.raises(PlannerError, match="unknown parameter"):
+    with pytest.raises(PlannerError, match="unknown option"):
         get_planner("rgg-pso", bogus=1)
     for name in ("rgg", "rgg-pso", "rgg-pso+"):  # the benchmark runner's common option
         get_planner(name, track_feasibility=True)
-    with pytest.raises(PlannerError, match="unknown parameter"):
+    with pytest.raises(PlannerError, match="unknown option"):
         get_planner("rgg-pso+", bogus=1)
     with pytest.raises(PlannerError):
         get_planner("rgg-pso+", whole_fraction=1.0)
     with pytest.raises(PlannerError):
         get_planner("rgg-pso", pop_size=0)
     p = get_planner("rgg-pso")
-    d = p.describe()
+    d = p.describe()["optimizer_config"]
     assert (d["pop_size"], d["w"], d["w_damp"], d["c1"], d["c2"]) == (100, 1.0, 0.98, 1.5, 1.5)
     assert get_planner("rgg-pso+").describe()["whole_fraction"] == 0.5
 
 
 def test_duplicate_invariant_presets_score_particles_like_decoded_paths() -> None:
     """The one-batch shortcut for length2d gives exactly the grouped Alg. 2 result."""
-    from uavplan.planners.rgg_pso import DUPLICATE_INVARIANT, evaluate_decoded
     from uavplan.problems import PathProblem
+    from uavplan.problems.variable_length import DUPLICATE_INVARIANT, evaluate_decoded
     from uavplan.scenarios import load_builtin
 
     problem = PathProblem(load_builtin("simple2d"))
@@ -294,14 +292,14 @@ def test_rgg_pso_samples_n_nodes_by_default_as_the_paper_says() -> None:
     uniform."""
     sc = load_builtin("simple2d")
     r = get_planner("rgg-pso", pop_size=20, n_waypoints=7).plan(sc, budget=3, seed=0)
-    assert r.config["run"]["rgg_samples"] == [7]
+    assert r.info["rgg_samples"] == [7]
     assert r.config["n_samples"] is None and r.config["max_doublings"] == 0
     dense = get_planner("rgg-pso", pop_size=20, n_samples=50, max_doublings=2)
-    assert dense.plan(sc, budget=3, seed=0).config["run"]["rgg_samples"][0] >= 50
+    assert dense.plan(sc, budget=3, seed=0).info["rgg_samples"][0] >= 50
     seeded = uniform = 0
     for seed in range(12):
         run = get_planner("rgg-pso", pop_size=20, n_waypoints=3).plan(sc, budget=2, seed=seed)
-        if run.config["run"]["uniform_seeded"]:
+        if run.info["uniform_seeded"]:
             uniform += 1
         else:
             seeded += 1

@@ -8,13 +8,11 @@ import numpy as np
 import pytest
 
 from uavplan.planners import PlannerError, get_planner
+from uavplan.planners.grid_index import GridIndex, near_brute, nearest_brute
 from uavplan.planners.rrt_star import (
-    GridIndex,
     RRTStarConfig,
     RRTStarPlanner,
     RRTStarTree,
-    near_brute,
-    nearest_brute,
     rrt_star,
     shortcut_path,
     validity_problem,
@@ -246,7 +244,7 @@ def test_planner_on_spso(spso: Scenario) -> None:
     ev = PathProblem(spso).evaluate(res.waypoints[None])
     assert res.cost == pytest.approx(ev.cost[0])
     assert res.iterations == 400 == len(res.history) == len(res.evaluations_history)
-    run = res.config["run"]
+    run = res.info
     assert run["rrt_iterations"] == 400 and res.evaluations == run["edge_checks"]
     assert res.first_feasible_iteration == run["found_iteration"]
     h = res.history
@@ -256,21 +254,23 @@ def test_planner_on_spso(spso: Scenario) -> None:
     assert np.all(np.diff(res.evaluations_history) >= 0)
 
 
-def test_planner_stop_at_goal_and_pop_size(spso: Scenario) -> None:
+def test_planner_stop_at_goal_and_iterations(spso: Scenario) -> None:
     a = get_planner("rrt-star", stop_at_goal=True).plan(spso, seed=4)
     r = rrt_star(spso, None, RRTStarConfig(), np.random.default_rng(np.random.SeedSequence(4)))
     assert a.feasible and a.iterations == r.found_iteration
     assert r.path is not None and np.array_equal(a.waypoints, r.path)
-    b = get_planner("rrt-star", pop_size=50).plan(spso, budget=4, seed=4)
-    assert b.iterations == 4 and b.config["run"]["rrt_iterations"] == 200
+    b = get_planner("rrt-star").plan(spso, budget=200, seed=4)  # one RRT* iteration each
+    assert b.iterations == 200 and b.info["rrt_iterations"] == 200
+    c = get_planner("rrt-star", max_iterations=150).plan(spso, seed=4)  # the default budget
+    assert c.iterations == 150
 
 
 def test_planner_parameters() -> None:
-    p = get_planner("rrt-star", step=30.0, pop_size=2)
+    p = get_planner("rrt-star", step=30.0)
     assert isinstance(p, RRTStarPlanner) and p.config.step == 30.0
     assert p.config.stop_at_goal is False  # the planner is anytime by default
     assert p.describe()["step"] == 30.0
-    with pytest.raises(PlannerError, match="unknown parameter"):
+    with pytest.raises(PlannerError, match="unknown option"):
         get_planner("rrt-star", bogus=1)
     with pytest.raises(PlannerError, match="step"):
         get_planner("rrt-star", step=-1.0)

@@ -18,26 +18,17 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from uavplan.cli import app
-from uavplan.verify.core import (
-    KINDS,
-    PlanFormatError,
-    Trajectory,
-    bilinear_height,
+from uavplan.io.plan_file import parse_plan
+from uavplan.verify import KINDS, PlanFormatError, Trajectory, verify_plan
+from uavplan.verify.obstacles import check_circles, check_cylinders, check_polygons
+from uavplan.verify.separation import (
     candidate_pairs,
-    check_bounds,
-    check_circles,
-    check_cylinders,
     check_moving,
-    check_polygons,
     check_separation,
-    check_speed,
-    check_terrain,
-    check_times,
     pair_min_distance,
-    parse_plan,
-    terrain_clearance_extrema,
-    verify_plan,
 )
+from uavplan.verify.terrain import bilinear_height, check_terrain, terrain_clearance_extrema
+from uavplan.verify.timing import check_bounds, check_speed, check_times
 from uavplan.world import (
     UAV,
     AltitudeBand,
@@ -467,14 +458,14 @@ def test_smoothed_paths() -> None:
         (lambda p: p["uavs"][2]["times"].__setitem__(1, "x"), r"times\[1\]: 'x' is not a number"),
         (lambda p: p["uavs"][2]["times"].__setitem__(1, "inf"), "is not a finite number"),
         (lambda p: p["uavs"][2].__setitem__("id", "u0"), "'u0' appears twice"),
-        (lambda p: p.__setitem__("format", "other/2"), "format: 'other/2'"),
+        (lambda p: p.__setitem__("format", "other/2"), "format: 'other/2' is not one of"),
     ],
 )
 def test_bad_plans(mutate: Any, message: str) -> None:
     plan = clean_plan()
     mutate(plan)
     with pytest.raises(PlanFormatError, match=message):
-        parse_plan(plan, 3, source="plan.json")
+        parse_plan(plan, 3, source="plan.json").trajectories()
 
 
 # ---------------------------------------------------------------------------- CLI

@@ -152,11 +152,11 @@ def fleet_scenario(ref: str) -> Any:
 
 def _run_fleet(spec: RunSpec) -> dict[str, Any]:
     """A fleet planner run, its plan checked by the independent verifier
-    (:mod:`uavplan.verify.core`), planned and smoothed paths both."""
+    (:mod:`uavplan.verify`), planned and smoothed paths both."""
     from uavplan.io.plan_file import plan_document
     from uavplan.planners import get_planner
     from uavplan.planners.fleet_plan import FleetPlan
-    from uavplan.verify.core import verify_plan
+    from uavplan.verify import verify_plan
 
     p = spec.params
     scenario = fleet_scenario(spec.scenario)

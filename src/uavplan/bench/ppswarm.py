@@ -247,7 +247,7 @@ def sections(
     out.append(
         (
             "Independent verification (uavplan verify)",
-            "every fleet plan is checked by uavplan.verify.core, written apart from the "
+            "every fleet plan is checked by uavplan.verify, written apart from the "
             "planner: continuous-time separation >= S2 for every pair, obstacles, terrain and "
             "the altitude band along every segment; feasible_but_failed must be 0; "
             "smoothed = the Dubins-smoothed paths checked the same way",

@@ -7,8 +7,9 @@ from typing import Any
 import typer
 from rich.console import Console
 
-err = Console(stderr=True)
-out = Console()
+#: messages stay one line each (no wrapping at the terminal's width), also when piped
+err = Console(stderr=True, soft_wrap=True, highlight=False)
+out = Console(soft_wrap=True)
 
 
 def fail(lines: list[str] | str, code: int = 2) -> typer.Exit:

@@ -4,46 +4,22 @@ Prints every violation, then a summary (UAVs, pairs checked, minimum separation,
 kind). Exit codes: 0 no violation, 1 some violation, 2 bad input (a missing or unreadable file,
 invalid JSON, a missing or malformed field, mismatched lengths, an unusable scenario), reported on
 stderr as one line naming the file, the field and the value, without a traceback. What is checked:
-:mod:`uavplan.verify.core` and ``docs/verify.md``.
+:mod:`uavplan.verify` and ``docs/verify.md``.
 """
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
 
+from uavplan.cli._common import fail
+
 if TYPE_CHECKING:
-    from uavplan.verify.core import VerifyReport
-
-
-def _fail(lines: list[str] | str, code: int = 2) -> typer.Exit:
-    err = Console(stderr=True, highlight=False, soft_wrap=True)
-    for line in [lines] if isinstance(lines, str) else lines:
-        err.print(line, markup=False)
-    return typer.Exit(code)
-
-
-def _read_plan(path: Path) -> Any:
-    if path.is_dir() and (path / "plan.json").is_file():
-        path = path / "plan.json"
-    if not path.exists():
-        raise _fail(f"{path}: no such plan file")
-    if path.is_dir():
-        raise _fail(f"{path}: a folder without a plan.json")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise _fail(f"{path}: cannot read: {exc}") from None
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise _fail(
-            f"{path}: invalid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}"
-        ) from None
+    from uavplan.verify import VerifyReport
 
 
 def _m(v: float) -> str:
@@ -101,23 +77,28 @@ def verify(
     """Check PLAN_FILE against SCENARIO independently of the planner: UAV-UAV separation over
     continuous time, obstacles, terrain and altitude band along every segment, bounds, times and
     speed. Exit 0 if all pass, 1 on any violation, 2 on bad input."""
+    from uavplan.io.plan_file import PlanFormatError, load_plan_json, parse_plan, plan_path
     from uavplan.io.scenario_file import ScenarioFileError
     from uavplan.scenarios import resolve
-    from uavplan.verify.core import PlanFormatError, parse_plan, verify_trajectories
+    from uavplan.verify import verify_trajectories
 
-    data = _read_plan(plan_file)
+    try:
+        data = load_plan_json(plan_file)
+    except PlanFormatError as exc:
+        raise fail(exc.problems[0]) from None
     try:
         world = resolve(scenario)
     except ScenarioFileError as exc:
-        raise _fail(exc.problems) from None
+        raise fail(exc.problems) from None
     except (OSError, ValueError) as exc:
-        raise _fail(f"{scenario}: {exc}") from None
-    shown = plan_file / "plan.json" if plan_file.is_dir() else plan_file
+        raise fail(f"{scenario}: {exc}") from None
+    shown = plan_path(plan_file)
     try:
-        trajs, name = parse_plan(data, world.dim, smoothed=smoothed, source=str(shown))
+        pf = parse_plan(data, world.dim, source=str(shown))
+        trajs = pf.trajectories("smoothed" if smoothed else "planned")
     except PlanFormatError as exc:
-        raise _fail(exc.problems[0]) from None
-    report = verify_trajectories(trajs, world, name, smoothed)
+        raise fail(exc.problems[0]) from None
+    report = verify_trajectories(trajs, world, pf.scenario, smoothed)
 
     out = Console(highlight=False, soft_wrap=True)
     limit = max_show if max_show > 0 else len(report.violations)
@@ -135,6 +116,6 @@ def verify(
             json_out.parent.mkdir(parents=True, exist_ok=True)
             json_out.write_text(json.dumps(report.to_dict(), indent=2) + "\n", encoding="utf-8")
         except OSError as exc:
-            raise _fail(f"--json {json_out}: cannot write: {exc}") from None
+            raise fail(f"--json {json_out}: cannot write: {exc}") from None
     if not report.ok:
         raise typer.Exit(1)

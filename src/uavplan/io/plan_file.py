@@ -1,35 +1,535 @@
-"""Plan files (``plan.json``): the one place their format is written."""
+"""Plan files (``plan.json``): the one module that writes and reads them.
+
+**Format 2** (``"format": "uavplan.plan/2"``), a JSON object (its JSON Schema:
+:func:`plan_schema`, ``uavplan schema plan``; described in ``docs/plan-format.md``):
+
+* ``scenario``, ``algorithm``, ``config`` (the planner's options), ``seed``, ``version``,
+  ``python``, ``frame`` (local ENU metres: x east, y north, z up, absolute altitudes; seconds);
+* ``feasible``: the plan's verdict (with a fleet planner, separation between UAVs included);
+  ``separation_checked``: whether separation between UAVs was part of planning;
+* ``fleet`` (fleet planners only): priority order, fleet cost, verdict, history, restart
+  costs, wall time, the planner's figures;
+* ``uavs``: one record per UAV: ``id``, ``waypoints`` ``[[x, y(, z)], ...]`` and ``times``
+  (the planned timed polyline), ``cost``, ``terms``, ``cost_model``, ``feasible``,
+  ``violations``, ``length``, ``evaluations``, ``iterations``, ``wall_time``, ``history``,
+  ``first_feasible_iteration``, ``info`` (the planner's figures), and optionally ``smoothed``
+  (``points``, ``times``, ``clear``, ``violations``: the Dubins-smoothed flight).
+
+JSON has no infinity: infinite costs are the strings ``"inf"``/``"-inf"``. Coordinates and times
+are rounded to 6 decimals (micrometres, microseconds).
+
+**Reading** (:func:`read_plan_file`, :func:`parse_plan`) returns a typed :class:`PlanFile` whose
+UAVs give their trajectories (:meth:`UAVPlan.trajectory`: planned or smoothed, as
+:class:`Trajectory`); it reads format 2 and format 1 (no top-level ``feasible``, no per-UAV
+``cost_model`` and ``info``), and a bare ``{"uavs": [{"id", "waypoints", "times"}, ...]}``. A
+file it cannot read raises :class:`PlanFormatError` with one line naming the file, the field
+and the value.
+"""
 
 from __future__ import annotations
 
+import json
+import math
 import platform
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field
 
 from uavplan import __version__
 from uavplan.io.atomic import write_json_atomic
-from uavplan.planners.fleet_plan import FleetPlan
 
-PLAN_FORMAT = "uavplan.plan/1"
+if TYPE_CHECKING:
+    from uavplan.planners.base import FleetResult, PlanResult
+    from uavplan.planners.fleet_plan import FleetPlan
+
+FloatArray = NDArray[np.float64]
+
+PLAN_FORMAT = "uavplan.plan/2"
+#: Every format this module reads.
+READABLE_FORMATS = ("uavplan.plan/1", PLAN_FORMAT)
+FRAME = "local ENU metres: x east, y north, z up (absolute altitude)"
+
+
+class PlanFormatError(ValueError):
+    """A plan that cannot be read: ``problems`` holds one line naming the file, field and value."""
+
+    def __init__(self, problems: Sequence[str]) -> None:
+        self.problems: list[str] = list(problems) or ["invalid plan"]
+        super().__init__("\n".join(self.problems))
+
+
+# ====================================================================================== writing
+def _num(v: float) -> float | str:
+    """JSON has no infinity: write it as the string "inf"."""
+    v = float(v)
+    return v if math.isfinite(v) else ("inf" if v > 0 else ("-inf" if v < 0 else "nan"))
+
+
+def _points(a: Any) -> list[Any]:
+    out: list[Any] = np.asarray(a, dtype=np.float64).round(6).tolist()
+    return out
+
+
+def _plain(obj: Any) -> Any:
+    """JSON-ready: NumPy scalars and arrays as Python numbers and lists, non-finite as strings."""
+    if isinstance(obj, Mapping):
+        return {str(k): _plain(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_plain(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _plain(obj.tolist())
+    if isinstance(obj, bool | np.bool_):
+        return bool(obj)
+    if isinstance(obj, int | np.integer):
+        return int(obj)
+    if isinstance(obj, float | np.floating):
+        return _num(float(obj))
+    return obj
+
+
+def uav_record(r: PlanResult) -> dict[str, Any]:
+    """The ``uavs`` entry of one UAV's result."""
+    rec: dict[str, Any] = {
+        "id": r.uav_id,
+        "waypoints": _points(r.waypoints),
+        "times": _points(r.times),
+        "cost": _num(r.cost),
+        "terms": {k: _num(v) for k, v in r.terms.items()},
+        "cost_model": r.cost_model,
+        "feasible": bool(r.feasible),
+        "violations": list(r.violations),
+        "length": r.length,
+        "evaluations": int(r.evaluations),
+        "iterations": int(r.iterations),
+        "wall_time": float(r.wall_time),
+        "history": [_num(v) for v in np.asarray(r.history)],
+        "first_feasible_iteration": r.first_feasible_iteration,
+        "info": _plain(r.info),
+    }
+    if r.smoothed is not None:
+        rec["smoothed"] = {
+            "points": _points(r.smoothed),
+            "times": _points(r.smoothed_times),
+            "clear": r.smoothed_ok,
+            "violations": list(r.smoothed_violations),
+        }
+    return rec
+
+
+def fleet_record(f: FleetResult) -> dict[str, Any]:
+    """The ``fleet`` block of a fleet planner's result."""
+    return {
+        "priority": list(f.priority),
+        "cost": _num(f.cost),
+        "feasible": bool(f.feasible),
+        "history": [_num(v) for v in np.asarray(f.history)],
+        "restart_costs": [_num(v) for v in np.asarray(f.restart_costs)],
+        "wall_time": float(f.wall_time),
+        "info": _plain(f.info),
+    }
 
 
 def plan_document(plan: FleetPlan) -> dict[str, Any]:
-    """The JSON-ready ``plan.json`` of a plan."""
+    """The JSON-ready ``plan.json`` of a plan (format 2)."""
     return {
         "format": PLAN_FORMAT,
         "scenario": plan.scenario.name,
         "algorithm": plan.algorithm,
-        "config": plan.config,
+        "config": _plain(plan.config),
         "seed": plan.seed,
         "version": __version__,
         "python": platform.python_version(),
-        "frame": "local ENU metres: x east, y north, z up (absolute altitude)",
+        "frame": FRAME,
+        "feasible": bool(plan.feasible),
         "separation_checked": plan.fleet is not None,
-        **({"fleet": plan.fleet.to_dict()} if plan.fleet is not None else {}),
-        "uavs": [r.to_dict() for r in plan.results],
+        **({"fleet": fleet_record(plan.fleet)} if plan.fleet is not None else {}),
+        "uavs": [uav_record(r) for r in plan.results],
     }
 
 
 def write_plan_file(plan: FleetPlan, path: str | Path) -> Path:
-    """Write ``plan``'s ``plan.json`` to ``path`` atomically."""
+    """Write ``plan``'s ``plan.json`` to ``path`` atomically (a reader never sees half a file,
+    and a failed write leaves what was there)."""
     return write_json_atomic(Path(path), plan_document(plan))
+
+
+# ====================================================================================== reading
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    """One UAV's timed polyline.
+
+    Attributes:
+        id: the UAV id.
+        points: (n, dim) metres, n >= 2.
+        times: (n,) seconds.
+        feasible: what the plan claims of it (None if it does not say).
+    """
+
+    id: str
+    points: FloatArray
+    times: FloatArray
+    feasible: bool | None = None
+
+    @property
+    def dim(self) -> int:
+        return int(self.points.shape[1])
+
+    @property
+    def times_valid(self) -> bool:
+        return bool(np.all(np.diff(self.times) >= 0))
+
+    def position(self, t: float) -> FloatArray:
+        """Position at time ``t`` (clamped to the flight), metres."""
+        return np.array([np.interp(t, self.times, self.points[:, k]) for k in range(self.dim)])
+
+
+@dataclass(frozen=True, eq=False)
+class UAVPlan:
+    """One UAV's record of a plan file.
+
+    Attributes:
+        id: the UAV id; planned: its planned timed polyline (``waypoints``, ``times``).
+        feasible, cost, cost_model, violations: what the planner said of it (None: not said).
+        smoothed: the smoothed flight (None if none); smoothed_clear, smoothed_violations: what
+            the planner said of that.
+        record: the whole record as read.
+    """
+
+    id: str
+    planned: Trajectory
+    feasible: bool | None = None
+    cost: float | None = None
+    cost_model: str | None = None
+    violations: tuple[str, ...] = ()
+    smoothed: Trajectory | None = None
+    smoothed_clear: bool | None = None
+    smoothed_violations: tuple[str, ...] = ()
+    record: Mapping[str, Any] = field(default_factory=dict)
+
+    def trajectory(self, kind: Literal["planned", "smoothed"] = "planned") -> Trajectory:
+        if kind == "planned":
+            return self.planned
+        if self.smoothed is None:
+            raise PlanFormatError([f"{self.id}: no smoothed path"])
+        return self.smoothed
+
+
+@dataclass(frozen=True, eq=False)
+class PlanFile:
+    """A plan file as read: its header fields and one :class:`UAVPlan` per UAV.
+
+    ``format`` is the file's format (None for a bare ``{"uavs": ...}``), ``feasible`` the plan's
+    verdict (format 1: every UAV feasible), ``dim`` the points' dimension."""
+
+    format: str | None
+    scenario: str | None
+    algorithm: str | None
+    seed: int | None
+    config: Mapping[str, Any]
+    separation_checked: bool | None
+    feasible: bool | None
+    fleet: Mapping[str, Any] | None
+    uavs: tuple[UAVPlan, ...]
+    dim: int
+    source: str = "plan"
+
+    def trajectories(self, kind: Literal["planned", "smoothed"] = "planned") -> list[Trajectory]:
+        """Every UAV's trajectory of ``kind``; PlanFormatError naming the first UAV without a
+        smoothed path when ``kind="smoothed"``."""
+        out = []
+        for k, u in enumerate(self.uavs):
+            if kind == "smoothed" and u.smoothed is None:
+                raise PlanFormatError(
+                    [f"{self.source}: uavs[{k}] ({u.id}): no smoothed path (verify without "
+                     "--smoothed)"]
+                )
+            out.append(u.trajectory(kind))
+        return out
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _number(value: Any, where: str, finite: bool = True) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float | str):
+        raise PlanFormatError([f"{where}: {_short(value)} is not a number"])
+    words = ("inf", "-inf", "+inf", "nan", "infinity", "-infinity")
+    if isinstance(value, str) and value.strip().lower() not in words:
+        raise PlanFormatError([f"{where}: {value!r} is not a number"])
+    x = float(value)
+    if finite and not math.isfinite(x):
+        raise PlanFormatError([f"{where}: {value!r} is not a finite number"])
+    if math.isnan(x):
+        raise PlanFormatError([f"{where}: {value!r} is not a number"])
+    return x
+
+
+def _array(value: Any, where: str, dim: int | None) -> FloatArray:
+    if not isinstance(value, list):
+        raise PlanFormatError([f"{where}: expected a list, got {_short(value)}"])
+    if dim is None:
+        return np.array([_number(v, f"{where}[{k}]") for k, v in enumerate(value)])
+    rows = []
+    for k, row in enumerate(value):
+        if not isinstance(row, list) or len(row) != dim:
+            raise PlanFormatError(
+                [f"{where}[{k}]: expected a point of {dim} coordinates, got {_short(row)}"]
+            )
+        rows.append([_number(v, f"{where}[{k}][{c}]") for c, v in enumerate(row)])
+    return np.array(rows, dtype=np.float64).reshape(len(rows), dim)
+
+
+def _timed(
+    data: Mapping[str, Any], pts_key: str, base: str, dim: int, uid: str, feasible: bool | None
+) -> Trajectory:
+    for key in (pts_key, "times"):
+        if key not in data:
+            raise PlanFormatError([f"{base}.{key}: missing"])
+    pts = _array(data[pts_key], f"{base}.{pts_key}", dim)
+    ts = _array(data["times"], f"{base}.times", None)
+    if len(pts) < 2:
+        raise PlanFormatError([f"{base}.{pts_key}: {len(pts)} points, need at least 2"])
+    if len(ts) != len(pts):
+        raise PlanFormatError(
+            [f"{base}.times: {len(ts)} values but {pts_key} has {len(pts)} points"]
+        )
+    return Trajectory(uid, pts, ts, feasible)
+
+
+def _infer_dim(uavs: list[Any], source: str) -> int:
+    for k, rec in enumerate(uavs):
+        if isinstance(rec, Mapping):
+            wp = rec.get("waypoints")
+            if isinstance(wp, list) and wp and isinstance(wp[0], list):
+                if len(wp[0]) in (2, 3):
+                    return len(wp[0])
+                raise PlanFormatError(
+                    [
+                        f"{source}: uavs[{k}].waypoints[0]: expected a point of 2 or 3 "
+                        f"coordinates, got {_short(wp[0])}"
+                    ]
+                )
+    return 3
+
+
+def _opt_bool(rec: Mapping[str, Any], key: str, where: str) -> bool | None:
+    v = rec.get(key)
+    if v is None or isinstance(v, bool):
+        return v
+    raise PlanFormatError([f"{where}.{key}: {_short(v)} is not true or false"])
+
+
+def _names(rec: Mapping[str, Any], key: str, where: str) -> tuple[str, ...]:
+    v = rec.get(key, [])
+    if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
+        raise PlanFormatError([f"{where}.{key}: expected a list of names, got {_short(v)}"])
+    return tuple(v)
+
+
+def parse_plan(data: Any, dim: int | None = None, source: str = "plan") -> PlanFile:
+    """A decoded ``plan.json`` as a :class:`PlanFile`.
+
+    Args:
+        data: the decoded JSON.
+        dim: the scenario's dimension (2 or 3): every point must have that many coordinates
+            (default: the first point's).
+        source: the file name used in error messages.
+
+    Raises:
+        PlanFormatError: a missing or malformed field, named with its path and value.
+    """
+    if not isinstance(data, Mapping):
+        raise PlanFormatError([f"{source}: expected a JSON object, got {_short(data)}"])
+    fmt = data.get("format")
+    if fmt is not None and fmt not in READABLE_FORMATS:
+        raise PlanFormatError(
+            [f"{source}: format: {fmt!r} is not one of {list(READABLE_FORMATS)}"]
+        )
+    name = data.get("scenario")
+    if name is not None and not isinstance(name, str):
+        raise PlanFormatError([f"{source}: scenario: {_short(name)} is not a name"])
+    uavs = data.get("uavs")
+    if uavs is None:
+        raise PlanFormatError([f"{source}: uavs: missing"])
+    if not isinstance(uavs, list) or not uavs:
+        raise PlanFormatError([f"{source}: uavs: expected a non-empty list, got {_short(uavs)}"])
+    d = dim if dim is not None else _infer_dim(uavs, source)
+    out: list[UAVPlan] = []
+    seen: set[str] = set()
+    for k, rec in enumerate(uavs):
+        here = f"{source}: uavs[{k}]"
+        if not isinstance(rec, Mapping):
+            raise PlanFormatError([f"{here}: expected an object, got {_short(rec)}"])
+        uid = rec.get("id", f"#{k}")
+        if not isinstance(uid, str | int) or isinstance(uid, bool):
+            raise PlanFormatError([f"{here}.id: {_short(uid)} is not an id"])
+        uid = str(uid)
+        if uid in seen:
+            raise PlanFormatError([f"{here}.id: {uid!r} appears twice"])
+        seen.add(uid)
+        feasible = _opt_bool(rec, "feasible", here)
+        planned = _timed(rec, "waypoints", here, d, uid, feasible)
+        smoothed = None
+        clear: bool | None = None
+        sm_viol: tuple[str, ...] = ()
+        sm = rec.get("smoothed")
+        if sm is not None:
+            if not isinstance(sm, Mapping):
+                raise PlanFormatError([f"{here}.smoothed: expected an object, got {_short(sm)}"])
+            clear = _opt_bool(sm, "clear", f"{here}.smoothed")
+            smoothed = _timed(sm, "points", f"{here}.smoothed", d, uid, clear)
+            sm_viol = _names(sm, "violations", f"{here}.smoothed")
+        cost = rec.get("cost")
+        cm = rec.get("cost_model")
+        out.append(
+            UAVPlan(
+                id=uid,
+                planned=planned,
+                feasible=feasible,
+                cost=None if cost is None else _number(cost, f"{here}.cost", finite=False),
+                cost_model=cm if isinstance(cm, str) else None,
+                violations=_names(rec, "violations", here),
+                smoothed=smoothed,
+                smoothed_clear=clear,
+                smoothed_violations=sm_viol,
+                record=rec,
+            )
+        )
+    verdict = _opt_bool(data, "feasible", source)
+    if verdict is None and fmt == "uavplan.plan/1":
+        fleet = data.get("fleet")
+        if isinstance(fleet, Mapping) and isinstance(fleet.get("feasible"), bool):
+            verdict = fleet["feasible"]
+        elif all(u.feasible is not None for u in out):
+            verdict = all(bool(u.feasible) for u in out)
+    seed = data.get("seed")
+    fleet_block = data.get("fleet")
+    config = data.get("config")
+    return PlanFile(
+        format=fmt,
+        scenario=name,
+        algorithm=data.get("algorithm") if isinstance(data.get("algorithm"), str) else None,
+        seed=seed if isinstance(seed, int) and not isinstance(seed, bool) else None,
+        config=config if isinstance(config, Mapping) else {},
+        separation_checked=_opt_bool(data, "separation_checked", source),
+        feasible=verdict,
+        fleet=fleet_block if isinstance(fleet_block, Mapping) else None,
+        uavs=tuple(out),
+        dim=d,
+        source=source,
+    )
+
+
+def load_plan_json(path: str | Path) -> Any:
+    """The decoded JSON of a plan file (``path`` may be the folder holding ``plan.json``);
+    PlanFormatError naming the file otherwise."""
+    p = Path(path)
+    if p.is_dir() and (p / "plan.json").is_file():
+        p = p / "plan.json"
+    if not p.exists():
+        raise PlanFormatError([f"{p}: no such plan file"])
+    if p.is_dir():
+        raise PlanFormatError([f"{p}: a folder without a plan.json"])
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise PlanFormatError([f"{p}: cannot read: {exc}"]) from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise PlanFormatError(
+            [f"{p}: invalid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}"]
+        ) from None
+
+
+def plan_path(path: str | Path) -> Path:
+    """The plan file ``path`` names (the ``plan.json`` inside a folder)."""
+    p = Path(path)
+    return p / "plan.json" if p.is_dir() and (p / "plan.json").is_file() else p
+
+
+def read_plan_file(path: str | Path, dim: int | None = None) -> PlanFile:
+    """Read a plan file (see :func:`parse_plan`)."""
+    return parse_plan(load_plan_json(path), dim, str(plan_path(path)))
+
+
+# ====================================================================================== schema
+Number = float | Literal["inf", "-inf"]
+
+
+class _Spec(BaseModel):
+    model_config = ConfigDict(extra="allow")
+
+
+class SmoothedSpec(_Spec):
+    """The smoothed (flyable) version of a UAV's path."""
+
+    points: list[list[float]] = Field(description="[[x, y(, z)], ...] metres, dense")
+    times: list[float] = Field(description="seconds, one per point, non-decreasing")
+    clear: bool | None = Field(None, description="whether it keeps every clearance")
+    violations: list[str] = Field(default_factory=list)
+
+
+class UAVSpec(_Spec):
+    """One UAV's planned path and how it was found."""
+
+    id: str
+    waypoints: list[list[float]] = Field(description="[[x, y(, z)], ...] metres, start..goal")
+    times: list[float] = Field(description="seconds at each waypoint")
+    cost: Number | None = None
+    terms: dict[str, Number] = Field(default_factory=dict)
+    cost_model: str | None = None
+    feasible: bool | None = None
+    violations: list[str] = Field(default_factory=list)
+    length: float | None = None
+    evaluations: int | None = None
+    iterations: int | None = None
+    wall_time: float | None = None
+    history: list[Number] = Field(default_factory=list)
+    first_feasible_iteration: int | None = None
+    info: dict[str, Any] = Field(default_factory=dict)
+    smoothed: SmoothedSpec | None = None
+
+
+class FleetSpec(_Spec):
+    """A fleet planner's fleet-level result."""
+
+    priority: list[str]
+    cost: Number
+    feasible: bool
+    history: list[Number] = Field(default_factory=list)
+    restart_costs: list[Number] = Field(default_factory=list)
+    wall_time: float | None = None
+    info: dict[str, Any] = Field(default_factory=dict)
+
+
+class PlanSpec(_Spec):
+    """A uavplan plan file (``plan.json``)."""
+
+    format: Literal["uavplan.plan/1", "uavplan.plan/2"] | None = "uavplan.plan/2"
+    scenario: str | None = None
+    algorithm: str | None = None
+    config: dict[str, Any] = Field(default_factory=dict)
+    seed: int | None = None
+    version: str | None = None
+    python: str | None = None
+    frame: str | None = FRAME
+    feasible: bool | None = None
+    separation_checked: bool | None = None
+    fleet: FleetSpec | None = None
+    uavs: list[UAVSpec] = Field(min_length=1)
+
+
+def plan_schema() -> dict[str, Any]:
+    """The JSON Schema of plan files."""
+    out = PlanSpec.model_json_schema()
+    out["$schema"] = "https://json-schema.org/draft/2020-12/schema"
+    out["title"] = "uavplan plan file"
+    return out

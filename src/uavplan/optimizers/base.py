@@ -282,22 +282,17 @@ def register(cls: O) -> O:
 
 
 def available() -> list[str]:
-    """Names of the registered optimizers."""
-    _load_builtins()
+    """Names of the registered optimizers (importing this module imports the package, whose
+    ``__init__`` imports, and so registers, the built-in ones)."""
     return sorted(_REGISTRY)
 
 
 def get(name: str) -> type[Optimizer]:
     """The optimizer class registered under ``name``."""
-    _load_builtins()
     try:
         return _REGISTRY[name.lower()]
     except KeyError:
         raise OptimizerError(f"unknown optimizer {name!r}; available: {available()}") from None
-
-
-def _load_builtins() -> None:
-    import uavplan.optimizers  # noqa: F401  (registers the built-in optimizers)
 
 
 def config_dict(config: Any) -> dict[str, Any]:

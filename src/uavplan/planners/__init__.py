@@ -1,21 +1,73 @@
-"""Planners: ``plan(scenario, task, budget, seed) -> PlanResult``, found by name."""
+"""Planners: ``plan(scenario, task, budget, seed) -> PlanResult``, found by name.
 
+Importing this package imports every planner module, each of which registers its planners
+(:func:`~uavplan.planners.base.register_planner`); a new planner is a new module listed here.
+See :mod:`uavplan.planners.base` for the framework and ``docs/extending.md`` for an example.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from uavplan.planners import (  # noqa: F401  (registers the built-in planners)
+    optimizer_planner,
+    ppswarm,
+    rgg,
+    rgg_pso,
+    rgg_pso_plus,
+    rrt_star,
+)
 from uavplan.planners.base import (
+    FleetPlanner,
+    FleetResult,
+    Outcome,
     Planner,
+    PlannerConfig,
+    PlannerEntry,
     PlannerError,
     PlanResult,
-    available_planners,
-    get_planner,
+    Run,
+    describe_options,
+    option,
     register_planner,
+    registry,
 )
 from uavplan.planners.optimizer_planner import OptimizerPlanner
 
 __all__ = [
+    "FleetPlanner",
+    "FleetResult",
     "OptimizerPlanner",
+    "Outcome",
     "PlanResult",
     "Planner",
+    "PlannerConfig",
+    "PlannerEntry",
     "PlannerError",
+    "Run",
     "available_planners",
+    "describe_options",
     "get_planner",
+    "option",
+    "planner_entry",
     "register_planner",
 ]
+
+
+def available_planners() -> list[str]:
+    """Names of the registered planners, sorted."""
+    return sorted(registry())
+
+
+def planner_entry(name: str) -> PlannerEntry:
+    """The registry entry of ``name`` (its class, fixed options and summary)."""
+    try:
+        return registry()[name.lower()]
+    except KeyError:
+        raise PlannerError(f"unknown planner {name!r}; available: {available_planners()}") from None
+
+
+def get_planner(name: str, **options: Any) -> Planner:
+    """A planner by name; ``options`` configure it (e.g. ``pop_size=300``), checked against
+    its config (unknown options and values out of range are refused, naming the valid ones)."""
+    return planner_entry(name)(**options)

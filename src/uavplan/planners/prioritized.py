@@ -61,21 +61,24 @@ from __future__ import annotations
 
 import itertools
 import time
-from dataclasses import asdict, dataclass, field, fields, replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from uavplan import optimizers
-from uavplan.optimizers.base import Budget
+from uavplan.optimizers.base import Budget, OptimizerConfig
 from uavplan.optimizers.constraints import RULES, Constrained
 from uavplan.planners.base import (
+    FleetOutcome,
     FleetPlanner,
-    FleetResult,
+    FleetPlannerConfig,
     PlannerError,
     PlanResult,
     ProgressCallback,
+    make_result,
+    option,
 )
 from uavplan.problems.encoding import ENCODINGS, CartesianEncoding
 from uavplan.problems.path_problem import PRESETS, SEPARATION_TERM, PathProblem
@@ -115,54 +118,41 @@ def fleet_problem(
 
 
 @dataclass(frozen=True)
-class PrioritizedConfig:
+class PrioritizedConfig(FleetPlannerConfig):
     """Fleet planner settings. Defaults: PPSwarm Table 1 (N_iter 20, N_restart 5, N_pop 300,
     rho 20 %, PSO w = 1, c1 = c2 = 1.5) and Sect. 5.1; the rest documented in the module."""
 
-    optimizer: str = "pso"
-    optimizer_params: dict[str, Any] = field(default_factory=dict)
-    pop_size: int = 300
-    n_iter: int = 20
-    n_restart: int = 5
-    rho: float = 0.2
-    alpha: float = 0.1
-    order: str = "lh"
-    seeding: str = "rrt-star"
-    rrt_iterations: int | None = None
-    rrt_params: dict[str, Any] = field(default_factory=dict)
-    n_waypoints: int | None = None
-    cost: str = "ppswarm"
-    weights: dict[str, float] | None = None
-    dt: float = 1.0
-    constraints: str = "inf"
-    max_delays: int = 0
-    delay_step: float = 5.0
-    smooth: bool = True
-    smooth_step: float = 5.0
-    smooth_timing: str = "planned"
-    separation_margin: float = 0.0
-
-    def __post_init__(self) -> None:
-        if self.order not in ORDERS:
-            raise PlannerError(f"order must be one of {ORDERS}, got {self.order!r}")
-        if self.seeding not in SEEDINGS:
-            raise PlannerError(f"seeding must be one of {SEEDINGS}, got {self.seeding!r}")
-        if self.pop_size < 1 or self.n_iter < 1 or self.n_restart < 1:
-            raise PlannerError("pop_size, n_iter and n_restart must be >= 1")
-        if not 0.0 <= self.rho <= 1.0 or not 0.0 <= self.alpha <= 1.0:
-            raise PlannerError(f"rho and alpha must be in [0, 1], got {self.rho}, {self.alpha}")
-        if not self.dt > 0:
-            raise PlannerError(f"dt must be positive, got {self.dt}")
-        if self.constraints not in RULES:
-            raise PlannerError(f"constraints must be one of {RULES}, got {self.constraints!r}")
-        if self.cost not in PRESETS:
-            raise PlannerError(f"unknown cost preset {self.cost!r}; choose from {sorted(PRESETS)}")
-        if not (self.separation_margin >= 0.0 and np.isfinite(self.separation_margin)):
-            raise PlannerError(f"separation_margin must be >= 0 m, got {self.separation_margin!r}")
-        if self.smooth_timing not in SMOOTH_TIMINGS:
-            raise PlannerError(
-                f"smooth_timing must be one of {SMOOTH_TIMINGS}, got {self.smooth_timing!r}"
-            )
+    optimizer: str = option("pso", "low-level optimizer (Alg. 4: PSO; the baselines' others)")
+    optimizer_options: dict[str, Any] = option(
+        default_factory=dict, doc="the low-level optimizer's options (w, c1, F, CR, ...)"
+    )
+    pop_size: int = option(300, "N_pop: particles per UAV (Table 1)", low=1)
+    n_iter: int = option(20, "N_iter: low-level iterations per UAV and restart (Table 1)", low=1)
+    n_restart: int = option(5, "N_restart: passes over the fleet (Table 1)", low=1)
+    rho: float = option(0.2, "Eq. 16: share of random paths after a restart (Table 1)", low=0,
+                        high=1)  # fmt: skip
+    alpha: float = option(0.1, "Eq. 15: blend of random paths into the RRT* seed (ours: not "
+                          "given)", low=0, high=1)  # fmt: skip
+    order: str = option("lh", "priorities: longer first, shorter first, random", choices=ORDERS)
+    seeding: str = option("rrt-star", "first populations from RRT* paths (Alg. 1) or uniform",
+                          choices=SEEDINGS)  # fmt: skip
+    rrt_iterations: int | None = option(None, "RRT* iterations (default: its max_iterations)",
+                                        low=1)  # fmt: skip
+    rrt_params: dict[str, Any] = option(default_factory=dict, doc="RRT* options (step, ...)")
+    n_waypoints: int | None = option(None, "free waypoints (default: the scenario's)", low=1)
+    cost: str = option("ppswarm", "cost preset (F1-F4; F5 is added)", choices=tuple(PRESETS))
+    weights: dict[str, float] | None = option(None, "cost term weight overrides")
+    dt: float = option(1.0, "reservation table's time bucket, s", low=0, low_open=True)
+    constraints: str = option(
+        "inf", "how violations reach the optimizer (Sect. 2: infinity)", choices=RULES
+    )
+    max_delays: int = option(0, "take-off delays a blocked UAV may try (ours; 0: none)", low=0)
+    delay_step: float = option(5.0, "one take-off delay, s", low=0, low_open=True)
+    smooth: bool = option(True, "Dubins-smooth every path (Sect. 4.4) and check it")
+    smooth_step: float = option(5.0, "sample spacing of smoothed paths, m", low=0, low_open=True)
+    smooth_timing: str = option("planned", "smoothed flights keep the planned times or fly at "
+                                "constant speed (the paper's)", choices=SMOOTH_TIMINGS)  # fmt: skip
+    separation_margin: float = option(0.0, "plan this much wider than S2, m (ours)", low=0)
 
 
 def polyline_with_n_vertices(path: FloatArray, n: int) -> FloatArray:
@@ -201,62 +191,49 @@ def resample_by_length(path: FloatArray, n: int) -> FloatArray:
 
 
 class PrioritizedPlanner(FleetPlanner):
-    """Prioritized planning with restarts and a low-level population optimizer.
+    """Prioritized planning with restarts and a low-level population optimizer (PPSwarm's
+    engine; its named configurations are in :mod:`uavplan.planners.ppswarm`).
 
-    ``budget`` (iterations) sets ``n_iter`` when given: the low-level optimizer's moves per UAV
-    per restart.
+    ``budget`` (iterations) sets ``n_iter`` when given: the low-level optimizer's iterations per
+    UAV per restart.
     """
 
-    name = "prioritized"
+    name = "prioritized-engine"
+    Config = PrioritizedConfig
+    config: PrioritizedConfig
     dims = (3,)
 
     def __init__(self, config: PrioritizedConfig | None = None, **options: Any) -> None:
-        base = config or PrioritizedConfig()
-        known = {f.name for f in fields(PrioritizedConfig)}
-        opt_name = options.get("optimizer", base.optimizer)
-        opt_known = {f.name for f in fields(optimizers.get(opt_name).Config)}
-        direct = {k: v for k, v in options.items() if k in known}
-        routed = {k: v for k, v in options.items() if k not in known and k in opt_known}
-        unknown = set(options) - set(direct) - set(routed) - {"track_feasibility"}
-        if unknown:
-            raise PlannerError(
-                f"{self.name}: unknown option(s) {sorted(unknown)}; known: {sorted(known)} and "
-                f"the optimizer's {sorted(opt_known)}"
-            )
-        cfg = replace(base, **direct)
-        if routed:
-            cfg = replace(cfg, optimizer_params={**cfg.optimizer_params, **routed})
-        self.config = cfg
-        self.optimizer_cls = optimizers.get(cfg.optimizer)
-        params = dict(cfg.optimizer_params)
-        params.setdefault("pop_size", cfg.pop_size)
-        try:
-            self.opt_config = self.optimizer_cls.Config(**params)
-        except TypeError as exc:
-            raise PlannerError(f"{cfg.optimizer}: {exc}") from None
+        super().__init__(config, **options)
+        self.optimizer_cls = optimizers.get(self.config.optimizer)
 
-    def describe(self) -> dict[str, Any]:
-        d = asdict(self.config)
-        d["name"] = self.name
-        d["optimizer_config"] = asdict(self.opt_config)
-        return d
+    def _optimizer_config(self) -> OptimizerConfig:
+        """The low-level optimizer's config; its population is ``pop_size`` (N_pop) unless
+        ``optimizer_options`` sets one."""
+        cfg = self.config
+        return self.build_optimizer_config(
+            cfg.optimizer, {"pop_size": cfg.pop_size, **cfg.optimizer_options}
+        )
+
+    @property
+    def opt_config(self) -> OptimizerConfig:
+        assert self.optimizer_config is not None
+        return self.optimizer_config
 
     # ------------------------------------------------------------------ high level (Alg. 3)
     def _plan_fleet(
         self,
         scenario: Scenario,
-        budget: Budget | int | None,
+        budget: Budget | None,
         seed: int | None,
         callback: ProgressCallback | None,
-    ) -> FleetResult:
+    ) -> FleetOutcome:
         cfg = self.config
         n_iter = cfg.n_iter
         if budget is not None:
-            b = Budget.of(budget)
-            if b.max_iterations is None:
+            if budget.max_iterations is None:
                 raise PlannerError(f"{self.name} takes an iteration budget (N_iter)")
-            n_iter = int(b.max_iterations)
-        t_start = time.perf_counter()
+            n_iter = int(budget.max_iterations)
         tasks = scenario.tasks
         M = len(tasks)
         root = np.random.SeedSequence(seed)
@@ -351,18 +328,11 @@ class PrioritizedPlanner(FleetPlanner):
             results_t, report = smooth_fleet(scenario, results_t, prio, cfg)
             info["smoothing_time"] = time.perf_counter() - t0
             info["smoothing"] = report
-        wall = time.perf_counter() - t_start
-        return FleetResult(
+        return FleetOutcome(
             results=results_t,
             priority=tuple(prio),
-            cost=float(total) if n_bad == 0 else float("inf"),
-            feasible=n_bad == 0,
             history=np.asarray(fleet_history),
             restart_costs=np.asarray(restart_costs),
-            wall_time=wall,
-            algorithm=self.name,
-            config=self.describe(),
-            seed=seed,
             info=info,
         )
 
@@ -396,7 +366,10 @@ class PrioritizedPlanner(FleetPlanner):
                     validity_problem,
                 )
 
-                rc = RRTStarConfig(**cfg.rrt_params)
+                try:
+                    rc = RRTStarConfig(**cfg.rrt_params)
+                except (TypeError, PlannerError) as exc:
+                    raise PlannerError(f"{self.name}: rrt_params: {exc}") from None
                 res = rrt_star(
                     scenario, task, rc, np.random.default_rng(s), max_iterations=cfg.rrt_iterations
                 )
@@ -456,23 +429,14 @@ class PrioritizedPlanner(FleetPlanner):
             opt.tell(X, f)
             X_last = X
         assert opt.best_x is not None
-        path = enc.decode(opt.best_x[None])
-        ev = problem.evaluate(path)
-        res = PlanResult(
-            uav_id=task.id,
-            waypoints=path[0],
-            times=problem.times(path)[0],
-            cost=float(ev.cost[0]),
-            terms={k: float(v[0]) for k, v in ev.terms.items()},
-            feasible=bool(ev.feasible[0]),
-            evaluations=opt.evaluations,
-            iterations=opt.iterations,
-            wall_time=time.perf_counter() - t0,
-            history=np.asarray(opt.history),
-            evaluations_history=np.asarray(opt.evaluations_history, dtype=np.int64),
+        res = make_result(
+            problem,
+            enc.decode(opt.best_x[None])[0],
             algorithm=self.name,
-            cost_model=problem.cost_name,
-            violations=tuple(k for k, v in ev.violations.items() if v[0]),
+            history=opt.history,
+            evaluations=opt.evaluations,
+            evaluations_history=opt.evaluations_history,
+            wall_time=time.perf_counter() - t0,
         )
         return res, np.asarray(X_last)
 

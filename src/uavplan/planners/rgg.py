@@ -38,15 +38,13 @@ shortest path as a path candidate for the swarm. Here:
   there are any), not just by a node.
 
 Edge checks are feasibility tests of segments, not cost evaluations; :class:`RGG` counts them
-(``edge_checks``) and the planners report them in ``PlanResult.config["run"]``.
+(``edge_checks``) and the planners report them in ``PlanResult.info``.
 """
 
 from __future__ import annotations
 
 import math
-import time
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -55,8 +53,16 @@ from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
 from uavplan.optimizers.base import Budget
-from uavplan.planners.base import Planner, PlannerError, PlanResult, ProgressCallback
-from uavplan.problems.path_problem import LOOKUP, PathProblem
+from uavplan.planners.base import (
+    Outcome,
+    Planner,
+    PlannerConfig,
+    PlannerError,
+    Run,
+    option,
+    register_planner,
+)
+from uavplan.problems.path_problem import LOOKUP
 from uavplan.problems.validity import MotionValidator
 from uavplan.world.scenario import Scenario, Task
 
@@ -354,150 +360,65 @@ def rgg_shortest_path(
 
 
 # ---------------------------------------------------------------------------------- the planner
-#: Iterations (sample batches) of the ``rgg`` planner when no budget is given.
-DEFAULT_RGG_ITERATIONS = 20
+@dataclass(frozen=True)
+class RGGConfig(PlannerConfig):
+    """Options of the ``rgg`` planner (ours: the paper uses the RGG only to seed PSO)."""
+
+    samples: int = option(DEFAULT_SAMPLES, "free samples added to the graph per iteration", low=1)
+    gamma: float = option(
+        DEFAULT_GAMMA, "connectivity constant of the radius (PRM* bound: 1.38 in 2-D)", low=0,
+        low_open=True,
+    )  # fmt: skip
 
 
-@dataclass
-class _Best:
-    path: FloatArray | None = None
-    cost: float = np.inf
-    feasible: bool = False
-    history: list[float] = field(default_factory=list)
-    feasible_history: list[float] = field(default_factory=list)
-
-
+@register_planner
 class RGGPlanner(Planner):
     """The RGG's shortest path alone (a baseline), anytime by batch densification.
 
-    Iteration t adds ``pop_size`` samples to one graph (named ``pop_size`` so that the common
-    planner option applies: it is the batch of samples per iteration), shrinks ``r`` to the new
-    sample count, checks the new edges and runs Dijkstra; the path is evaluated (one
-    evaluation) when it changed. ``history`` is the best cost so far (inf until the start and
-    goal connect). If they never connect, the result is the straight start-goal segment,
-    ``feasible=False``, with ``"disconnected"`` among its violations.
+    Iteration t adds ``samples`` samples to one graph, shrinks ``r`` to the new sample count,
+    checks the new edges and runs Dijkstra; the path is evaluated (one evaluation) when it
+    changed. ``history`` is the best cost so far (inf until the start and goal connect). If they
+    never connect, the result is the straight start-goal segment, ``feasible=False``, with
+    ``"disconnected"`` among its violations.
 
-    Args:
-        pop_size: samples added per iteration (default 100).
-        gamma: connectivity constant (:data:`DEFAULT_GAMMA`).
-        cost, weights: cost preset and weight overrides (the scenario's by default).
-        track_feasibility: accepted for the common planner interface; feasibility is always
-            tracked.
-
-    Budget: its iterations (default :data:`DEFAULT_RGG_ITERATIONS` when it sets none; an RGG
-    iteration is a batch of samples, and a pure evaluation budget would not bound the run since
-    an unchanged path is not re-evaluated), stopped earlier by its evaluations or time.
+    Budget: its iterations (default 20; an evaluation-only budget is capped there too, since an
+    unchanged path is not re-evaluated), stopped earlier by its evaluations or time.
     """
 
     name = "rgg"
+    Config = RGGConfig
+    config: RGGConfig
+    default_iterations = 20
 
-    def __init__(
-        self,
-        pop_size: int = DEFAULT_SAMPLES,
-        gamma: float = DEFAULT_GAMMA,
-        cost: str | None = None,
-        weights: dict[str, float] | None = None,
-        track_feasibility: bool = True,
-        **unknown: Any,
-    ) -> None:
-        if unknown:
-            raise PlannerError(
-                f"rgg: unknown parameter(s) {sorted(unknown)}; "
-                "known: ['cost', 'gamma', 'pop_size', 'track_feasibility', 'weights']"
-            )
-        if int(pop_size) < 1:
-            raise PlannerError(f"pop_size must be >= 1, got {pop_size}")
-        if not gamma > 0:
-            raise PlannerError(f"gamma must be > 0, got {gamma}")
-        self.pop_size = int(pop_size)
-        self.gamma = float(gamma)
-        self.cost = cost
-        self.weights = weights
+    def iteration_limit(self, budget: Budget) -> int | None:
+        return budget.max_iterations or self.default_iterations
 
-    def describe(self) -> dict[str, Any]:
-        return {
-            "name": self.name,
-            "pop_size": self.pop_size,
-            "gamma": self.gamma,
-            "cost": self.cost,
-            "weights": self.weights,
-        }
-
-    def _plan(
-        self,
-        scenario: Scenario,
-        task: Task,
-        budget: Budget | int | None,
-        seed: int | None,
-        callback: ProgressCallback | None,
-    ) -> PlanResult:
-        t0 = time.perf_counter()
-        b = Budget.of(budget if budget is not None else DEFAULT_RGG_ITERATIONS)
-        max_iterations = b.max_iterations or DEFAULT_RGG_ITERATIONS
-        problem = PathProblem(scenario, task, cost=self.cost, weights=self.weights)
-        rng = np.random.default_rng(np.random.SeedSequence(seed))
-        g = RGG(scenario, task, self.gamma, lookup=problem.lookup)
-        best = _Best()
-        evaluations = 0
-        evals_hist: list[int] = []
+    def _plan(self, run: Run) -> Outcome:
+        cfg = self.config
+        problem = run.problem
+        rng = np.random.default_rng(np.random.SeedSequence(run.seed))
+        g = RGG(run.scenario, run.task, cfg.gamma, lookup=problem.lookup)
+        tr = run.tracker
         last: IntArray | None = None
         while True:
-            g.add_samples(self.pop_size, rng)
+            g.add_samples(cfg.samples, rng)
             idx = g.shortest_path()
             if idx is not None and (last is None or not np.array_equal(idx, last)):
                 last = idx
                 path = g.path(idx)
                 ev = problem.evaluate(path[None])
-                evaluations += 1
-                c, f = float(ev.cost[0]), bool(ev.feasible[0])
-                if (f, -c) > (best.feasible, -best.cost):
-                    best.path, best.cost, best.feasible = path, c, f
-            prev_f = best.feasible_history[-1] if best.feasible_history else np.inf
-            best.history.append(min(best.history[-1], best.cost) if best.history else best.cost)
-            best.feasible_history.append(min(prev_f, best.cost if best.feasible else np.inf))
-            evals_hist.append(evaluations)
-            it = len(best.history)
-            if callback is not None and callback(it, best.history[-1]):
+                tr.evaluations += 1
+                tr.offer(path, float(ev.cost[0]), bool(ev.feasible[0]))
+            if tr.end_iteration():
                 break
-            if it >= max_iterations:
-                break
-            if b.max_evaluations is not None and evaluations >= b.max_evaluations:
-                break
-            if b.max_time is not None and time.perf_counter() - t0 >= b.max_time:
-                break
-        reason: tuple[str, ...] = ()
-        final = best.path
-        if final is None:
-            final = np.stack([problem.start, problem.goal])
-            reason = ("disconnected",)
-        ev = problem.evaluate(final[None])
-        fh = np.asarray(best.feasible_history, dtype=np.float64)
-        finite = np.flatnonzero(np.isfinite(fh))
-        config = self.describe()
-        config["run"] = {
-            "edge_checks": g.edge_checks,
-            "n_samples": g.n_samples,
-            "radius": g.radius,
-            "edges": len(g.edges),
-            "reason": "start and goal not connected in the RGG" if reason else "",
-        }
-        return PlanResult(
-            uav_id=task.id,
-            waypoints=final,
-            times=problem.times(final[None])[0],
-            cost=float(ev.cost[0]),
-            terms={k: float(v[0]) for k, v in ev.terms.items()},
-            feasible=bool(ev.feasible[0]),
-            evaluations=evaluations,
-            iterations=len(best.history),
-            wall_time=time.perf_counter() - t0,
-            history=np.asarray(best.history, dtype=np.float64),
-            algorithm=self.name,
-            config=config,
-            seed=seed,
-            cost_model=problem.cost_name,
-            violations=tuple(k for k, v in ev.violations.items() if v[0]) + reason,
-            feasible_history=fh,
-            first_feasible_iteration=int(finite[0]) + 1 if len(finite) else None,
-            evaluations_history=np.asarray(evals_hist, dtype=np.int64),
+        disconnected = tr.path is None
+        return Outcome(
+            reasons=("disconnected",) if disconnected else (),
+            info={
+                "edge_checks": g.edge_checks,
+                "n_samples": g.n_samples,
+                "radius": g.radius,
+                "edges": len(g.edges),
+                "reason": "start and goal not connected in the RGG" if disconnected else "",
+            },
         )

@@ -100,11 +100,9 @@ start-goal segment with ``feasible=False`` and ``"no_path"`` among its violation
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass, fields, replace
-from typing import Any
+from dataclasses import dataclass, fields
 
 import numba
 import numpy as np
@@ -113,14 +111,17 @@ from numpy.typing import NDArray
 
 from uavplan.optimizers.base import Budget
 from uavplan.planners.base import (
-    _REGISTRY,
+    Options,
+    Outcome,
     Planner,
+    PlannerConfig,
     PlannerError,
-    PlanResult,
-    ProgressCallback,
+    Run,
+    option,
     register_planner,
 )
-from uavplan.problems.path_problem import LOOKUP, PathProblem
+from uavplan.planners.grid_index import GridIndex, pad3
+from uavplan.problems.path_problem import LOOKUP
 from uavplan.problems.validity import MotionValidator, greedy_shortcut
 from uavplan.world.scenario import Scenario, Task
 
@@ -130,46 +131,26 @@ BoolArray = NDArray[np.bool_]
 
 #: Samples drawn from the generator at a time.
 SAMPLE_BLOCK = 256
-#: Most cells of a :class:`GridIndex` (the cell grows to stay below it).
-MAX_CELLS = 1 << 21
 #: A rewire must shorten the cost-to-come by more than this (metres): no churn on round-off.
 REWIRE_TOL = 1e-9
 
 
 # ------------------------------------------------------------------------------ configuration
 @dataclass(frozen=True)
-class RRTStarConfig:
-    """RRT* settings (metres); defaults and their reasons in the module docstring.
+class RRTStarConfig(Options):
+    """RRT* settings (metres); defaults and their reasons in the module docstring."""
 
-    Attributes:
-        step: steering step (Alg. 1 line 5's step size).
-        max_iterations: Alg. 1's ``Iterations``.
-        goal_radius: the goal region's radius around the goal (line 10).
-        near_radius: cap of the near/rewire radius (line 7).
-        goal_bias: probability that a sample is the goal (not in the paper).
-        rewire_factor: factor on the RRT* radius bound ``gamma*`` (OMPL's ``rewire_factor``).
-        stop_at_goal: Alg. 1 line 12's ``break`` at the first goal connection.
-        shortcut: greedy shortcutting of the extracted path (not in the paper).
-    """
-
-    step: float = 50.0
-    max_iterations: int = 5000
-    goal_radius: float = 50.0
-    near_radius: float = 100.0
-    goal_bias: float = 0.05
-    rewire_factor: float = 1.1
-    stop_at_goal: bool = True
-    shortcut: bool = False
-
-    def __post_init__(self) -> None:
-        for name in ("step", "goal_radius", "near_radius", "rewire_factor"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v > 0):
-                raise PlannerError(f"rrt-star: {name} must be finite and > 0, got {v}")
-        if int(self.max_iterations) != self.max_iterations or self.max_iterations < 1:
-            raise PlannerError(f"rrt-star: max_iterations must be >= 1, got {self.max_iterations}")
-        if not 0.0 <= self.goal_bias < 1.0:
-            raise PlannerError(f"rrt-star: goal_bias must be in [0, 1), got {self.goal_bias}")
+    step: float = option(50.0, "steering step (Alg. 1 line 5)", low=0, low_open=True)
+    max_iterations: int = option(5000, "Alg. 1's Iterations", low=1)
+    goal_radius: float = option(50.0, "goal region's radius (line 10)", low=0, low_open=True)
+    near_radius: float = option(100.0, "cap of the near/rewire radius (line 7)", low=0,
+                                low_open=True)  # fmt: skip
+    goal_bias: float = option(0.05, "probability that a sample is the goal (OMPL's; not in the "
+                              "paper)", low=0, high=1, high_open=True)  # fmt: skip
+    rewire_factor: float = option(1.1, "factor on the RRT* radius bound gamma* (OMPL's)", low=0,
+                                  low_open=True)  # fmt: skip
+    stop_at_goal: bool = option(True, "Alg. 1 line 12: stop at the first goal connection")
+    shortcut: bool = option(False, "greedy shortcutting of the extracted path (not in the paper)")
 
 
 @dataclass(frozen=True)
@@ -190,149 +171,6 @@ class RRTStarResult:
     found_iteration: int | None
     cost: float
     edge_checks: int = 0
-
-
-# ------------------------------------------------------------------------------ grid kernels
-@njit(cache=True)
-def _cell(x: float, lo: float, cell: float) -> int:
-    return int(np.floor((x - lo) / cell))
-
-
-@njit(cache=True)
-def _clamp(c: int, n: int) -> int:
-    if c < 0:
-        return 0
-    if c >= n:
-        return n - 1
-    return c
-
-
-@njit(cache=True)
-def _grid_insert(pts, i, head, nxt, lo, cell, dims):
-    a = _clamp(_cell(pts[i, 0], lo[0], cell), dims[0])
-    b = _clamp(_cell(pts[i, 1], lo[1], cell), dims[1])
-    c = _clamp(_cell(pts[i, 2], lo[2], cell), dims[2])
-    k = (a * dims[1] + b) * dims[2] + c
-    nxt[i] = head[k]
-    head[k] = i
-
-
-@njit(cache=True)
-def _grid_rebuild(pts, n, head, nxt, lo, cell, dims):
-    head[:] = -1
-    for i in range(n):
-        _grid_insert(pts, i, head, nxt, lo, cell, dims)
-
-
-@njit(cache=True)
-def _scan(pts, head, nxt, k, q0, q1, q2, best, bd2):
-    j = head[k]
-    while j >= 0:
-        dx = pts[j, 0] - q0
-        dy = pts[j, 1] - q1
-        dz = pts[j, 2] - q2
-        d2 = dx * dx + dy * dy + dz * dz
-        if d2 < bd2 or (d2 == bd2 and j < best):
-            best = j
-            bd2 = d2
-        j = nxt[j]
-    return best, bd2
-
-
-@njit(cache=True)
-def _box_cells(ci, k, dims):
-    """Cells of the grid within Chebyshev index distance k of ``ci`` (0 for k < 0)."""
-    if k < 0:
-        return 0
-    out = 1
-    for a in range(3):
-        w = min(ci[a] + k, dims[a] - 1) - max(ci[a] - k, 0) + 1
-        if w <= 0:
-            return 0
-        out *= w
-    return out
-
-
-@njit(cache=True)
-def _grid_nearest(pts, n, head, nxt, lo, cell, dims, q, limit):
-    """Nearest point to ``q``: rings of cells of Chebyshev index distance k = 0, 1, ... around
-    q's (unclamped) cell; stop once the best distance is <= k cell + (q's distance to its own
-    cell's faces), a lower bound on any point in a farther ring. If the rings would visit more
-    than ``limit`` cells, scan the ``n`` points instead (cheaper then; same answer)."""
-    ci = np.empty(3, dtype=np.int64)
-    dface = np.inf
-    kmax = 0
-    for a in range(3):
-        ci[a] = _cell(q[a], lo[a], cell)
-        f = (q[a] - lo[a]) - ci[a] * cell
-        dface = min(dface, f, cell - f)
-        kmax = max(kmax, abs(ci[a]), abs(dims[a] - 1 - ci[a]))
-    dface = max(dface, 0.0)
-    best = -1
-    bd2 = np.inf
-    visited = 0
-    for k in range(kmax + 1):
-        visited += _box_cells(ci, k, dims) - _box_cells(ci, k - 1, dims)
-        if visited > limit:
-            best = -1
-            bd2 = np.inf
-            for j in range(n):
-                dx = pts[j, 0] - q[0]
-                dy = pts[j, 1] - q[1]
-                dz = pts[j, 2] - q[2]
-                d2 = dx * dx + dy * dy + dz * dz
-                if d2 < bd2:
-                    best = j
-                    bd2 = d2
-            return best, bd2
-        a0, a1 = max(ci[0] - k, 0), min(ci[0] + k, dims[0] - 1)
-        b0, b1 = max(ci[1] - k, 0), min(ci[1] + k, dims[1] - 1)
-        c0, c1 = max(ci[2] - k, 0), min(ci[2] + k, dims[2] - 1)
-        for a in range(a0, a1 + 1):
-            for b in range(b0, b1 + 1):
-                base = (a * dims[1] + b) * dims[2]
-                if abs(a - ci[0]) == k or abs(b - ci[1]) == k:
-                    for c in range(c0, c1 + 1):
-                        best, bd2 = _scan(pts, head, nxt, base + c, q[0], q[1], q[2], best, bd2)
-                else:
-                    c = ci[2] - k
-                    if 0 <= c < dims[2]:
-                        best, bd2 = _scan(pts, head, nxt, base + c, q[0], q[1], q[2], best, bd2)
-                    c = ci[2] + k
-                    if k > 0 and 0 <= c < dims[2]:
-                        best, bd2 = _scan(pts, head, nxt, base + c, q[0], q[1], q[2], best, bd2)
-        if best >= 0:
-            bound = k * cell + dface
-            if bd2 <= bound * bound:
-                break
-    return best, bd2
-
-
-@njit(cache=True)
-def _grid_near(pts, head, nxt, lo, cell, dims, q, r, out):
-    """Points within ``r`` of ``q`` (cells within ceil(r / cell) of q's cell: the 27 neighbours
-    while r <= cell) into ``out``; returns how many there are (may exceed ``len(out)``)."""
-    m = max(int(np.ceil(r / cell)), 1)
-    r2 = r * r
-    count = 0
-    ci0 = _cell(q[0], lo[0], cell)
-    ci1 = _cell(q[1], lo[1], cell)
-    ci2 = _cell(q[2], lo[2], cell)
-    for a in range(max(ci0 - m, 0), min(ci0 + m, dims[0] - 1) + 1):
-        for b in range(max(ci1 - m, 0), min(ci1 + m, dims[1] - 1) + 1):
-            base = (a * dims[1] + b) * dims[2]
-            for c in range(max(ci2 - m, 0), min(ci2 + m, dims[2] - 1) + 1):
-                j = head[base + c]
-                while j >= 0:
-                    dx = pts[j, 0] - q[0]
-                    dy = pts[j, 1] - q[1]
-                    dz = pts[j, 2] - q[2]
-                    if dx * dx + dy * dy + dz * dz <= r2:
-                        if count < out.shape[0]:
-                            out[count] = j
-                        count += 1
-                    j = nxt[j]
-    return count
 
 
 # ------------------------------------------------------------------------------ tree kernels
@@ -402,154 +240,6 @@ def _insert_rewire(pts, parent, cost, first_child, next_sib, stack, new, cand, o
                     ch = next_sib[ch]
             rewired += 1
     return rewired
-
-
-# ------------------------------------------------------------------------------ grid index
-def _pad3(p: FloatArray) -> FloatArray:
-    out = np.zeros(3)
-    v = np.asarray(p, dtype=np.float64).ravel()
-    out[: len(v)] = v
-    return out
-
-
-class GridIndex:
-    """Nearest and near(r) queries over points added one at a time (2-D or 3-D).
-
-    A uniform grid of cubic cells over a box (``lo``..``hi``; points outside go to the border
-    cells, so they are found but may make ``nearest`` inexact: keep them inside), one linked list
-    of point indices per cell (``head`` per cell, ``nxt`` per point), point arrays that grow by
-    doubling. 2-D points get z = 0 and a grid one cell thick. :meth:`set_cell` rebuilds the grid
-    with another cell size (at most :data:`MAX_CELLS` cells: the cell grows to respect it);
-    :meth:`balance` shrinks the cell as the points get denser.
-
-    ``nearest`` searches rings of cells outwards; when the rings would visit more cells than
-    ``scan_limit`` times the number of points (a young tree in a fine grid, or a query far from
-    every point), scanning the points is cheaper and gives the same answer, so it does that
-    (``scan_limit = inf``: rings only).
-    """
-
-    def __init__(self, lo: FloatArray, hi: FloatArray, cell: float, capacity: int = 1024) -> None:
-        self.dim = len(np.ravel(lo))
-        if self.dim not in (2, 3):
-            raise ValueError(f"GridIndex is 2-D or 3-D, got {self.dim}")
-        self._box_lo = _pad3(lo)
-        self._box_hi = _pad3(hi)
-        if np.any(self._box_hi < self._box_lo):
-            raise ValueError("GridIndex needs lo <= hi")
-        self._pts = np.zeros((max(int(capacity), 1), 3))
-        self._nxt = np.full(len(self._pts), -1, dtype=np.int64)
-        self.n = 0
-        self.scan_limit = 1.0
-        self.set_cell(cell)
-
-    @property
-    def points(self) -> FloatArray:
-        """The points so far, (n, dim) (a view)."""
-        return self._pts[: self.n, : self.dim]
-
-    @property
-    def n_cells(self) -> int:
-        return int(np.prod(self._dims))
-
-    @property
-    def measure(self) -> float:
-        """Length, area or volume of the box (its first ``dim`` sides)."""
-        return float(np.prod((self._box_hi - self._box_lo)[: self.dim]))
-
-    def balance(self, r: float) -> None:
-        """Shrink the cell to ``max(r, (measure / n)^(1/dim))`` (``r``: the radius of the near
-        queries to come; the second term keeps about one point per cell of a uniform set) when
-        that is below half the current cell; never grows it."""
-        target = max(float(r), (self.measure / max(self.n, 1)) ** (1.0 / self.dim))
-        if 0 < target < 0.5 * self.cell:
-            self.set_cell(target)
-
-    def set_cell(self, cell: float) -> None:
-        """Rebuild the grid with cubic cells of side ``cell`` (or larger, see the class)."""
-        if not (np.isfinite(cell) and cell > 0):
-            raise ValueError(f"cell must be finite and > 0, got {cell}")
-        extent = self._box_hi - self._box_lo
-        pad = 1e-6 * (1.0 + float(extent.max()))
-        lo = self._box_lo - pad
-        span = extent + 2 * pad
-        while True:
-            dims = np.floor(span / cell).astype(np.int64) + 1
-            if self.dim == 2:
-                dims[2] = 1
-            if int(np.prod(dims)) <= MAX_CELLS:
-                break
-            cell *= 1.25
-        self.cell = float(cell)
-        self._lo = lo
-        self._dims = dims
-        self._head = np.full(int(np.prod(dims)), -1, dtype=np.int64)
-        _grid_rebuild(self._pts, self.n, self._head, self._nxt, self._lo, self.cell, self._dims)
-
-    def add(self, p: FloatArray) -> int:
-        """Add a point; returns its index."""
-        if self.n == len(self._pts):
-            cap = 2 * len(self._pts)
-            pts = np.zeros((cap, 3))
-            pts[: self.n] = self._pts
-            nxt = np.full(cap, -1, dtype=np.int64)
-            nxt[: self.n] = self._nxt
-            self._pts, self._nxt = pts, nxt
-        i = self.n
-        self._pts[i] = _pad3(p)
-        _grid_insert(self._pts, i, self._head, self._nxt, self._lo, self.cell, self._dims)
-        self.n += 1
-        return i
-
-    def nearest(self, q: FloatArray) -> tuple[int, float]:
-        """Index of the nearest point (lowest index among ties) and its distance."""
-        if self.n == 0:
-            raise ValueError("nearest of an empty GridIndex")
-        limit = self.scan_limit * self.n
-        i, d2 = _grid_nearest(
-            self._pts,
-            self.n,
-            self._head,
-            self._nxt,
-            self._lo,
-            self.cell,
-            self._dims,
-            _pad3(q),
-            float(min(limit, 1e18)),
-        )
-        return int(i), math.sqrt(d2)
-
-    def near(self, q: FloatArray, r: float) -> IntArray:
-        """Indices of the points within ``r`` of ``q`` (distance <= r), ascending."""
-        qq = _pad3(q)
-        out = np.empty(64, dtype=np.int64)
-        while True:
-            k = _grid_near(
-                self._pts, self._head, self._nxt, self._lo, self.cell, self._dims, qq, float(r), out
-            )
-            if k <= len(out):
-                return np.sort(out[:k])
-            out = np.empty(2 * k, dtype=np.int64)
-
-
-def nearest_brute(points: FloatArray, q: FloatArray) -> tuple[int, float]:
-    """Reference for :meth:`GridIndex.nearest`: a scan of every point (same arithmetic)."""
-    p = np.asarray(points, dtype=np.float64)
-    d = p - np.asarray(q, dtype=np.float64)
-    d2 = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]
-    if p.shape[1] == 3:
-        d2 = d2 + d[:, 2] * d[:, 2]
-    i = int(np.argmin(d2))
-    return i, math.sqrt(float(d2[i]))
-
-
-def near_brute(points: FloatArray, q: FloatArray, r: float) -> IntArray:
-    """Reference for :meth:`GridIndex.near`: a scan of every point (same arithmetic)."""
-    p = np.asarray(points, dtype=np.float64)
-    d = p - np.asarray(q, dtype=np.float64)
-    d2 = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]
-    if p.shape[1] == 3:
-        d2 = d2 + d[:, 2] * d[:, 2]
-    return np.asarray(np.flatnonzero(d2 <= r * r), dtype=np.int64)
 
 
 # ------------------------------------------------------------------------------ problem helpers
@@ -695,7 +385,7 @@ class RRTStarTree:
             self._refill()
         i = self._pos
         self._pos += 1
-        return _pad3(self.goal) if self._goal_draw[i] else self._samples[i]
+        return pad3(self.goal) if self._goal_draw[i] else self._samples[i]
 
     def _grow(self) -> None:
         cap = len(self.grid._pts)
@@ -835,90 +525,49 @@ def rrt_star(
 
 
 # ------------------------------------------------------------------------------ the planner
-#: The planner's configuration when none is given: anytime (see the module docstring).
-PLANNER_CONFIG = RRTStarConfig(stop_at_goal=False)
+@dataclass(frozen=True)
+class RRTStarPlannerConfig(RRTStarConfig, PlannerConfig):
+    """The ``rrt-star`` planner's options: :class:`RRTStarConfig`'s, anytime by default."""
+
+    stop_at_goal: bool = option(
+        False, "stop at the first goal connection (Alg. 1); the planner is anytime by default"
+    )
 
 
 class RRTStarPlanner(Planner):
     """RRT* as a planner (``rrt-star``); see the module docstring.
 
-    Args:
-        config: an :class:`RRTStarConfig` (default :data:`PLANNER_CONFIG`: the defaults with
-            ``stop_at_goal=False``); keyword overrides of its fields (``step=30.0``) apply on top.
-        pop_size: RRT* iterations per planner iteration (default 1).
-        cost, weights: cost preset and weight overrides (the scenario's by default).
-        track_feasibility: accepted for the common planner interface; always tracked.
-
-    Budget: planner iterations (an int or ``Budget.max_iterations``; by default
-    ``ceil(config.max_iterations / pop_size)``), stopped earlier by its evaluations (segment
-    checks), its time or the callback, or at the first goal connection with ``stop_at_goal``.
+    One planner iteration is one RRT* iteration. Budget: iterations (default the config's
+    ``max_iterations``), stopped earlier by its evaluations (segment checks), its time or the
+    callback, or at the first goal connection with ``stop_at_goal``.
     """
 
     name = "rrt-star"
+    Config = RRTStarPlannerConfig
+    config: RRTStarPlannerConfig
 
-    def __init__(
-        self,
-        config: RRTStarConfig | None = None,
-        pop_size: int = 1,
-        cost: str | None = None,
-        weights: dict[str, float] | None = None,
-        track_feasibility: bool = True,
-        **overrides: Any,
-    ) -> None:
-        known = {f.name for f in fields(RRTStarConfig)}
-        unknown = set(overrides) - known
-        if unknown:
-            raise PlannerError(
-                f"rrt-star: unknown parameter(s) {sorted(unknown)}; known: "
-                f"{sorted(known | {'config', 'cost', 'pop_size', 'track_feasibility', 'weights'})}"
-            )
-        if int(pop_size) < 1:
-            raise PlannerError(f"pop_size must be >= 1, got {pop_size}")
-        try:
-            self.config = replace(config if config is not None else PLANNER_CONFIG, **overrides)
-        except (TypeError, ValueError) as e:
-            raise PlannerError(f"rrt-star: {e}") from e
-        self.pop_size = int(pop_size)
-        self.cost = cost
-        self.weights = weights
+    def budget(self, budget: Budget | int | None) -> Budget:
+        return super().budget(budget if budget is not None else self.config.max_iterations)
 
-    def describe(self) -> dict[str, Any]:
-        return {
-            "name": self.name,
-            "pop_size": self.pop_size,
-            "cost": self.cost,
-            "weights": self.weights,
-            **asdict(self.config),
-        }
+    def iteration_limit(self, budget: Budget) -> int | None:
+        return budget.max_iterations or self.config.max_iterations
 
-    def _plan(
-        self,
-        scenario: Scenario,
-        task: Task,
-        budget: Budget | int | None,
-        seed: int | None,
-        callback: ProgressCallback | None,
-    ) -> PlanResult:
-        t0 = time.perf_counter()
+    def rrt_config(self) -> RRTStarConfig:
         cfg = self.config
-        default_iterations = -(-cfg.max_iterations // self.pop_size)
-        b = Budget.of(budget if budget is not None else default_iterations)
-        max_iterations = b.max_iterations or default_iterations
-        problem = PathProblem(scenario, task, cost=self.cost, weights=self.weights)
-        rng = np.random.default_rng(np.random.SeedSequence(seed))
-        tree = RRTStarTree(scenario, task, cfg, rng)
-        best_path: FloatArray | None = None
-        best_cost, best_feasible, best_length = np.inf, False, np.inf
-        history: list[float] = []
-        feasible_history: list[float] = []
-        evals_history: list[int] = []
+        return RRTStarConfig(**{f.name: getattr(cfg, f.name) for f in fields(RRTStarConfig)})
+
+    def _plan(self, run: Run) -> Outcome:
+        cfg = self.config
+        problem = run.problem
+        rng = np.random.default_rng(np.random.SeedSequence(run.seed))
+        tree = RRTStarTree(run.scenario, run.task, self.rrt_config(), rng)
+        tr = run.tracker
+        best_length = np.inf
         path_evaluations = shortcut_checks = 0
         last: IntArray | None = None
         with serial_numba():
             while True:
-                for _ in range(self.pop_size):
-                    if tree.iterate() and cfg.stop_at_goal:
-                        break
+                tree.iterate()
                 node = tree.best_goal_node()
                 if node is not None:
                     idx = tree.path_indices(node)
@@ -930,70 +579,28 @@ class RRTStarPlanner(Planner):
                             shortcut_checks += k
                         ev = problem.evaluate(path[None])
                         path_evaluations += 1
-                        c, f = float(ev.cost[0]), bool(ev.feasible[0])
-                        if (f, -c) > (best_feasible, -best_cost):
-                            best_path, best_cost, best_feasible = path, c, f
+                        if tr.offer(path, float(ev.cost[0]), bool(ev.feasible[0])):
                             best_length = _length(path)
-                prev_f = feasible_history[-1] if feasible_history else np.inf
-                history.append(min(history[-1], best_cost) if history else best_cost)
-                feasible_history.append(min(prev_f, best_cost if best_feasible else np.inf))
-                evaluations = tree.edge_checks + shortcut_checks
-                evals_history.append(evaluations)
-                it = len(history)
-                if callback is not None and callback(it, history[-1]):
+                tr.evaluations = tree.edge_checks + shortcut_checks
+                stop = tr.end_iteration()
+                if stop or (cfg.stop_at_goal and tree.found_iteration is not None):
                     break
-                if cfg.stop_at_goal and tree.found_iteration is not None:
-                    break
-                if it >= max_iterations:
-                    break
-                if b.max_evaluations is not None and evaluations >= b.max_evaluations:
-                    break
-                if b.max_time is not None and time.perf_counter() - t0 >= b.max_time:
-                    break
-        reason: tuple[str, ...] = ()
-        final = best_path
-        if final is None:
-            final = np.stack([problem.start, problem.goal])
-            reason = ("no_path",)
-        ev = problem.evaluate(final[None])
-        fh = np.asarray(feasible_history, dtype=np.float64)
-        finite = np.flatnonzero(np.isfinite(fh))
-        config = self.describe()
-        config["run"] = {
-            "rrt_iterations": tree.iterations,
-            "found_iteration": tree.found_iteration,
-            "n_nodes": tree.n_nodes,
-            "edge_checks": tree.edge_checks,
-            "shortcut_checks": shortcut_checks,
-            "path_evaluations": path_evaluations,
-            "rewires": tree.rewires,
-            "radius": tree.radius(),
-            "length": best_length if best_path is not None else None,
-            "reason": "no start-goal path found within the budget" if reason else "",
-        }
-        return PlanResult(
-            uav_id=task.id,
-            waypoints=final,
-            times=problem.times(final[None])[0],
-            cost=float(ev.cost[0]),
-            terms={k: float(v[0]) for k, v in ev.terms.items()},
-            feasible=bool(ev.feasible[0]) and not reason,
-            evaluations=tree.edge_checks + shortcut_checks,
-            iterations=len(history),
-            wall_time=time.perf_counter() - t0,
-            history=np.asarray(history, dtype=np.float64),
-            algorithm=self.name,
-            config=config,
-            seed=seed,
-            cost_model=problem.cost_name,
-            violations=tuple(k for k, v in ev.violations.items() if v[0]) + reason,
-            feasible_history=fh,
-            first_feasible_iteration=int(finite[0]) + 1 if len(finite) else None,
-            evaluations_history=np.asarray(evals_history, dtype=np.int64),
+        found = tr.path is not None
+        return Outcome(
+            reasons=() if found else ("no_path",),
+            info={
+                "rrt_iterations": tree.iterations,
+                "found_iteration": tree.found_iteration,
+                "n_nodes": tree.n_nodes,
+                "edge_checks": tree.edge_checks,
+                "shortcut_checks": shortcut_checks,
+                "path_evaluations": path_evaluations,
+                "rewires": tree.rewires,
+                "radius": tree.radius(),
+                "length": best_length if found else None,
+                "reason": "" if found else "no start-goal path found within the budget",
+            },
         )
 
 
-def register_all() -> None:
-    """Register ``rrt-star`` (idempotent)."""
-    if "rrt-star" not in _REGISTRY:
-        register_planner("rrt-star", lambda **kw: RRTStarPlanner(**kw))
+register_planner(RRTStarPlanner)

@@ -483,3 +483,37 @@ def greedy_shortcut(
         a = int(js[int(np.argmax(ok))]) if ok.any() else a + 1
         keep.append(a)
     return wp[keep], (None if t is None else t[keep]), checks
+
+
+def shortest_subsequence(
+    validator: MotionValidator, path: FloatArray, max_interior: int
+) -> tuple[FloatArray | None, int]:
+    """The shortest sub-sequence of ``path``'s vertices (first and last kept) whose segments are
+    all valid and which has at most ``max_interior`` interior vertices (an exact dynamic
+    program over the visibility DAG of the vertices; every pair is checked in one batch), or
+    None; and the number of segments checked. RGG-PSO+ fits its graph paths into particles of
+    ``N`` waypoints with it; unlike :func:`greedy_shortcut` it is optimal for the cap."""
+    p = np.asarray(path, dtype=np.float64)
+    K = len(p)
+    i, j = np.triu_indices(K, k=1)
+    ok = validator.segments_valid(p[i], p[j])
+    W = np.full((K, K), np.inf)
+    W[i[ok], j[ok]] = np.linalg.norm(p[j[ok]] - p[i[ok]], axis=1)
+    # f[c, v]: shortest chain 0 -> v visiting c nodes after 0 (v included)
+    f = np.full(K, np.inf)
+    f[0] = 0.0
+    preds: list[NDArray[np.intp]] = []
+    best_c, best_len = -1, np.inf
+    for c in range(1, max_interior + 2):
+        tot = f[:, None] + W
+        arg = np.argmin(tot, axis=0)
+        f = tot[arg, np.arange(K)]
+        preds.append(arg)
+        if f[K - 1] < best_len:
+            best_c, best_len = c, float(f[K - 1])
+    if best_c < 0:
+        return None, len(i)
+    out = [K - 1]
+    for c in range(best_c - 1, -1, -1):
+        out.append(int(preds[c][out[-1]]))
+    return np.asarray(p[out[::-1]]), len(i)

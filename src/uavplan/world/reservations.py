@@ -23,7 +23,7 @@ query is proportional to the candidate's own pieces (and the reserved pieces sha
 not to the number of UAVs in the table.
 
 A UAV is in the air only between its first and last time (it takes off at its start and lands at
-its goal): before and after it is no hazard. :mod:`uavplan.verify.core` checks the same
+its goal): before and after it is no hazard. :mod:`uavplan.verify` checks the same
 semantics independently, pair by pair.
 """
 

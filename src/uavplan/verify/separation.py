@@ -1,0 +1,381 @@
+"""Separation between UAVs over continuous time: every pair, exact closest approach per common
+interval, pruned by sort-and-sweep on whole-flight boxes."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from uavplan.io.plan_file import Trajectory
+from uavplan.verify.report import (
+    TOL,
+    Violation,
+    fmt_num,
+    fmt_point,
+    fmt_points,
+)
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+# ================================================================================ separation
+@njit(cache=True)
+def _walk(P, T, a0, a1, b0, b1, rec, record):  # pragma: no cover - numba
+    """Exact minimum distance between two timed polylines over their common flight time.
+
+    Rows ``a0:a1`` of ``P`` (N, 3) / ``T`` (N,) are UAV a, rows ``b0:b1`` UAV b (>= 2 rows each,
+    times non-decreasing). Walks the union of both breakpoint lists; on each common interval the
+    relative motion is linear, so the minimum is that of a quadratic. A zero-length segment (a
+    jump) is swept as a straight motion at its instant. If ``record``, writes one row per interval
+    into ``rec`` (t_start, t_end, d_min, t_min, pa xyz and pb xyz at the minimum, b - a at
+    t_start and at t_end).
+
+    Returns (d_min, t_min, pa_x, pa_y, pa_z, pb_x, pb_y, pb_z, n_rows); d_min is inf when the
+    flights do not overlap in time.
+    """
+    best = np.inf
+    res = np.full(8, np.nan)
+    res[0] = np.inf
+    n = 0
+    T0 = max(T[a0], T[b0])
+    T1 = min(T[a1 - 1], T[b1 - 1])
+    if T0 > T1:
+        return res, 0
+    i = a0
+    while i < a1 - 2 and T[i + 1] < T0:
+        i += 1
+    j = b0
+    while j < b1 - 2 and T[j + 1] < T0:
+        j += 1
+    t = T0
+    pa = np.empty(3)
+    qa = np.empty(3)
+    pb = np.empty(3)
+    qb = np.empty(3)
+    while True:
+        # once one UAV has landed (at t = T1), the other's jumps at that instant still count
+        a_done = i >= a1 - 1
+        b_done = j >= b1 - 1
+        if (a_done and b_done) or (a_done and T[j + 1] > t) or (b_done and T[i + 1] > t):
+            break
+        ea = np.inf if a_done else T[i + 1]
+        eb = np.inf if b_done else T[j + 1]
+        e = min(ea, eb)
+        for c in range(3):
+            if a_done:
+                pa[c] = P[a1 - 1, c]
+                qa[c] = P[a1 - 1, c]
+            elif ea > T[i]:
+                va = (P[i + 1, c] - P[i, c]) / (ea - T[i])
+                pa[c] = P[i, c] + va * (t - T[i])
+                qa[c] = P[i, c] + va * (e - T[i])
+            else:
+                pa[c] = P[i, c]
+                qa[c] = P[i + 1, c]
+            if b_done:
+                pb[c] = P[b1 - 1, c]
+                qb[c] = P[b1 - 1, c]
+            elif eb > T[j]:
+                vb = (P[j + 1, c] - P[j, c]) / (eb - T[j])
+                pb[c] = P[j, c] + vb * (t - T[j])
+                qb[c] = P[j, c] + vb * (e - T[j])
+            else:
+                pb[c] = P[j, c]
+                qb[c] = P[j + 1, c]
+        r0x = pb[0] - pa[0]
+        r0y = pb[1] - pa[1]
+        r0z = pb[2] - pa[2]
+        drx = (qb[0] - qa[0]) - r0x
+        dry = (qb[1] - qa[1]) - r0y
+        drz = (qb[2] - qa[2]) - r0z
+        dd = drx * drx + dry * dry + drz * drz
+        w = 0.0
+        if dd > 0.0:
+            w = -(r0x * drx + r0y * dry + r0z * drz) / dd
+            w = min(max(w, 0.0), 1.0)
+        x = r0x + w * drx
+        y = r0y + w * dry
+        z = r0z + w * drz
+        d = math.sqrt(x * x + y * y + z * z)
+        tm = t + w * (e - t)
+        if record:
+            rec[n, 0] = t
+            rec[n, 1] = e
+            rec[n, 2] = d
+            rec[n, 3] = tm
+            for c in range(3):
+                rec[n, 4 + c] = pa[c] + w * (qa[c] - pa[c])
+                rec[n, 7 + c] = pb[c] + w * (qb[c] - pb[c])
+                rec[n, 10 + c] = pb[c] - pa[c]
+                rec[n, 13 + c] = qb[c] - qa[c]
+        n += 1
+        if d < best:
+            best = d
+            res[0] = d
+            res[1] = tm
+            for c in range(3):
+                res[2 + c] = pa[c] + w * (qa[c] - pa[c])
+                res[5 + c] = pb[c] + w * (qb[c] - pb[c])
+        if ea == e:
+            i += 1
+        if eb == e:
+            j += 1
+        t = e
+    return res, n
+
+
+@njit(cache=True)
+def _pairs_min(P, T, off, pairs):  # pragma: no cover - numba
+    """(m, 2) minimum distance and its time for each pair of trajectories (rows of ``off``)."""
+    m = pairs.shape[0]
+    out = np.empty((m, 2))
+    dummy = np.empty((1, 16))
+    for q in range(m):
+        a = pairs[q, 0]
+        b = pairs[q, 1]
+        res, _ = _walk(P, T, off[a], off[a + 1], off[b], off[b + 1], dummy, False)
+        out[q, 0] = res[0]
+        out[q, 1] = res[1]
+    return out
+
+
+@njit(cache=True)
+def _sweep(lo, hi, t0, t1, gap, out, fill):  # pragma: no cover - numba
+    """Sort-and-sweep along x: pairs (a < b) whose boxes ``lo..hi`` (n, 3), grown by ``gap``,
+    overlap on every axis and whose time windows ``[t0, t1]`` overlap. Returns their number;
+    if ``fill``, writes them into ``out`` (m, 2) int64."""
+    n = lo.shape[0]
+    order = np.argsort(lo[:, 0], kind="mergesort")
+    m = 0
+    for p in range(n):
+        a = order[p]
+        for r in range(p + 1, n):
+            b = order[r]
+            if lo[b, 0] - hi[a, 0] > gap:
+                break
+            if t0[a] > t1[b] or t0[b] > t1[a]:
+                continue
+            ok = True
+            for c in range(1, 3):
+                if lo[b, c] - hi[a, c] > gap or lo[a, c] - hi[b, c] > gap:
+                    ok = False
+                    break
+            if not ok:
+                continue
+            if fill:
+                out[m, 0] = min(a, b)
+                out[m, 1] = max(a, b)
+            m += 1
+    return m
+
+
+def _pack(trajs: Sequence[Trajectory]) -> tuple[FloatArray, FloatArray, IntArray]:
+    """Stack trajectories into P (N, 3) (z = 0 for 2-D), T (N,), offsets (n + 1,)."""
+    counts = [len(t.times) for t in trajs]
+    off = np.zeros(len(trajs) + 1, dtype=np.int64)
+    off[1:] = np.cumsum(counts)
+    P = np.zeros((int(off[-1]), 3))
+    T = np.zeros(int(off[-1]))
+    for k, tr in enumerate(trajs):
+        P[off[k] : off[k + 1], : tr.dim] = tr.points
+        T[off[k] : off[k + 1]] = tr.times
+    return P, T, off
+
+
+def candidate_pairs(trajs: Sequence[Trajectory], gap: float) -> IntArray:
+    """Pairs ``(a, b)``, a < b, that could come closer than ``gap``: their flight time windows
+    overlap and their whole-flight boxes, grown by ``gap``, overlap (sort-and-sweep). Every
+    pair left out stays farther than ``gap`` apart at every instant. Returns (m, 2) int64."""
+    if len(trajs) < 2:
+        return np.zeros((0, 2), dtype=np.int64)
+    lo = np.zeros((len(trajs), 3))
+    hi = np.zeros((len(trajs), 3))
+    for k, tr in enumerate(trajs):
+        lo[k, : tr.dim] = tr.points.min(axis=0)
+        hi[k, : tr.dim] = tr.points.max(axis=0)
+    t0 = np.array([tr.times.min() for tr in trajs])
+    t1 = np.array([tr.times.max() for tr in trajs])
+    m = int(_sweep(lo, hi, t0, t1, float(gap), np.zeros((1, 2), dtype=np.int64), False))
+    pairs = np.zeros((m, 2), dtype=np.int64)
+    _sweep(lo, hi, t0, t1, float(gap), pairs, True)
+    if len(pairs):
+        pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+    return pairs
+
+
+def pair_min_distance(a: Trajectory, b: Trajectory) -> tuple[float, float]:
+    """Exact minimum distance between two UAVs over continuous time while both fly, and the
+    time it happens: ``(metres, seconds)``, ``(inf, nan)`` if their flights do not overlap."""
+    P, T, off = _pack([a, b])
+    res, _ = _walk(P, T, off[0], off[1], off[1], off[2], np.empty((1, 16)), False)
+    return float(res[0]), float(res[1])
+
+
+def pair_encounters(a: Trajectory, b: Trajectory, s2: float) -> list[Violation]:
+    """Every close encounter of two UAVs (a run of consecutive common intervals on which they
+    come closer than ``s2 - TOL``), reported at its closest point."""
+    P, T, off = _pack([a, b])
+    rec = np.empty((len(a.times) + len(b.times) + 2, 16))
+    _, n = _walk(P, T, off[0], off[1], off[1], off[2], rec, True)
+    rows = rec[:n]
+    out = []
+    k = 0
+    while k < n:
+        if rows[k, 2] >= s2 - TOL:
+            k += 1
+            continue
+        e = k
+        # the run goes on while the distance stays below s2 across the shared breakpoint
+        while (
+            e + 1 < n
+            and rows[e + 1, 2] < s2 - TOL
+            and float(np.linalg.norm(rows[e, 13:16])) < s2 - TOL
+            and float(np.linalg.norm(rows[e + 1, 10:13])) < s2 - TOL
+        ):
+            e += 1
+        run = rows[k : e + 1]
+        w = int(np.argmin(run[:, 2]))
+        d, t = float(run[w, 2]), float(run[w, 3])
+        pa = fmt_point(run[w, 4 : 4 + a.dim])
+        pb = fmt_point(run[w, 7 : 7 + b.dim])
+        t_in = _crossing(run[0], s2, first=True)
+        t_out = _crossing(run[-1], s2, first=False)
+        out.append(
+            Violation(
+                "separation",
+                (a.id, b.id),
+                t,
+                (pa, pb),
+                d,
+                s2,
+                f"{a.id} and {b.id} {fmt_num(d)} m apart at t={t:.3f} s (S2 {s2:g} m; "
+                f"closer from t={t_in:.3f} to {t_out:.3f} s): "
+                f"{a.id} at {fmt_points(pa)}, {b.id} at {fmt_points(pb)}",
+            )
+        )
+        k = e + 1
+    return out
+
+
+def _crossing(row: FloatArray, s2: float, first: bool) -> float:
+    """The time at which the distance of a recorded interval crosses ``s2``: the first time it
+    drops below (``first``) or the last time it is below; the interval's end if it never
+    crosses inside it."""
+    t0, t1 = float(row[0]), float(row[1])
+    r0 = row[10:13]
+    dr = row[13:16] - r0
+    qa, qb, qc = float(dr @ dr), 2.0 * float(r0 @ dr), float(r0 @ r0) - s2 * s2
+    disc = qb * qb - 4 * qa * qc
+    if qa <= 0 or disc < 0:
+        return t0 if first else t1
+    w = (-qb - math.sqrt(disc)) / (2 * qa) if first else (-qb + math.sqrt(disc)) / (2 * qa)
+    w = min(max(w, 0.0), 1.0)
+    return t0 + w * (t1 - t0)
+
+
+@dataclass(frozen=True)
+class SeparationResult:
+    """What :func:`check_separation` found: the violations, the number of pairs checked exactly,
+    and the overall minimum distance among them with its pair and time."""
+
+    violations: list[Violation]
+    pairs_checked: int
+    min_distance: float
+    min_pair: tuple[str, str] | None
+    min_time: float | None
+
+
+def check_separation(
+    trajs: Sequence[Trajectory], s2: float, prune: bool = True, exact_min: bool = True
+) -> SeparationResult:
+    """Every pair of UAVs at least ``s2`` apart over continuous time (exact).
+
+    Args:
+        trajs: the UAVs (times non-decreasing).
+        s2: the required separation, metres.
+        prune: skip pairs that cannot come within ``s2`` (see :func:`candidate_pairs`); False
+            checks every pair exactly (for tests and benchmarks).
+        exact_min: when no checked pair comes within ``s2``, widen the pruning until the fleet's
+            overall minimum separation is found exactly (pairs pruned at a gap ``g`` are farther
+            than ``g`` apart, so once some pair is found at ``<= g`` it is the minimum); False
+            reports the minimum over the pairs checked for ``s2`` only (inf if none).
+
+    Returns:
+        The violations (one per close encounter), the number of pairs checked exactly for
+        ``s2``, and the minimum separation with its pair and time.
+    """
+    n = len(trajs)
+    if n < 2:
+        return SeparationResult([], 0, math.inf, None, None)
+    P, T, off = _pack(trajs)
+
+    def exact(pairs: IntArray) -> FloatArray:
+        if len(pairs) == 0:
+            return np.zeros((0, 2))
+        return np.asarray(_pairs_min(P, T, off, np.ascontiguousarray(pairs)))
+
+    if prune:
+        pairs = candidate_pairs(trajs, s2)
+    else:
+        ia, ib = np.triu_indices(n, 1)
+        pairs = np.stack([ia, ib], axis=1).astype(np.int64)
+    res = exact(pairs)
+    out: list[Violation] = []
+    for bad in np.flatnonzero(res[:, 0] < s2 - TOL):
+        a, b = trajs[int(pairs[bad, 0])], trajs[int(pairs[bad, 1])]
+        out.extend(pair_encounters(a, b, s2))
+    checked = len(pairs)
+    best = float(res[:, 0].min()) if len(res) else math.inf
+    if prune and exact_min and not best <= s2:
+        lo = np.min([t.points.min(axis=0) for t in trajs], axis=0)
+        hi = np.max([t.points.max(axis=0) for t in trajs], axis=0)
+        diameter = float(np.linalg.norm(hi - lo))
+        gap = best if math.isfinite(best) else 2.0 * max(s2, 1.0)
+        while True:
+            pairs = candidate_pairs(trajs, gap)
+            res = exact(pairs)
+            best = float(res[:, 0].min()) if len(res) else math.inf
+            if best <= gap or gap > diameter:
+                break
+            gap = best if math.isfinite(best) else 2.0 * gap
+    if not len(res) or not math.isfinite(best):
+        return SeparationResult(out, checked, math.inf, None, None)
+    q = int(np.argmin(res[:, 0]))
+    pair = (trajs[int(pairs[q, 0])].id, trajs[int(pairs[q, 1])].id)
+    return SeparationResult(out, checked, float(res[q, 0]), pair, float(res[q, 1]))
+
+
+def check_moving(traj: Trajectory, obstacles: Sequence[Any]) -> list[Violation]:
+    """The UAV stays at least ``radius`` from every moving obstacle's centre over continuous
+    time (the obstacle holds its first and last positions outside its knots)."""
+    out = []
+    for oi, obs in enumerate(obstacles):
+        ot = np.asarray(obs.times, dtype=np.float64)
+        op = np.asarray(obs.positions, dtype=np.float64)[:, : traj.dim]
+        t_lo, t_hi = float(traj.times[0]), float(traj.times[-1])
+        times = np.concatenate([[min(t_lo, ot[0])], ot, [max(t_hi, ot[-1])]])
+        pts = np.concatenate([op[:1], op, op[-1:]])
+        other = Trajectory(f"moving obstacle {oi}", pts, times)
+        for v in pair_encounters(traj, other, float(obs.radius)):
+            d, t = v.value, v.time
+            out.append(
+                Violation(
+                    "moving",
+                    (traj.id,),
+                    t,
+                    v.where,
+                    d,
+                    float(obs.radius),
+                    f"{traj.id}: {fmt_num(d)} m from the centre of moving obstacle {oi} (radius "
+                    f"{obs.radius:g} m) at t={t:.3f} s, UAV at {fmt_points(v.where[0])}, "
+                    f"obstacle at {fmt_points(v.where[1])}",
+                )
+            )
+    return out

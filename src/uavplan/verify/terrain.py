@@ -1,0 +1,268 @@
+"""Terrain and altitude-band checks of one trajectory against the bilinear DEM, exact along every
+segment (the segment split at grid lines, a quadratic per cell)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from uavplan.io.plan_file import Trajectory
+from uavplan.verify.report import (
+    TOL,
+    Violation,
+    fmt_num,
+    fmt_point,
+    fmt_points,
+    point_at,
+    segment_ends,
+)
+from uavplan.world.obstacles import AltitudeBand
+from uavplan.world.terrain import Terrain
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+# ================================================================================ terrain
+@njit(cache=True)
+def _terrain_extrema(A, B, H, x0, y0, dx, dy):  # pragma: no cover - numba
+    """Exact min and max of ``z - h(x, y)`` along segments ``A[m] -> B[m]`` over the bilinear DEM
+    ``H`` (clamped to its edges outside). Returns (m, 4): min, s at min, max, s at max."""
+    m = A.shape[0]
+    ny, nx = H.shape
+    out = np.empty((m, 4))
+    for q in range(m):
+        u0 = (A[q, 0] - x0) / dx
+        u1 = (B[q, 0] - x0) / dx
+        v0 = (A[q, 1] - y0) / dy
+        v1 = (B[q, 1] - y0) / dy
+        za = A[q, 2]
+        zb = B[q, 2]
+        du = u1 - u0
+        dv = v1 - v0
+        # next grid line crossed along u and along v (only lines 0..n-1 change the formula)
+        if du > 0:
+            ku = max(math.floor(u0) + 1, 0)
+            su = (ku - u0) / du if ku <= nx - 1 else 2.0
+        elif du < 0:
+            ku = min(math.ceil(u0) - 1, nx - 1)
+            su = (ku - u0) / du if ku >= 0 else 2.0
+        else:
+            ku = 0
+            su = 2.0
+        if dv > 0:
+            kv = max(math.floor(v0) + 1, 0)
+            sv = (kv - v0) / dv if kv <= ny - 1 else 2.0
+        elif dv < 0:
+            kv = min(math.ceil(v0) - 1, ny - 1)
+            sv = (kv - v0) / dv if kv >= 0 else 2.0
+        else:
+            kv = 0
+            sv = 2.0
+        cmin = np.inf
+        smin = 0.0
+        cmax = -np.inf
+        smax = 0.0
+        sa = 0.0
+        while True:
+            sb = min(su, sv, 1.0)
+            if sb > sa:
+                sm = 0.5 * (sa + sb)
+                uc = min(max(u0 + du * sm, 0.0), nx - 1.0)
+                vc = min(max(v0 + dv * sm, 0.0), ny - 1.0)
+                i = min(math.floor(uc), nx - 2)
+                j = min(math.floor(vc), ny - 2)
+                a0 = min(max(u0 + du * sa, 0.0), nx - 1.0) - i
+                a1 = min(max(u0 + du * sb, 0.0), nx - 1.0) - i - a0
+                b0 = min(max(v0 + dv * sa, 0.0), ny - 1.0) - j
+                b1 = min(max(v0 + dv * sb, 0.0), ny - 1.0) - j - b0
+                z0 = za + (zb - za) * sa
+                z1 = (zb - za) * (sb - sa)
+                h00 = H[j, i]
+                p = H[j, i + 1] - h00
+                r = H[j + 1, i] - h00
+                w = h00 - H[j, i + 1] - H[j + 1, i] + H[j + 1, i + 1]
+                # c(t) = z - h along the piece, t in [0, 1]: c0 + c1 t + c2 t^2
+                c0 = z0 - (h00 + p * a0 + r * b0 + w * a0 * b0)
+                c1 = z1 - (p * a1 + r * b1 + w * (a0 * b1 + a1 * b0))
+                c2 = -w * a1 * b1
+                e0 = c0
+                e1 = c0 + c1 + c2
+                if e0 < cmin:
+                    cmin = e0
+                    smin = sa
+                if e0 > cmax:
+                    cmax = e0
+                    smax = sa
+                if e1 < cmin:
+                    cmin = e1
+                    smin = sb
+                if e1 > cmax:
+                    cmax = e1
+                    smax = sb
+                if c2 != 0.0:
+                    tv = -c1 / (2.0 * c2)
+                    if 0.0 < tv < 1.0:
+                        ev = c0 + tv * (c1 + c2 * tv)
+                        if c2 > 0.0 and ev < cmin:
+                            cmin = ev
+                            smin = sa + tv * (sb - sa)
+                        elif c2 < 0.0 and ev > cmax:
+                            cmax = ev
+                            smax = sa + tv * (sb - sa)
+            if sb >= 1.0:
+                break
+            if su <= sb:
+                if du > 0:
+                    ku += 1
+                    su = (ku - u0) / du if ku <= nx - 1 else 2.0
+                else:
+                    ku -= 1
+                    su = (ku - u0) / du if ku >= 0 else 2.0
+            if sv <= sb:
+                if dv > 0:
+                    kv += 1
+                    sv = (kv - v0) / dv if kv <= ny - 1 else 2.0
+                else:
+                    kv -= 1
+                    sv = (kv - v0) / dv if kv >= 0 else 2.0
+            sa = sb
+        out[q, 0] = cmin
+        out[q, 1] = smin
+        out[q, 2] = cmax
+        out[q, 3] = smax
+    return out
+
+
+def terrain_clearance_extrema(a: FloatArray, b: FloatArray, terrain: Terrain) -> FloatArray:
+    """Exact minimum and maximum of ``z - h(x, y)`` along each segment over the bilinear DEM.
+
+    Each segment is split where it crosses the grid lines; on each piece the clearance is a
+    quadratic in the segment parameter, whose extrema are taken in closed form. Outside the grid
+    the height is that of the nearest edge point (the grid extends its edges).
+
+    Args:
+        a, b: (m, 3) segment ends, metres.
+        terrain: the DEM (only ``heights, x0, y0, dx, dy`` are read).
+
+    Returns:
+        (m, 4): minimum clearance (m), segment parameter of the minimum, maximum clearance (m),
+        segment parameter of the maximum.
+    """
+    A = np.ascontiguousarray(a, dtype=np.float64).reshape(-1, 3)
+    B = np.ascontiguousarray(b, dtype=np.float64).reshape(-1, 3)
+    H = np.ascontiguousarray(terrain.heights, dtype=np.float64)
+    return np.asarray(
+        _terrain_extrema(
+            A, B, H, float(terrain.x0), float(terrain.y0), float(terrain.dx), float(terrain.dy)
+        )
+    )
+
+
+def bilinear_height(terrain: Terrain, x: FloatArray, y: FloatArray) -> FloatArray:
+    """The verifier's own bilinear lookup (nearest edge outside the grid), metres."""
+    H = np.asarray(terrain.heights, dtype=np.float64)
+    ny, nx = H.shape
+    u = np.clip((np.asarray(x, dtype=np.float64) - terrain.x0) / terrain.dx, 0.0, nx - 1.0)
+    v = np.clip((np.asarray(y, dtype=np.float64) - terrain.y0) / terrain.dy, 0.0, ny - 1.0)
+    i = np.minimum(np.floor(u).astype(np.intp), nx - 2)
+    j = np.minimum(np.floor(v).astype(np.intp), ny - 2)
+    s, r = u - i, v - j
+    return np.asarray(
+        H[j, i] * (1 - s) * (1 - r)
+        + H[j, i + 1] * s * (1 - r)
+        + H[j + 1, i] * (1 - s) * r
+        + H[j + 1, i + 1] * s * r
+    )
+
+
+def check_terrain(
+    traj: Trajectory, terrain: Terrain | None, band: AltitudeBand | None = None
+) -> list[Violation]:
+    """Terrain and altitude band along every segment (3-D only).
+
+    * ``terrain``: the clearance ``z - h`` must stay >= 0 (exact, bilinear DEM);
+    * ``altitude``, ground reference: ``z - h`` in ``[band.min, band.max]`` along the segment
+      (exact min and max; ground is 0 without terrain);
+    * ``altitude``, absolute reference: ``z`` in ``[band.min, band.max]`` at every waypoint
+      (``z`` is linear along a segment).
+    """
+    if traj.dim != 3:
+        return []
+    a, b = segment_ends(traj)
+    out: list[Violation] = []
+    ground = band is not None and band.reference == "ground"
+    ext: FloatArray | None = None
+    if terrain is not None:
+        ext = terrain_clearance_extrema(a, b, terrain)
+    elif ground:  # flat ground at z = 0: z - h is linear
+        za, zb = a[:, 2], b[:, 2]
+        ext = np.stack(
+            [
+                np.minimum(za, zb),
+                np.where(za <= zb, 0.0, 1.0),
+                np.maximum(za, zb),
+                np.where(za >= zb, 0.0, 1.0),
+            ],
+            axis=1,
+        )
+    if terrain is not None and ext is not None:
+        for k in (int(i) for i in np.flatnonzero(ext[:, 0] < -TOL)):
+            p, t = point_at(traj, k, float(ext[k, 1]))
+            out.append(
+                Violation(
+                    "terrain",
+                    (traj.id,),
+                    t,
+                    (p,),
+                    float(ext[k, 0]),
+                    0.0,
+                    f"{traj.id}: segment {k} goes {fmt_num(-ext[k, 0])} m under the terrain at "
+                    f"{fmt_points(p)}, t={t:.3f} s",
+                )
+            )
+    if band is None:
+        return out
+    if ground and ext is not None:
+        for k in range(a.shape[0]):
+            for col, bad, bound, word in (
+                (0, ext[k, 0] < band.min - TOL, band.min, "below"),
+                (2, ext[k, 2] > band.max + TOL, band.max, "above"),
+            ):
+                if not bad:
+                    continue
+                p, t = point_at(traj, k, float(ext[k, col + 1]))
+                out.append(
+                    Violation(
+                        "altitude",
+                        (traj.id,),
+                        t,
+                        (p,),
+                        float(ext[k, col]),
+                        bound,
+                        f"{traj.id}: segment {k} at {fmt_num(ext[k, col])} m above ground, {word} "
+                        f"the band [{band.min:g}, {band.max:g}] m, at {fmt_points(p)}, t={t:.3f} s",
+                    )
+                )
+    elif not ground:
+        z = traj.points[:, 2]
+        for w in np.flatnonzero((z < band.min - TOL) | (z > band.max + TOL)):
+            k = int(w)
+            zk = float(z[k])
+            bound = band.min if zk < band.min else band.max
+            out.append(
+                Violation(
+                    "altitude",
+                    (traj.id,),
+                    float(traj.times[k]),
+                    (fmt_point(traj.points[k]),),
+                    zk,
+                    bound,
+                    f"{traj.id}: waypoint {k} at altitude {fmt_num(zk)} m, outside the band "
+                    f"[{band.min:g}, {band.max:g}] m",
+                )
+            )
+    return out

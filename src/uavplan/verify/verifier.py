@@ -1,0 +1,173 @@
+"""The independent verifier for fleet plans (``plan.json``): is every UAV's timed path flyable, and
+do the UAVs keep their distance from each other?
+
+This module is written apart from the planner's own cost and feasibility code on purpose: it
+does not import :mod:`uavplan.problems`, :mod:`uavplan.world.geometry`, the terrain kernels or
+``Terrain.clears / min_clearance / max_clearance``, nor :mod:`uavplan.world.reservations`. It
+reads the scenario only as data (bounds, obstacles, the DEM grid, the altitude band, UAV limits)
+and does its own geometry, so that a bug in the planner's geometry cannot hide itself.
+
+Semantics (frame: metres, x east, y north, z up, absolute altitudes; seconds):
+
+* **Timed paths.** A UAV flies its polyline piecewise-linearly in time between
+  ``(times[k], waypoints[k])``. It is in the air only during ``[times[0], times[-1]]`` (it takes
+  off at its start and lands at its goal); before and after it is no hazard. A repeated time with
+  two different points is an instantaneous jump: it is reported as a ``speed`` violation and, for
+  separation, the jump is swept as a straight motion at that instant.
+* **Separation** (``separation``): for every pair of UAVs, the minimum distance over continuous
+  time must be at least ``S2 = scenario.uav.s2``. Between the union of both UAVs' time
+  breakpoints the relative motion is linear, so the minimum on each common interval is the
+  minimum of a quadratic (closed form, clamped to the interval): exact, not sampled. Pairs are
+  pruned first (sort-and-sweep on whole-flight boxes grown by ``S2``, and the flights' time
+  windows); a pruned pair is farther apart than ``S2`` at every instant. One violation is
+  reported per close encounter (a stretch of time during which the pair is closer than ``S2``),
+  at its closest point. The report's minimum separation is the fleet's exact minimum over all
+  pairs (when no pair comes within ``S2``, the pruning is widened until it is found).
+* **Obstacles.** Cylinders (``cylinder``): the part of a segment between ``z_min - margin`` and
+  ``z_max + margin`` must stay at a horizontal distance of at least ``radius + margin`` from the
+  axis. Circles (``circle``) are infinite vertical prisms of radius ``radius + margin``. Polygons
+  and revealed uncertain areas (``polygon``) are infinite vertical prisms: a segment must not
+  enter the interior and must keep at least ``margin`` from the boundary (touching a polygon
+  with no margin is allowed). Moving obstacles (``moving``): the distance over continuous time
+  from the UAV to the obstacle's centre (which holds its first and last positions outside its
+  knots) must be at least its radius. All exact.
+* **Bounds** (``bounds``): every waypoint lies in the scenario's box (the box is convex, so whole
+  segments do).
+* **Terrain** (``terrain``): ``z - h(x, y) >= 0`` along every segment against the bilinear DEM
+  (outside the grid the height of the nearest edge point). Along a straight segment inside one
+  grid cell the bilinear surface is a quadratic in the segment parameter, so each segment is split
+  at the grid lines it crosses and the exact minimum is taken per piece.
+* **Altitude band** (``altitude``): with reference ``"ground"`` the height above ground stays in
+  ``[min, max]`` along the whole segment (exact, with the same per-cell quadratic for the minimum
+  and the maximum; ground is 0 without terrain); with ``"absolute"``, ``z`` stays in
+  ``[min, max]`` (linear along a segment, so the waypoints suffice).
+* **Timing.** ``times`` must be non-decreasing (``times``); the implied speed of a segment must
+  not exceed ``scenario.uav.speed * (1 + 1e-6)`` (``speed``), with an extra ``1e-6 (v + 2)`` m of
+  slack per segment for the 6-decimal rounding of ``plan.json``. A UAV whose times decrease is left
+  out of the separation and moving-obstacle checks (its motion is undefined) and a warning says
+  so.
+* **Warnings** (not violations): the plan's scenario name differs from the scenario's; a UAV's
+  first or last point differs from its task's start or goal; a UAV the plan calls feasible
+  fails a check.
+
+All geometric comparisons use a tolerance of ``TOL = 1e-6`` m: a distance exactly equal to the
+required one passes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from uavplan.io.plan_file import Trajectory, parse_plan
+from uavplan.verify.obstacles import check_circles, check_cylinders, check_polygons
+from uavplan.verify.report import (
+    KINDS,
+    VerifyReport,
+    Violation,
+    fmt_points,
+)
+from uavplan.verify.separation import check_moving, check_separation
+from uavplan.verify.terrain import check_terrain
+from uavplan.verify.timing import check_bounds, check_speed, check_times
+from uavplan.world.scenario import Scenario
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+# ================================================================================ everything
+def verify_trajectories(
+    trajs: Sequence[Trajectory],
+    scenario: Scenario,
+    plan_scenario: str | None = None,
+    smoothed: bool = False,
+) -> VerifyReport:
+    """Run every check on parsed trajectories (see the module docstring)."""
+    sc = scenario
+    report = VerifyReport(
+        scenario=sc.name,
+        plan_scenario=plan_scenario,
+        smoothed=smoothed,
+        uav_ids=[t.id for t in trajs],
+        n_segments=sum(len(t.times) - 1 for t in trajs),
+        s2=float(sc.uav.s2),
+    )
+    if plan_scenario is not None and plan_scenario != sc.name:
+        report.warnings.append(
+            f"the plan is for scenario {plan_scenario!r}, verifying against {sc.name!r}"
+        )
+    tasks = {t.id: t for t in sc.tasks}
+    per_uav: list[Violation] = []
+    timed: list[Trajectory] = []
+    polygons = sc.no_fly_polygons
+    for tr in trajs:
+        task = tasks.get(tr.id)
+        if task is not None:
+            for what, want, got in (
+                ("start", task.start, tr.points[0]),
+                ("goal", task.goal, tr.points[-1]),
+            ):
+                gap = float(np.linalg.norm(np.asarray(want) - got))
+                if gap > 1e-3:
+                    report.warnings.append(
+                        f"{tr.id}: path {what} {fmt_points(got)} is {gap:.3f} m from the task's "
+                        f"{what} {fmt_points(want)}"
+                    )
+        vs = check_times(tr)
+        times_ok = not vs
+        if not times_ok:
+            report.warnings.append(
+                f"{tr.id}: times decrease, left out of the separation and moving-obstacle checks"
+            )
+        else:
+            timed.append(tr)
+        vs += check_speed(tr, float(sc.uav.speed))
+        vs += check_bounds(tr, sc.bounds.lower, sc.bounds.upper)
+        if tr.dim == 3 and sc.cylinders:
+            vs += check_cylinders(tr, sc.cylinders)
+        if sc.circles:
+            vs += check_circles(tr, sc.circles)
+        if polygons:
+            vs += check_polygons(tr, polygons)
+        if sc.moving_obstacles and times_ok:
+            vs += check_moving(tr, sc.moving_obstacles)
+        vs += check_terrain(tr, sc.terrain, sc.altitude)
+        if tr.feasible and vs:
+            report.warnings.append(
+                f"{tr.id}: the plan calls it feasible, the verifier found {len(vs)} violation(s)"
+            )
+        per_uav += vs
+    sep = check_separation(timed, report.s2)
+    n = len(trajs)
+    report.pairs_total = n * (n - 1) // 2
+    report.pairs_checked = sep.pairs_checked
+    report.min_separation = sep.min_distance
+    report.min_separation_pair = sep.min_pair
+    report.min_separation_time = sep.min_time
+    order = {k: i for i, k in enumerate(KINDS)}
+    report.violations = sorted(per_uav + sep.violations, key=lambda v: order.get(v.kind, 99))
+    return report
+
+
+def verify_plan(
+    plan: Mapping[str, Any], scenario: Scenario, smoothed: bool = False
+) -> VerifyReport:
+    """Verify a decoded ``plan.json`` against ``scenario`` (see the module docstring).
+
+    Args:
+        plan: the decoded plan (``{"format", "scenario", "uavs": [{"id", "waypoints", "times",
+            ...}, ...]}``).
+        scenario: the world to check against.
+        smoothed: verify each UAV's ``smoothed`` polyline instead of its waypoints.
+
+    Raises:
+        PlanFormatError: the plan cannot be read (a missing or malformed field, mismatched
+            lengths, points of the wrong dimension, no smoothed path with ``smoothed=True``).
+    """
+    pf = parse_plan(plan, scenario.dim)
+    trajs = pf.trajectories("smoothed" if smoothed else "planned")
+    return verify_trajectories(trajs, scenario, pf.scenario, smoothed)
