@@ -16,7 +16,8 @@ import dataclasses
 import tempfile
 import time
 
-from uavplan.bench.plans import Scale, get_plan
+from uavplan.bench.catalog import get_plan
+from uavplan.bench.plans import Scale
 from uavplan.bench.runner import run_sweep
 from uavplan.bench.store import ResultStore
 from uavplan.scenarios.generators import SETTINGS

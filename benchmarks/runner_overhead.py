@@ -18,7 +18,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from uavplan.bench.plans import get_plan
+from uavplan.bench.catalog import get_plan
 from uavplan.bench.runner import run_sweep
 
 

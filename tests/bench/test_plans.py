@@ -7,7 +7,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from uavplan.bench.plans import available_plans, get_plan
+from uavplan.bench.catalog import available_plans, get_plan
 from uavplan.bench.report import write_report
 from uavplan.bench.runner import run_sweep
 

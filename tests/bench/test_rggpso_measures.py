@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from uavplan.bench import rggpso
+from uavplan.bench.papers import rggpso
 from uavplan.bench.report import write_report
 from uavplan.bench.runner import run_sweep
 
@@ -101,7 +101,7 @@ def test_ordering_test_detects_a_true_and_a_false_claim() -> None:
 
 
 def test_rgg_report_has_the_paper_tables(tmp_path: Path) -> None:
-    from uavplan.bench.plans import get_plan
+    from uavplan.bench.catalog import get_plan
 
     run_sweep(get_plan("rggpso-rq1"), tmp_path, scale="smoke", executor="serial")
     _, md = write_report(tmp_path)

@@ -14,7 +14,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from uavplan.bench.plans import Algorithm, ExperimentPlan, Scale, derive_seed, get_plan
+from uavplan.bench.catalog import get_plan
+from uavplan.bench.plans import Algorithm, ExperimentPlan, Scale, derive_seed
 from uavplan.bench.runner import SweepInterrupted, run_sweep
 from uavplan.bench.store import ResultStore
 
@@ -216,7 +217,7 @@ def test_shards_share_one_schema(tmp_path: Path) -> None:
 
 
 def test_report_uses_the_runs_the_last_sweep_asked_for(tmp_path) -> None:
-    from uavplan.bench.plans import get_plan
+    from uavplan.bench.catalog import get_plan
     from uavplan.bench.report import write_report
     from uavplan.bench.runner import run_sweep
 

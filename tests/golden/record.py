@@ -86,7 +86,7 @@ def demo_record(plan: dict[str, Any]) -> dict[str, Any]:
 def collect() -> dict[str, Any]:
     from typer.testing import CliRunner
 
-    from uavplan.bench.plans import available_plans, get_plan
+    from uavplan.bench.catalog import available_plans, get_plan
     from uavplan.bench.runner import run_sweep
     from uavplan.bench.store import ResultStore
     from uavplan.cli import app

@@ -18,7 +18,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from uavplan.bench import plots, ppswarm, rggpso, stats
+from uavplan.bench import plots, stats
+from uavplan.bench.catalog import find_plan
 from uavplan.bench.store import ResultStore
 from uavplan.io.atomic import write_bytes_atomic, write_text_atomic
 
@@ -208,8 +209,8 @@ def write_report(folder: str | Path) -> tuple[Path, Path]:
             figures.append((name, title, data))
 
     sections = build_sections(df, manifest)
-    paper = {"rggpso-": rggpso.sections, "ppswarm-": ppswarm.sections}
-    maker = next((m for p, m in paper.items() if plan.startswith(p)), None)
+    registered = find_plan(plan)
+    maker = registered.report if registered is not None else None
     if maker is not None and not df.empty:
         paper_sections, paper_figures = maker(df, plan)
         sections = paper_sections + sections

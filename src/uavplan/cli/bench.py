@@ -23,7 +23,7 @@ def _fail(msg: str, code: int = 2) -> typer.Exit:
 @bench_app.command("list")
 def list_plans() -> None:
     """The experiment plans and their scales."""
-    from uavplan.bench.plans import available_plans, get_plan
+    from uavplan.bench.catalog import available_plans, get_plan
 
     table = Table(title="experiment plans")
     for col in ("plan", "scenarios x algorithms", "smoke runs", "paper runs", "description"):
@@ -55,7 +55,8 @@ def run(
     report: Annotated[bool, typer.Option(help="Write the report when done.")] = True,
 ) -> None:
     """Run PLAN; finished runs in --out are skipped, so the same command resumes a sweep."""
-    from uavplan.bench.plans import PlanError, get_plan
+    from uavplan.bench.catalog import get_plan
+    from uavplan.bench.plans import PlanError
     from uavplan.bench.runner import Progress as SweepProgress
     from uavplan.bench.runner import SweepInterrupted, run_sweep
 

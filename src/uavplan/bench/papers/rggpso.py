@@ -1,8 +1,9 @@
-"""The RGG-PSO+ paper's measures (Liu et al. 2024, Sect. 5.3 and 6) over a sweep's run table.
+"""RGG-PSO+ (Liu et al. 2024, J. Intell. Robot. Syst.): its experiments (Sect. 5, the plans
+``rggpso-rq1/2/3``: 1000 scenes x 10 runs) and its measures (Sect. 5.3 and 6) over a sweep's
+run table, shown by the plans' report hook (:func:`sections`).
 
-Each function takes the tidy run table of a ``rggpso-rq*`` plan (``ResultStore.read()``) and
-returns a DataFrame (or a figure); :mod:`uavplan.bench.report` shows them when the plan is one of
-the paper's.
+Each measure takes the tidy run table of a ``rggpso-rq*`` plan (``ResultStore.read()``) and
+returns a DataFrame (or a figure).
 
 Definitions (the paper is terse; our readings):
 
@@ -41,6 +42,7 @@ import scipy.stats as sps
 from matplotlib.figure import Figure
 
 from uavplan.bench import stats
+from uavplan.bench.plans import Algorithm, ExperimentPlan, Scale, register_plan
 
 #: Penalty of the normalized length where no feasible path exists (Sect. 6.1).
 PENALTY = 5.0
@@ -366,3 +368,63 @@ def sections(
             )
         )
     return out, figs
+
+
+# ------------------------------------------------------------------------------ the plans
+def plans() -> list[ExperimentPlan]:
+    """RGG-PSO+ (Liu et al. 2024) Sect. 5: 1000 scenes x 10 runs, 100 particles, 200 iterations,
+    N = 20 waypoints (the scenes' default); smoke scale: two scenes, one run, a small budget."""
+    from uavplan.scenarios.generators import family_names
+
+    paper_scenes = tuple(family_names())
+    smoke_scenes = ("rgg-n05-i000", "rgg-n14-i000")
+    scales = {
+        "smoke": Scale(runs=1, iterations=15, pop_size=20, scenarios=smoke_scenes),
+        "paper": Scale(runs=10, iterations=200, pop_size=100, scenarios=paper_scenes),
+    }
+
+    def alg(label: str) -> Algorithm:
+        return Algorithm(label, label)
+
+    return [
+        ExperimentPlan(
+            name="rggpso-rq1",
+            description=(
+                "RGG-PSO+ vs RGG-PSO, PSO, SPSO, GA, DE on the 1000-scene family, 10 runs: best "
+                "normalized path length over iterations (Fig. 5)"
+            ),
+            scenarios=smoke_scenes,
+            algorithms=tuple(alg(a) for a in ("rgg-pso+", "rgg-pso", "pso", "spso", "ga", "de")),
+            scales=scales,
+            reference="rgg-pso+",
+            metric="path_length",
+            report=sections,
+        ),
+        ExperimentPlan(
+            name="rggpso-rq2",
+            description=(
+                "RGG-PSO vs PSO: F-Measure (iterations before the first feasible particle) and "
+                "the first feasible path's normalized length (Table 1)"
+            ),
+            scenarios=smoke_scenes,
+            algorithms=(alg("rgg-pso"), alg("pso")),
+            scales=scales,
+            reference="rgg-pso",
+            metric="path_length",
+            report=sections,
+        ),
+        ExperimentPlan(
+            name="rggpso-rq3",
+            description="RGG-PSO+ vs RGG-PSO vs PSO final normalized lengths (Table 2)",
+            scenarios=smoke_scenes,
+            algorithms=(alg("rgg-pso+"), alg("rgg-pso"), alg("pso")),
+            scales=scales,
+            reference="rgg-pso+",
+            metric="path_length",
+            report=sections,
+        ),
+    ]
+
+
+for _plan in plans():
+    register_plan(_plan)

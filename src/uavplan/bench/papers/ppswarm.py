@@ -1,5 +1,7 @@
-"""PPSwarm (Meng, Chen & Qu 2024, *Drones* 8, 192) report sections: our Tables 3-5 beside the
-paper's, the independent verifier's verdicts, and the restart curves of Sect. 5.3.3.
+"""PPSwarm (Meng, Chen & Qu 2024, *Drones* 8, 192): its experiments (Sect. 5, the plans
+``ppswarm-table3/4/5`` and ``ppswarm-params``, run kind ``fleet``) and its report sections (the
+plans' report hook :func:`sections`): our Tables 3-5 beside the paper's, the independent
+verifier's verdicts, and the restart curves of Sect. 5.3.3.
 
 Costs are the fleet's total F (Eq. 13, the sum over UAVs); a fleet with an infeasible UAV costs
 inf. Best / worst / mean / std are over the runs whose fleet is feasible, and ``feasible`` is the
@@ -14,6 +16,8 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+
+from uavplan.bench.plans import Algorithm, ExperimentPlan, Scale, register_plan
 
 ALGS = ("pso", "de", "abc", "gwo", "spso", "ppswarm")
 
@@ -255,3 +259,128 @@ def sections(
         )
     )
     return out, figs
+
+
+# ------------------------------------------------------------------------------ the plans
+def plans() -> list[ExperimentPlan]:
+    """PPSwarm (Meng, Chen & Qu 2024) Sect. 5 on our four scenarios (``ppswarm1``-``4``, 40 UAVs;
+    ``NAME@N`` is the same world with a generated fleet of N UAVs). Each configuration runs with
+    its own ``N_iter`` (a scale's ``iterations = 0``); the smoke scale runs 4 UAVs with a tiny
+    budget. Every fleet plan is checked by the independent verifier."""
+    table2 = {  # Table 2: the baselines under LH prioritized planning, N_pop 300, N_iter 100
+        "pso": {"optimizer": "pso", "w": 0.8, "c1": 1.45, "c2": 1.5},
+        "de": {"optimizer": "de", "F": 0.8, "CR": 0.9},
+        # ABC: one of our iterations is one phase, so 100 cycles are 201 iterations
+        "abc": {"optimizer": "abc", "n_iter": 201},
+        "gwo": {"optimizer": "gwo", "max_iterations": 100},
+        "spso": {"optimizer": "spso", "w": 1.0, "c1": 1.5, "c2": 1.5},
+    }
+    scen4 = tuple(f"ppswarm{i}" for i in range(1, 5))
+    smoke = Scale(
+        runs=1,
+        iterations=3,
+        pop_size=12,
+        scenarios=("ppswarm1@4",),
+        options={"pop_size": 12, "rrt_iterations": 1500},
+    )
+    smoke_params = Scale(
+        runs=1,
+        iterations=2,
+        scenarios=("ppswarm1@3",),
+        options={"pop_size": 8, "n_restart": 2, "rrt_iterations": 1500},
+    )
+    plans = [
+        ExperimentPlan(
+            name="ppswarm-table3",
+            description=(
+                "PPSwarm vs PSO, DE, ABC, GWO, SPSO (LH prioritized planning), 40 UAVs, four "
+                "scenarios, 20 runs: best/worst/mean/std cost and runtime (Table 3), "
+                "convergence (Fig. 5), box plots (Fig. 6)"
+            ),
+            scenarios=scen4,
+            # graded infeasibility for every method: with the literal infinite costs of Sect. 2
+            # the uniformly seeded baselines end with most UAVs infeasible (see
+            # uavplan.planners.prioritized); feasible paths still cost exactly F
+            algorithms=(
+                Algorithm("ppswarm", "ppswarm", {"constraints": "feasibility-first"}),
+                *(
+                    Algorithm(k, "prioritized", {**v, "constraints": "feasibility-first"})
+                    for k, v in table2.items()
+                ),
+            ),
+            scales={"smoke": smoke, "paper": Scale(runs=20, iterations=0, pop_size=300)},
+            kind="fleet",
+            report=sections,
+            reference="ppswarm",
+        ),
+        ExperimentPlan(
+            name="ppswarm-table4",
+            description=(
+                "PPSwarm scalability on scenario 1: 40-500 UAVs with N_restart = 1 and 5 "
+                "(Table 4, Fig. 7)"
+            ),
+            scenarios=tuple(f"ppswarm1@{n}" for n in (40, 100, 200, 300, 400, 500)),
+            algorithms=(
+                Algorithm("ppswarm-r1", "ppswarm", {"n_restart": 1}),
+                Algorithm("ppswarm-r5", "ppswarm", {"n_restart": 5}),
+                # ours, not the paper's: UAVs blocked at take-off may wait up to 12 x 5 s
+                Algorithm("ppswarm-r1-wait", "ppswarm", {"n_restart": 1, "max_delays": 12}),
+            ),
+            scales={"smoke": smoke, "paper": Scale(runs=1, iterations=0, pop_size=300)},
+            kind="fleet",
+            report=sections,
+            reference="ppswarm-r5",
+        ),
+        ExperimentPlan(
+            name="ppswarm-table5",
+            description=(
+                "Priority orders LH vs SH vs RND with 10, 20, 30, 40 UAVs on the four "
+                "scenarios, 20 runs (Table 5)"
+            ),
+            scenarios=tuple(f"{s}@{n}" for s in scen4 for n in (10, 20, 30, 40)),
+            algorithms=tuple(
+                Algorithm(f"ppswarm-{o}", "ppswarm", {"order": o}) for o in ("lh", "sh", "rnd")
+            ),
+            scales={"smoke": smoke, "paper": Scale(runs=20, iterations=0, pop_size=300)},
+            kind="fleet",
+            report=sections,
+            reference="ppswarm-lh",
+        ),
+        ExperimentPlan(
+            name="ppswarm-params",
+            description=(
+                "Sect. 5.3.3 parameter analysis on scenario 1 (10 UAVs), 30 restarts: N_iter "
+                "20/40/60 with N_pop 100 and 300 and rho 0 (Fig. 9); rho 0-60 % (Fig. 10)"
+            ),
+            scenarios=("ppswarm1@10",),
+            algorithms=(
+                *(
+                    Algorithm(
+                        f"pop{p}-iter{it}-rho0",
+                        "ppswarm",
+                        {"pop_size": p, "n_iter": it, "rho": 0.0, "n_restart": 30},
+                    )
+                    for p in (100, 300)
+                    for it in (20, 40, 60)
+                ),
+                *(
+                    Algorithm(
+                        f"pop{p}-iter{it}-rho{int(r * 100)}",
+                        "ppswarm",
+                        {"pop_size": p, "n_iter": it, "rho": r, "n_restart": 30},
+                    )
+                    for p, it in ((100, 20), (300, 20), (300, 40), (300, 60))
+                    for r in (0.2, 0.4, 0.6)
+                ),
+            ),
+            scales={"smoke": smoke_params, "paper": Scale(runs=20, iterations=0)},
+            kind="fleet",
+            report=sections,
+            reference="pop300-iter20-rho20",
+        ),
+    ]
+    return plans
+
+
+for _plan in plans():
+    register_plan(_plan)

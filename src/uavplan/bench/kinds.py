@@ -1,0 +1,166 @@
+"""Run kinds: how one run of a plan is executed, by name (a plan's ``kind``).
+
+Built in: ``planner`` (a single-UAV planner), ``function`` (an optimizer on a benchmark
+function), ``fleet`` (a fleet planner, its plan checked by the independent verifier). A paper
+whose runs need something else registers its own kind with :func:`register_kind` in its module
+under :mod:`uavplan.bench.papers`. A kind takes the :class:`~uavplan.bench.plans.RunSpec` and
+returns the run's metrics (the columns of its row).
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from uavplan.bench.plans import PlanError, RunSpec
+
+RunKind = Callable[[RunSpec], dict[str, Any]]
+_KINDS: dict[str, RunKind] = {}
+
+
+def register_kind(name: str) -> Callable[[RunKind], RunKind]:
+    """Decorator: register a run kind under ``name``."""
+
+    def add(fn: RunKind) -> RunKind:
+        if name in _KINDS and _KINDS[name] is not fn:
+            raise PlanError(f"run kind {name!r} is already registered")
+        _KINDS[name] = fn
+        return fn
+
+    return add
+
+
+def run_kind(name: str) -> RunKind:
+    """The run kind registered under ``name``."""
+    try:
+        return _KINDS[name]
+    except KeyError:
+        raise PlanError(f"unknown run kind {name!r}; registered: {sorted(_KINDS)}") from None
+
+
+def kinds() -> list[str]:
+    return sorted(_KINDS)
+
+
+@functools.lru_cache(maxsize=16)
+def _scenario(ref: str) -> Any:
+    from uavplan.scenarios import resolve
+
+    return resolve(ref)
+
+
+def _budget(params: Any) -> Any:
+    from uavplan.optimizers import Budget
+
+    if params.get("evaluations"):
+        return Budget(max_evaluations=int(params["evaluations"]))
+    return Budget(max_iterations=int(params["iterations"]))
+
+
+@register_kind("planner")
+def run_planner(spec: RunSpec) -> dict[str, Any]:
+    """A single-UAV planner on the scenario's first task (feasibility tracked)."""
+    from uavplan.planners import get_planner
+
+    p = spec.params
+    scenario = _scenario(spec.scenario)
+    planner = get_planner(p["planner"], **dict(p["options"]))
+    if "track_feasibility" in planner.option_names():
+        planner = get_planner(p["planner"], track_feasibility=True, **dict(p["options"]))
+    r = planner.plan(scenario, None, _budget(p), spec.seed)
+    return {
+        "best_cost": r.cost,
+        "path_length": r.length,
+        "feasible": r.feasible,
+        "first_feasible_iteration": r.first_feasible_iteration,
+        "evaluations": r.evaluations,
+        "iterations": r.iterations,
+        "history": np.asarray(r.history),
+        "evaluations_history": np.asarray(r.evaluations_history, dtype=np.float64),
+        "feasible_history": np.asarray(r.feasible_history),
+        "violations": ",".join(r.violations),
+        "waypoints": np.asarray(r.waypoints).ravel().tolist(),
+        "reference_length": scenario.metadata.get("reference_length"),
+        "n_dim": int(np.asarray(r.waypoints).shape[1]),
+    }
+
+
+@register_kind("function")
+def run_function(spec: RunSpec) -> dict[str, Any]:
+    """An optimizer on a benchmark function (:mod:`uavplan.optimizers.functions`)."""
+    from uavplan.optimizers import minimize
+    from uavplan.optimizers.functions import function_problem
+
+    p = spec.params
+    problem = function_problem(spec.scenario, noise_seed=spec.seed)
+    r = minimize(problem, p["planner"], _budget(p), spec.seed, **dict(p["options"]))
+    return {
+        "best_cost": r.f,
+        "path_length": None,
+        "feasible": True,
+        "first_feasible_iteration": 1,
+        "evaluations": r.evaluations,
+        "iterations": r.iterations,
+        "history": np.asarray(r.history),
+        "evaluations_history": np.asarray(r.evaluations_history, dtype=np.float64),
+    }
+
+
+def fleet_scenario(ref: str) -> Any:
+    """A fleet scenario reference: a built-in name or file, optionally ``@N`` for the same world
+    with a generated fleet of N UAVs (its own crossing pattern and seed, see
+    :func:`uavplan.world.fleet_tasks.with_fleet`)."""
+    from uavplan.world.fleet_tasks import with_fleet
+
+    base, _, n = ref.partition("@")
+    scenario = _scenario(base)
+    if not n:
+        return scenario
+    fleet = dict(scenario.metadata.get("fleet") or {})
+    return with_fleet(
+        scenario, int(n), seed=int(fleet.get("seed", 0)), pattern=fleet.get("pattern", "crossing")
+    )
+
+
+@register_kind("fleet")
+def run_fleet(spec: RunSpec) -> dict[str, Any]:
+    """A fleet planner run, its plan checked by the independent verifier
+    (:mod:`uavplan.verify`), planned and smoothed paths both."""
+    from uavplan.io.plan_file import plan_document
+    from uavplan.planners import get_planner
+    from uavplan.planners.fleet_plan import FleetPlan
+    from uavplan.verify import verify_plan
+
+    p = spec.params
+    scenario = fleet_scenario(spec.scenario)
+    planner = get_planner(p["planner"], **dict(p["options"]))
+    budget = int(p["iterations"]) if p.get("iterations") else None
+    fr = planner.plan_fleet(scenario, budget, spec.seed)  # type: ignore[attr-defined]
+    plan = FleetPlan(scenario, planner.name, planner.describe(), spec.seed, fr.results, fr)
+    d = plan_document(plan)
+    rep = verify_plan(d, scenario)
+    smoothed = all(r.smoothed is not None for r in fr.results)
+    rep_s = verify_plan(d, scenario, smoothed=True) if smoothed else None
+    return {
+        "best_cost": fr.cost,
+        "path_length": float(sum(r.length for r in fr.results)),
+        "feasible": fr.feasible,
+        "first_feasible_iteration": None,
+        "evaluations": int(fr.info.get("evaluations", 0)),
+        "iterations": len(fr.history),
+        "history": np.asarray(fr.history),
+        "restart_costs": np.asarray(fr.restart_costs),
+        "n_uavs": len(fr.results),
+        "n_infeasible": int(sum(not r.feasible for r in fr.results)),
+        "verified": bool(rep.ok),
+        "verify_violations": len(rep.violations),
+        "min_separation": float(rep.min_separation),
+        "smoothed_verified": None if rep_s is None else bool(rep_s.ok),
+        "smoothed_violations": None if rep_s is None else len(rep_s.violations),
+        "smoothed_not_clear": int(sum(r.smoothed_ok is False for r in fr.results)),
+        "rrt_time": float(fr.info.get("rrt_time", 0.0)),
+        "planner_wall_time": float(fr.wall_time),
+    }
