@@ -1,8 +1,10 @@
-"""Command line: ``uavplan plan | demo | verify | scenario ... | bench ... | report``.
+"""Command line: ``uavplan plan | demo | verify | export | planners | schema | scenario ... |
+bench ... | report``.
 
 One module per command group: :mod:`uavplan.cli.plan` (``plan``, ``demo``),
 :mod:`uavplan.cli.scenario`, :mod:`uavplan.cli.bench` (``bench``, ``report``),
-:mod:`uavplan.cli.verify`.
+:mod:`uavplan.cli.verify`, :mod:`uavplan.cli.export`, :mod:`uavplan.cli.planners`,
+:mod:`uavplan.cli.schema`.
 """
 
 from __future__ import annotations
@@ -11,9 +13,12 @@ import typer
 
 from uavplan.cli.bench import bench_app
 from uavplan.cli.bench import report as report_command
+from uavplan.cli.export import export as export_command
 from uavplan.cli.plan import demo as demo_command
 from uavplan.cli.plan import plan as plan_command
+from uavplan.cli.planners import planners as planners_command
 from uavplan.cli.scenario import scenario_app
+from uavplan.cli.schema import schema as schema_command
 from uavplan.cli.verify import verify as verify_command
 
 app = typer.Typer(
@@ -29,6 +34,9 @@ app.add_typer(scenario_app, name="scenario")
 app.add_typer(bench_app, name="bench")
 app.command("report")(report_command)
 app.command("verify")(verify_command)
+app.command("export")(export_command)
+app.command("planners")(planners_command)
+app.command("schema")(schema_command)
 
 
 def main() -> None:

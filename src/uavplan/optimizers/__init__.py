@@ -48,7 +48,9 @@ __all__ = [
     "run",
 ]
 
-# Built-in optimizers: importing their modules registers them.
+# Importing an optimizer's module registers it: the built-ins by name (they are public API),
+# and any other module of this package found on disk.
+from uavplan._discovery import import_submodules
 from uavplan.optimizers.abc import ABC, ABCConfig
 from uavplan.optimizers.de import DE, DEConfig
 from uavplan.optimizers.ga import GA, GAConfig
@@ -58,3 +60,5 @@ from uavplan.optimizers.pso import PSO, PSOConfig
 from uavplan.optimizers.rscdwoa import RSCDWOA, RSCDWOAConfig
 from uavplan.optimizers.spso import SPSO, SPSOConfig
 from uavplan.optimizers.woa import WOA, WOAConfig
+
+import_submodules(__name__, __path__)

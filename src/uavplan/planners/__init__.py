@@ -1,7 +1,7 @@
 """Planners: ``plan(scenario, task, budget, seed) -> PlanResult``, found by name.
 
-Importing this package imports every planner module, each of which registers its planners
-(:func:`~uavplan.planners.base.register_planner`); a new planner is a new module listed here.
+Importing this package imports every module in it, each planner module registering its
+planners (:func:`~uavplan.planners.base.register_planner`): a new planner is a new module.
 See :mod:`uavplan.planners.base` for the framework and ``docs/extending.md`` for an example.
 """
 
@@ -9,14 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from uavplan.planners import (  # noqa: F401  (registers the built-in planners)
-    optimizer_planner,
-    ppswarm,
-    rgg,
-    rgg_pso,
-    rgg_pso_plus,
-    rrt_star,
-)
+from uavplan._discovery import import_submodules
 from uavplan.planners.base import (
     FleetPlanner,
     FleetResult,
@@ -33,6 +26,8 @@ from uavplan.planners.base import (
     registry,
 )
 from uavplan.planners.optimizer_planner import OptimizerPlanner
+
+import_submodules(__name__, __path__)  # registers every planner module's planners
 
 __all__ = [
     "FleetPlanner",

@@ -822,6 +822,11 @@ def register_planner(
     return cls if name is None else entry
 
 
+def unregister_planner(name: str) -> None:
+    """Remove ``name`` from the registry (a plugin being reloaded, a test's planner)."""
+    _REGISTRY.pop(name.lower(), None)
+
+
 def is_registered(name: str) -> bool:
     """Whether ``name`` is registered (without running the providers)."""
     return name.lower() in _REGISTRY

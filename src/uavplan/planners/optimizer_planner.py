@@ -91,6 +91,7 @@ class OptimizerPlanner(Planner):
 
 def _summary(name: str) -> str:
     doc = (optimizers.get(name).__doc__ or "").strip().split("\n")[0]
+    doc = doc.replace(" (see the module docstring)", "")
     return f"{doc} (optimizer over waypoints)"
 
 

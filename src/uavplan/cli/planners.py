@@ -1,0 +1,56 @@
+"""``uavplan planners [NAME]``: the registered planners, or one planner's options (generated
+from its config: defaults, ranges, what each does)."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+from rich.table import Table
+
+from uavplan.cli._common import fail, out
+
+
+def planners(
+    name: Annotated[str | None, typer.Argument(help="A planner: show its options.")] = None,
+) -> None:
+    """List the planners, or show NAME's options (usable as --param NAME=VALUE)."""
+    from dataclasses import fields
+
+    from uavplan import optimizers
+    from uavplan.planners import (
+        PlannerError,
+        available_planners,
+        describe_options,
+        get_planner,
+        planner_entry,
+    )
+
+    if name is None:
+        table = Table(title="planners (uavplan plan SCENARIO -a NAME)")
+        for col in ("name", "kind", "what it is"):
+            table.add_column(col)
+        for n in available_planners():
+            e = planner_entry(n)
+            table.add_row(n, "fleet" if e.fleet else "single UAV", e.summary)
+        out.print(table)
+        return
+    try:
+        p = get_planner(name)
+    except PlannerError as exc:
+        raise fail(str(exc)) from None
+    entry = planner_entry(name)
+    table = Table(title=f"{name}: {entry.summary}")
+    for col in ("option", "value", "valid", "what it does"):
+        table.add_column(col)
+    for o in describe_options(type(p.config)):
+        if o["name"] == "optimizer_options":
+            continue
+        table.add_row(o["name"], repr(getattr(p.config, o["name"])), o["range"], o["doc"])
+    opt = p.optimizer_name()
+    if opt is not None and p.optimizer_config is not None:
+        cfg = p.optimizer_config
+        doc = (optimizers.get(opt).__doc__ or "").strip().split("\n")[0]
+        for f in fields(cfg):
+            table.add_row(f.name, repr(getattr(cfg, f.name)), "", f"{opt}: {doc}")
+    out.print(table)

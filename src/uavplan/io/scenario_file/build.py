@@ -1,0 +1,355 @@
+"""Building the :class:`~uavplan.world.Scenario` from a validated spec: terrain, default bounds,
+obstacles, tasks (generated for a ``fleet``), with every problem found.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+
+from uavplan.io.scenario_file.errors import NO_VALUE, Problems, ScenarioFileError
+from uavplan.io.scenario_file.schema import (
+    AltitudeSpec,
+    FleetSpec,
+    ScenarioSpec,
+    TerrainSpec,
+    dump_spec,
+)
+from uavplan.world import (
+    UAV,
+    AltitudeBand,
+    Bounds,
+    Circle,
+    Cylinder,
+    DangerArea,
+    MovingObstacle,
+    Polygon,
+    Scenario,
+    Task,
+    Terrain,
+    UncertainArea,
+)
+from uavplan.world.fleet_tasks import fleet_tasks
+from uavplan.world.terrain import TerrainError
+
+#: Headroom above the highest terrain for the default z bound when there is no altitude band, m.
+DEFAULT_Z_HEADROOM = 500.0
+
+
+@cache
+def builtin_terrain(name: str) -> Terrain:
+    """Built-in terrains are immutable (read-only heights), so they are read once per process."""
+    return Terrain.builtin(name)
+
+
+def _load_terrain(ts: TerrainSpec, problems: Problems, base_dir: Path) -> Terrain | None:
+    if ts.builtin is not None:
+        try:
+            return builtin_terrain(ts.builtin)
+        except Exception as exc:
+            problems.add(("terrain", "builtin"), f"cannot load the built-in terrain: {exc}")
+            return None
+    assert ts.file is not None
+    path = Path(ts.file).expanduser()
+    if not path.is_absolute():
+        path = base_dir / path
+    resolved = Path(os.path.abspath(path))
+    if not resolved.exists():
+        problems.add(("terrain", "file"), f"DEM file not found: {resolved}")
+        return None
+    if resolved.is_dir():
+        problems.add(("terrain", "file"), f"is a directory, not a DEM file: {resolved}")
+        return None
+    origin = (float(ts.origin[0]), float(ts.origin[1]))
+    try:
+        return Terrain.from_file(resolved, cell_size=ts.cell_size, origin=origin, key=ts.key)
+    except TerrainError as exc:
+        problems.add(("terrain", "file"), str(exc))
+        return None
+    except Exception as exc:
+        problems.add(("terrain", "file"), f"cannot read the DEM {resolved}: {exc}")
+        return None
+
+
+def _default_z(terrain: Terrain, altitude: AltitudeSpec | None) -> tuple[float, float]:
+    hmin = float(np.min(terrain.heights))
+    hmax = float(np.max(terrain.heights))
+    if altitude is None:
+        top = hmax + DEFAULT_Z_HEADROOM
+    elif altitude.reference == "ground":
+        top = hmax + altitude.max
+    else:
+        top = altitude.max
+    return float(math.floor(hmin)), float(math.ceil(top))
+
+
+def _dim_reason(spec: ScenarioSpec, dim: int) -> str:
+    if spec.terrain is not None:
+        return "3-D (it has a terrain)"
+    return f"{dim}-D (bounds have {dim} values)"
+
+
+def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Scenario:
+    terrain: Terrain | None = None
+    terrain_failed = False
+    if spec.terrain is not None:
+        terrain = _load_terrain(spec.terrain, problems, base_dir)
+        terrain_failed = terrain is None
+
+    # ---- dimension
+    dim: int | None
+    if spec.terrain is not None:
+        dim = 3
+    elif spec.bounds is not None:
+        dim = len(spec.bounds.lower)
+    else:
+        problems.add(
+            ("bounds",), "required when there is no terrain (lower and upper corners)", NO_VALUE
+        )
+        dim = None
+
+    def ground(x: float, y: float) -> float:
+        return float(terrain.height(x, y)) if terrain is not None else 0.0
+
+    # ---- altitude band
+    altitude: AltitudeBand | None = None
+    if spec.altitude is not None:
+        if dim == 2:
+            problems.add(
+                ("altitude",),
+                "an altitude band needs a 3-D scenario (a terrain or [x, y, z] bounds)",
+            )
+        a = spec.altitude
+        try:
+            altitude = AltitudeBand(a.min, a.max, a.reference)
+        except ValueError as exc:
+            problems.add(("altitude",), str(exc))
+
+    # ---- bounds
+    bounds: Bounds | None = None
+    if spec.bounds is not None:
+        lo, hi = list(spec.bounds.lower), list(spec.bounds.upper)
+        if len(lo) != len(hi):
+            problems.add(
+                ("bounds",),
+                f"lower has {len(lo)} values and upper {len(hi)}; give both as [x, y] or both "
+                "as [x, y, z]",
+            )
+        else:
+            bad = [f"{'xyz'[k]}: {lo[k]:g} >= {hi[k]:g}" for k in range(len(lo)) if lo[k] >= hi[k]]
+            if bad:
+                problems.add(
+                    ("bounds",), f"lower must be below upper on every axis ({'; '.join(bad)})"
+                )
+            elif len(lo) == 2 and spec.terrain is not None:
+                if terrain is not None:
+                    zlo, zhi = _default_z(terrain, spec.altitude)
+                    try:
+                        bounds = Bounds((*lo, zlo), (*hi, zhi))
+                    except ValueError as exc:
+                        problems.add(("bounds",), f"default z range [{zlo:g}, {zhi:g}]: {exc}")
+            else:
+                try:
+                    bounds = Bounds(tuple(lo), tuple(hi))
+                except ValueError as exc:
+                    problems.add(("bounds",), str(exc))
+    elif terrain is not None:
+        xmin, xmax, ymin, ymax = (float(v) for v in terrain.extent)
+        zlo, zhi = _default_z(terrain, spec.altitude)
+        try:
+            bounds = Bounds((xmin, ymin, zlo), (xmax, ymax, zhi))
+        except ValueError as exc:
+            problems.add(
+                ("altitude",) if spec.altitude is not None else ("terrain",),
+                f"the default bounds z range [{zlo:g}, {zhi:g}] is empty ({exc}); give bounds",
+            )
+
+    # ---- UAV
+    uav: UAV | None = None
+    try:
+        uav = UAV(**spec.uav.model_dump())
+    except ValueError as exc:
+        problems.add(("uav",), str(exc))
+
+    # ---- static obstacles
+    cylinders: list[Cylinder] = []
+    if spec.cylinders and dim == 2:
+        problems.add(
+            ("cylinders",),
+            "a 2-D scenario has no cylinders (use circles, or make it 3-D with a terrain or "
+            "[x, y, z] bounds)",
+            NO_VALUE,
+        )
+    else:
+        for i, c in enumerate(spec.cylinders):
+            z_max = c.z_max
+            if c.height is not None:
+                if terrain_failed:
+                    continue
+                z_max = ground(c.center[0], c.center[1]) + c.height
+            try:
+                cylinders.append(
+                    Cylinder(
+                        (c.center[0], c.center[1]),
+                        c.radius,
+                        -np.inf if c.z_min is None else c.z_min,
+                        np.inf if z_max is None else z_max,
+                        c.margin,
+                    )
+                )
+            except ValueError as exc:
+                problems.add(("cylinders", i), str(exc), NO_VALUE)
+
+    circles: list[Circle] = []
+    for i, ci in enumerate(spec.circles):
+        try:
+            circles.append(Circle((ci.center[0], ci.center[1]), ci.radius, ci.margin))
+        except ValueError as exc:
+            problems.add(("circles", i), str(exc), NO_VALUE)
+
+    polygons: list[Polygon] = []
+    for i, pg in enumerate(spec.polygons):
+        try:
+            polygons.append(Polygon(tuple((v[0], v[1]) for v in pg.vertices), pg.margin))
+        except ValueError as exc:
+            problems.add(("polygons", i, "vertices"), str(exc))
+
+    dangers: list[DangerArea] = []
+    for i, d in enumerate(spec.danger_areas):
+        try:
+            dangers.append(DangerArea((d.center[0], d.center[1]), d.radius))
+        except ValueError as exc:
+            problems.add(("danger_areas", i), str(exc), NO_VALUE)
+
+    uncertain: list[UncertainArea] = []
+    for i, u in enumerate(spec.uncertain_areas):
+        try:
+            uncertain.append(UncertainArea(u.x, u.y, u.width, u.height, u.revealed))
+        except ValueError as exc:
+            problems.add(("uncertain_areas", i), str(exc), NO_VALUE)
+
+    moving: list[MovingObstacle] = []
+    for i, m in enumerate(spec.moving_obstacles):
+        ok = True
+        for k, pos in enumerate(m.positions):
+            if dim is not None and len(pos) != dim:
+                problems.add(
+                    ("moving_obstacles", i, "positions", k),
+                    f"has {len(pos)} coordinates but the scenario is {_dim_reason(spec, dim)}",
+                )
+                ok = False
+        if len(m.positions) != len(m.times):
+            problems.add(
+                ("moving_obstacles", i),
+                f"{len(m.times)} times but {len(m.positions)} positions (one position per time)",
+                NO_VALUE,
+            )
+            ok = False
+        if not ok:
+            continue
+        try:
+            moving.append(MovingObstacle(m.radius, np.asarray(m.times), np.asarray(m.positions)))
+        except ValueError as exc:
+            problems.add(("moving_obstacles", i), str(exc), NO_VALUE)
+
+    # ---- tasks
+    tasks: list[Task] = []
+    checks: list[tuple[int, str, tuple[float, ...]]] = []  # (spec index, which, point)
+    seen: dict[str, int] = {}
+    for i, t in enumerate(spec.tasks or []):
+        tid = t.id if t.id is not None else f"uav{problems.orig('tasks', i)}"
+        if tid in seen:
+            problems.add(
+                ("tasks", i, "id"),
+                f"duplicate task id (also tasks[{problems.orig('tasks', seen[tid])}])",
+                tid,
+            )
+        seen.setdefault(tid, i)
+        points: dict[str, tuple[float, ...]] = {}
+        for which in ("start", "goal"):
+            v = [float(c) for c in getattr(t, which)]
+            if dim is not None and len(v) != dim:
+                problems.add(
+                    ("tasks", i, which),
+                    f"has {len(v)} coordinates but the scenario is {_dim_reason(spec, dim)}",
+                )
+                continue
+            if spec.task_z == "ground" and len(v) == 3:
+                if terrain_failed:
+                    continue
+                v[2] += ground(v[0], v[1])
+            points[which] = tuple(v)
+            checks.append((i, which, tuple(v)))
+        if len(points) != 2:
+            continue
+        try:
+            tasks.append(Task(tid, points["start"], points["goal"], t.start_time))
+        except ValueError as exc:
+            problems.add(("tasks", i), str(exc), NO_VALUE)
+
+    # ---- the scenario (with whatever was valid), then where the tasks start and end
+    if not tasks and checks:  # no valid task, but single points to check: scene for checks only
+        p0 = checks[0][2]
+        tasks.append(Task("check", p0, p0))
+    if spec.fleet is not None and bounds is not None:  # stands in until the fleet is generated
+        tasks.append(Task("fleet", bounds.lower, bounds.lower))
+    if bounds is None or uav is None or not tasks or dim is None or terrain_failed:
+        problems.raise_if_any()
+        raise ScenarioFileError([f"{problems.source}: invalid scenario"])  # pragma: no cover
+    try:
+        scenario = Scenario(
+            name=spec.name,
+            bounds=bounds,
+            tasks=tuple(tasks),
+            terrain=terrain,
+            circles=tuple(circles),
+            polygons=tuple(polygons),
+            cylinders=tuple(cylinders),
+            danger_areas=tuple(dangers),
+            uncertain_areas=tuple(uncertain),
+            moving_obstacles=tuple(moving),
+            altitude=altitude,
+            uav=uav,
+            cost=spec.planning.cost or ("length2d" if dim == 2 else "ppswarm"),
+            n_waypoints=spec.planning.n_waypoints,
+            description=spec.description,
+            metadata={
+                "source": problems.source,
+                "base_dir": str(base_dir),
+                "spec": dump_spec(spec),
+            },
+        )
+    except ValueError as exc:
+        problems.add((), str(exc))
+        problems.raise_if_any()
+        raise  # pragma: no cover
+    for i, which, point in checks:
+        for reason in scenario.point_problems(np.asarray(point)):
+            problems.add(("tasks", i, which), reason)
+    problems.raise_if_any()
+    if spec.fleet is not None:
+        scenario = _with_generated_fleet(scenario, spec.fleet, problems)
+    return scenario
+
+
+def _with_generated_fleet(scenario: Scenario, fleet: FleetSpec, problems: Problems) -> Scenario:
+    """The scenario with the tasks its ``fleet`` block generates (every other check passed)."""
+    try:
+        tasks = fleet_tasks(
+            scenario,
+            fleet.count,
+            seed=fleet.seed,
+            pattern=fleet.pattern,
+            min_spacing=fleet.min_spacing,
+        )
+    except ValueError as exc:
+        problems.add(("fleet",), str(exc))
+        problems.raise_if_any()
+        raise  # pragma: no cover
+    scenario.metadata["fleet"] = fleet.model_dump()
+    return dataclasses.replace(scenario, tasks=tasks)

@@ -1,0 +1,321 @@
+"""The file format: the pydantic spec models (:class:`ScenarioSpec` and its blocks), the number
+types they use, :func:`schema` and :func:`dump_spec` (a spec as plain data).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Annotated, Any, Literal
+
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
+from pydantic_core import PydanticCustomError
+
+
+def _no_bool(value: Any) -> Any:
+    if isinstance(value, bool):
+        raise ValueError("must be a number, not true/false")
+    return value
+
+
+Num = Annotated[float, BeforeValidator(_no_bool)]
+PosNum = Annotated[float, BeforeValidator(_no_bool), Field(gt=0)]
+NonNegNum = Annotated[float, BeforeValidator(_no_bool), Field(ge=0)]
+XY = Annotated[list[Num], Field(min_length=2, max_length=2)]
+Point = Annotated[list[Num], Field(min_length=2, max_length=3)]
+
+
+class _Spec(BaseModel):
+    """Base of every file-level model: unknown keys are errors, numbers must be finite."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+class BoundsSpec(_Spec):
+    """The box paths must stay in."""
+
+    lower: Point = Field(description="Lower corner [x, y] or [x, y, z], metres.")
+    upper: Point = Field(
+        description="Upper corner, same length as lower, metres. With a terrain, [x, y] bounds "
+        "get the default z range."
+    )
+
+
+class TerrainSpec(_Spec):
+    """A digital elevation model: a built-in map or a DEM file (exactly one of the two)."""
+
+    model_config = ConfigDict(
+        json_schema_extra={"oneOf": [{"required": ["builtin"]}, {"required": ["file"]}]}
+    )
+
+    builtin: Literal["spso", "jacksboro", "topobathy"] | None = Field(
+        None, description="Name of a built-in terrain."
+    )
+    file: str | None = Field(
+        None,
+        min_length=1,
+        description="DEM file (.tif/.tiff GeoTIFF, .npy, .npz); a relative path is relative to "
+        "the scenario file's directory.",
+    )
+    cell_size: PosNum | None = Field(
+        None,
+        description="Grid spacing in metres (file only). Default: the GeoTIFF pixel scale, the "
+        ".npz dx/dy, else 1.",
+    )
+    origin: XY = Field(
+        default_factory=lambda: [0.0, 0.0],
+        description="Position [x0, y0] of grid node (0, 0) (the south-west node), metres "
+        "(file only).",
+    )
+    key: str | None = Field(
+        None,
+        description="Array name inside an .npz file (file only). Default: heights, elevation "
+        "or topo.",
+    )
+
+    @model_validator(mode="after")
+    def _one_source(self) -> TerrainSpec:
+        if (self.builtin is None) == (self.file is None):
+            raise ValueError("give exactly one of 'builtin' or 'file'")
+        if self.builtin is not None:
+            extra = sorted({"cell_size", "origin", "key"} & self.model_fields_set)
+            if extra:
+                raise ValueError(f"{', '.join(extra)} only apply to a terrain 'file'")
+        return self
+
+
+class CylinderSpec(_Spec):
+    """A vertical cylinder threat (3-D only)."""
+
+    center: XY = Field(description="Axis position [x, y], metres.")
+    radius: PosNum = Field(description="Radius, metres (> 0).")
+    z_min: Num | None = Field(None, description="Bottom, absolute metres; null = unbounded.")
+    z_max: Num | None = Field(None, description="Top, absolute metres; null = unbounded.")
+    height: PosNum | None = Field(
+        None,
+        description="Top above the terrain at the center, metres (z_max = ground(center) + "
+        "height); excludes z_max.",
+    )
+    margin: NonNegNum = Field(
+        0.0, description="Added to the radius for collision checks (e.g. the drone size), metres."
+    )
+
+    @model_validator(mode="after")
+    def _height_or_top(self) -> CylinderSpec:
+        if self.height is not None and self.z_max is not None:
+            raise ValueError("give either 'height' or 'z_max', not both")
+        return self
+
+
+class CircleSpec(_Spec):
+    """A disc obstacle (an infinitely tall prism in 3-D)."""
+
+    center: XY = Field(description="Center [x, y], metres.")
+    radius: PosNum = Field(description="Radius, metres (> 0).")
+    margin: NonNegNum = Field(0.0, description="Added to the radius for collision checks, m.")
+
+
+class PolygonSpec(_Spec):
+    """A simple polygon obstacle, convex or not (an infinitely tall prism in 3-D)."""
+
+    vertices: Annotated[list[XY], Field(min_length=3)] = Field(
+        description="At least 3 vertices [[x, y], ...] in order, metres."
+    )
+    margin: NonNegNum = Field(0.0, description="Distance a path must keep from it, metres.")
+
+
+class DangerAreaSpec(_Spec):
+    """A cylindrical area that may be crossed at a cost (HR-MAGA Eq. 1)."""
+
+    center: XY = Field(description="Center [x, y], metres.")
+    radius: PosNum = Field(description="Radius, metres (> 0).")
+
+
+class UncertainAreaSpec(_Spec):
+    """A rectangle known only once revealed; revealed areas are no-fly (HR-MAGA Eq. 2)."""
+
+    x: Num = Field(description="West edge, metres.")
+    y: Num = Field(description="South edge, metres.")
+    width: PosNum = Field(description="Extent along x, metres (> 0).")
+    height: PosNum = Field(description="Extent along y, metres (> 0).")
+    revealed: bool = Field(True, description="Whether the planner knows about it.")
+
+
+class MovingObstacleSpec(_Spec):
+    """A sphere (a disc in 2-D) moving along a timed piecewise-linear trajectory."""
+
+    radius: PosNum = Field(description="Radius, metres (> 0).")
+    times: Annotated[list[Num], Field(min_length=1)] = Field(
+        description="Knot times, strictly increasing seconds."
+    )
+    positions: Annotated[list[Point], Field(min_length=1)] = Field(
+        description="One position per time, [x, y, z] (3-D) or [x, y] (2-D), absolute metres."
+    )
+
+
+class AltitudeSpec(_Spec):
+    """Allowed altitudes."""
+
+    min: Num = Field(description="Lowest allowed altitude, metres.")
+    max: Num = Field(description="Highest allowed altitude, metres (> min).")
+    reference: Literal["ground", "absolute"] = Field(
+        "ground", description="'ground': above the terrain; 'absolute': z values."
+    )
+
+
+class UAVSpec(_Spec):
+    """UAV limits (defaults: PPSwarm Sect. 5.1)."""
+
+    speed: PosNum = Field(20.0, description="Cruise speed, m/s (> 0).")
+    turn_radius: NonNegNum = Field(20.0, description="Minimum turn radius, metres.")
+    s1: NonNegNum = Field(15.0, description="Safety distance to threats, metres.")
+    s2: NonNegNum = Field(10.0, description="Safety distance between UAVs, metres.")
+    size: NonNegNum = Field(1.0, description="UAV size, metres.")
+
+
+class TaskSpec(_Spec):
+    """One UAV's mission."""
+
+    id: str | None = Field(
+        None, min_length=1, description="Task id; default 'uav<index>' (uav0, uav1, ...)."
+    )
+    start: Point = Field(description="Start [x, y] or [x, y, z], metres (z: see task_z).")
+    goal: Point = Field(description="Goal, same form as start, metres.")
+    start_time: NonNegNum = Field(0.0, description="Departure time, seconds.")
+
+
+class PlanningSpec(_Spec):
+    """Planner defaults for this scenario."""
+
+    cost: str | None = Field(
+        None,
+        min_length=1,
+        description="Cost preset name; default 'ppswarm' in 3-D, 'length2d' in 2-D.",
+    )
+    n_waypoints: Annotated[int, BeforeValidator(_no_bool), Field(ge=1)] = Field(
+        10, description="Free path nodes between start and goal."
+    )
+
+
+class FleetSpec(_Spec):
+    """A generated fleet: tasks uav0 ... uav<count-1> (uavplan.world.fleet_tasks)."""
+
+    count: Annotated[int, BeforeValidator(_no_bool), Field(ge=1)] = Field(
+        description="Number of UAVs (tasks uav0 ... uav<count-1>)."
+    )
+    pattern: Literal["crossing", "random"] = Field(
+        "crossing",
+        description="'crossing': starts along the west/south edges, goals along the east/north "
+        "edges, paired at random so the lines cross; 'random': anywhere.",
+    )
+    seed: Annotated[int, BeforeValidator(_no_bool), Field(ge=0)] = Field(
+        0, description="Seed of the generator (the same seed gives the same tasks)."
+    )
+    min_spacing: PosNum | None = Field(
+        None,
+        description="Least distance between two starts, and between two goals, metres; "
+        "null = 3 * uav.s2.",
+    )
+
+
+class _TasksMissing:
+    """Stands for a missing ``tasks`` (and no ``fleet``), so the error names ``tasks``."""
+
+
+_TASKS_MISSING = _TasksMissing()
+
+
+class ScenarioSpec(_Spec):
+    """A uavplan scenario file (frame: x east, y north, z up; metres, seconds)."""
+
+    model_config = ConfigDict(
+        title="uavplan scenario",
+        json_schema_extra={"oneOf": [{"required": ["tasks"]}, {"required": ["fleet"]}]},
+    )
+
+    name: str = Field(min_length=1, description="Scenario name.")
+    description: str = Field("", description="Free text (sources, citations).")
+    bounds: BoundsSpec | None = Field(
+        None,
+        description="Box the paths stay in. Optional with a terrain: x/y default to the "
+        "terrain extent, z to [min terrain, max terrain + altitude max] (ground band), "
+        "[min terrain, altitude max] (absolute band) or [min terrain, max terrain + 500] "
+        "(no band), rounded outward to whole metres.",
+    )
+    terrain: TerrainSpec | None = Field(
+        None, description="Terrain; absent = none (a 2-D scene, or a flat 3-D world)."
+    )
+    cylinders: list[CylinderSpec] = Field(default_factory=list, description="3-D only.")
+    circles: list[CircleSpec] = Field(default_factory=list)
+    polygons: list[PolygonSpec] = Field(default_factory=list)
+    danger_areas: list[DangerAreaSpec] = Field(default_factory=list)
+    uncertain_areas: list[UncertainAreaSpec] = Field(default_factory=list)
+    moving_obstacles: list[MovingObstacleSpec] = Field(default_factory=list)
+    altitude: AltitudeSpec | None = Field(None, description="Altitude band (3-D only).")
+    uav: UAVSpec = Field(default_factory=lambda: UAVSpec.model_validate({}))
+    task_z: Literal["absolute", "ground"] = Field(
+        "absolute",
+        description="Whether task z values are absolute or above the terrain (converted to "
+        "absolute at load).",
+    )
+    tasks: Annotated[list[TaskSpec], Field(min_length=1)] | None = Field(
+        None, description="At least one task. Required unless 'fleet' is given (not both)."
+    )
+    fleet: FleetSpec | None = Field(
+        None,
+        description="Generate the tasks (uav0 ... uav<count-1>) instead of listing them; not "
+        "with 'tasks'.",
+    )
+    planning: PlanningSpec = Field(default_factory=lambda: PlanningSpec.model_validate({}))
+
+    @model_validator(mode="before")
+    @classmethod
+    def _tasks_or_fleet(cls, data: Any) -> Any:
+        if isinstance(data, Mapping) and data.get("tasks") is None and data.get("fleet") is None:
+            return {**data, "tasks": _TASKS_MISSING}
+        return data
+
+    @field_validator("tasks", mode="before")
+    @classmethod
+    def _tasks_given(cls, value: Any) -> Any:
+        if value is _TASKS_MISSING:
+            raise PydanticCustomError("missing", "Field required")
+        return value
+
+    @field_validator("fleet")
+    @classmethod
+    def _not_both(cls, value: FleetSpec | None, info: ValidationInfo) -> FleetSpec | None:
+        if value is not None and info.data.get("tasks") is not None:
+            raise ValueError(
+                "give either 'tasks' or 'fleet', not both ('fleet' generates the tasks)"
+            )
+        return value
+
+
+def schema() -> dict[str, Any]:
+    """The JSON Schema of the scenario file format."""
+    return ScenarioSpec.model_json_schema()
+
+
+def _tidy(obj: Any) -> Any:
+    """Whole floats as ints, recursively (``200`` rather than ``200.0`` in written files)."""
+    if isinstance(obj, float) and obj.is_integer() and abs(obj) < 1e15:
+        return int(obj)
+    if isinstance(obj, dict):
+        return {k: _tidy(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_tidy(v) for v in obj]
+    return obj
+
+
+def dump_spec(spec: ScenarioSpec) -> dict[str, Any]:
+    """The spec as plain data: keys not given left out, whole floats as ints."""
+    data: dict[str, Any] = _tidy(spec.model_dump(mode="json", exclude_unset=True))
+    return data

@@ -1,0 +1,163 @@
+"""Plan files: written in one place, read back typed, format 1 still read, a JSON Schema that
+every written plan satisfies; the schema, planners and export commands."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from uavplan.cli import app
+from uavplan.io.plan_file import (
+    PLAN_FORMAT,
+    PlanFormatError,
+    PlanSpec,
+    parse_plan,
+    plan_document,
+    plan_schema,
+    read_plan_file,
+    write_plan_file,
+)
+from uavplan.planners import available_planners, get_planner
+from uavplan.planners.fleet_plan import plan_all
+from uavplan.scenarios import resolve
+from uavplan.world.fleet_tasks import with_fleet
+
+runner = CliRunner()
+
+
+@pytest.fixture(scope="module")
+def fleet_plan():  # type: ignore[no-untyped-def]
+    sc = with_fleet(resolve("ppswarm1"), 3)
+    planner = get_planner("ppswarm", pop_size=12, n_iter=3, n_restart=1, rrt_iterations=1500)
+    return plan_all(sc, planner, None, 0)
+
+
+@pytest.fixture(scope="module")
+def single_plan():  # type: ignore[no-untyped-def]
+    return plan_all(resolve("simple2d"), get_planner("rgg-pso+", pop_size=20), 10, 1)
+
+
+def test_round_trip_keeps_the_trajectories_and_the_verdicts(fleet_plan, single_plan) -> None:  # type: ignore[no-untyped-def]
+    for plan in (fleet_plan, single_plan):
+        doc = json.loads(json.dumps(plan_document(plan)))  # through JSON, as on disk
+        assert doc["format"] == PLAN_FORMAT and doc["feasible"] == plan.feasible
+        PlanSpec.model_validate(doc)  # the schema accepts what we write
+        pf = parse_plan(doc)
+        assert pf.dim == plan.scenario.dim and pf.scenario == plan.scenario.name
+        assert pf.feasible == plan.feasible and pf.separation_checked == (plan.fleet is not None)
+        for u, r in zip(pf.uavs, plan.results, strict=True):
+            assert u.id == r.uav_id and u.feasible == r.feasible and u.cost_model == r.cost_model
+            np.testing.assert_allclose(u.planned.points, r.waypoints, atol=1e-6)
+            np.testing.assert_allclose(u.planned.times, r.times, atol=1e-6)
+            assert (u.smoothed is None) == (r.smoothed is None)
+            if r.smoothed is not None:
+                assert u.smoothed is not None and u.smoothed_clear == r.smoothed_ok
+                np.testing.assert_allclose(u.smoothed.points, r.smoothed, atol=1e-6)
+            assert u.record["info"] == json.loads(json.dumps(u.record["info"]))
+    assert len(parse_plan(plan_document(fleet_plan)).trajectories("smoothed")) == 3
+
+
+def test_format_1_still_loads() -> None:
+    v1 = {
+        "format": "uavplan.plan/1",
+        "scenario": "flat",
+        "separation_checked": False,
+        "uavs": [
+            {"id": "a", "waypoints": [[0, 0, 1], [1, 0, 1]], "times": [0, 1], "feasible": True,
+             "cost": "inf", "violations": []},
+            {"id": "b", "waypoints": [[0, 1, 1], [1, 1, 1]], "times": [0, 1], "feasible": False,
+             "violations": ["terrain"]},
+        ],
+    }  # fmt: skip
+    pf = parse_plan(v1)
+    assert pf.format == "uavplan.plan/1" and pf.feasible is False  # not every UAV feasible
+    assert pf.uavs[0].cost == np.inf and pf.uavs[1].violations == ("terrain",)
+    assert pf.uavs[0].cost_model is None
+    v1["uavs"][1]["feasible"] = True
+    assert parse_plan(v1).feasible is True
+    PlanSpec.model_validate(v1)
+
+
+@pytest.mark.parametrize(
+    ("doc", "message"),
+    [
+        ([], "expected a JSON object"),
+        ({"format": "uavplan.plan/9", "uavs": []}, "format: 'uavplan.plan/9' is not one of"),
+        ({"uavs": [{"id": "a", "waypoints": [[0, 0, 1, 1], [1, 0]], "times": [0, 1]}]},
+         "expected a point of 2 or 3 coordinates"),
+        ({"uavs": [{"id": "a", "waypoints": [[0, 0], [1, 0]], "times": [0, 1],
+                    "feasible": "yes"}]}, "feasible: 'yes' is not true or false"),
+        ({"uavs": [{"id": "a", "waypoints": [[0, 0], [1, 0]], "times": [0, 1],
+                    "smoothed": {"points": [[0, 0]], "times": [0]}}]},
+         "smoothed.points: 1 points, need at least 2"),
+        ({"uavs": [{"id": "a", "waypoints": [[0, 0], [1, 0]], "times": [0, 1],
+                    "violations": "terrain"}]}, "violations: expected a list of names"),
+    ],
+)  # fmt: skip
+def test_bad_plan_files_say_what_and_where(doc: object, message: str) -> None:
+    with pytest.raises(PlanFormatError, match=message) as e:
+        parse_plan(doc, source="p.json")
+    assert str(e.value).startswith("p.json") and len(e.value.problems) == 1
+
+
+def test_files_on_disk(tmp_path: Path, single_plan) -> None:  # type: ignore[no-untyped-def]
+    path = write_plan_file(single_plan, tmp_path / "plan.json")
+    assert read_plan_file(tmp_path).uavs[0].id == single_plan.results[0].uav_id  # the folder
+    for bad, msg in ((tmp_path / "nope.json", "no such plan file"), (tmp_path, None)):
+        if msg:
+            with pytest.raises(PlanFormatError, match=msg):
+                read_plan_file(bad)
+    path.write_text("{oops")
+    with pytest.raises(PlanFormatError, match="invalid JSON"):
+        read_plan_file(path)
+    path.write_bytes(b"\xff\xfe")
+    with pytest.raises(PlanFormatError, match="cannot read"):
+        read_plan_file(path)
+
+
+def test_schema_command_and_schema() -> None:
+    s = plan_schema()
+    assert s["title"] == "uavplan plan file" and "uavs" in s["properties"]
+    r = runner.invoke(app, ["schema", "plan"])
+    assert r.exit_code == 0 and json.loads(r.output)["title"] == "uavplan plan file"
+    r = runner.invoke(app, ["schema", "scenario"])
+    assert r.exit_code == 0 and "properties" in json.loads(r.output)
+    r = runner.invoke(app, ["schema", "mission"])
+    assert r.exit_code == 2 and "not one of" in r.output
+
+
+def test_planners_command_lists_and_describes() -> None:
+    r = runner.invoke(app, ["planners"])
+    assert r.exit_code == 0
+    for name in available_planners():
+        assert name in r.output
+    r = runner.invoke(app, ["planners", "rrt-star"])
+    assert r.exit_code == 0 and "step" in r.output and "goal_bias" in r.output
+    r = runner.invoke(app, ["planners", "pso"])
+    assert "pop_size" in r.output and "constraints" in r.output
+    r = runner.invoke(app, ["planners", "nope"])
+    assert r.exit_code == 2 and "unknown planner" in r.output
+
+
+def test_export_csv_and_the_infeasible_warning(tmp_path: Path, single_plan, fleet_plan) -> None:  # type: ignore[no-untyped-def]
+    write_plan_file(single_plan, tmp_path / "plan.json")
+    r = runner.invoke(app, ["export", str(tmp_path), "--format", "csv"])
+    rows = (tmp_path / "plan.csv").read_text().splitlines()
+    assert rows[0] == "uav,point,time_s,x_m,y_m"
+    assert len(rows) == 1 + len(single_plan.results[0].waypoints)
+    assert r.exit_code == (0 if single_plan.feasible else 1)
+    # an infeasible plan is written, but said loudly, and the exit code is 1
+    doc = plan_document(fleet_plan)
+    doc["feasible"] = False
+    (tmp_path / "bad.json").write_text(json.dumps(doc))
+    out = tmp_path / "fleet.csv"
+    r = runner.invoke(app, ["export", str(tmp_path / "bad.json"), "-o", str(out), "--smoothed"])
+    assert r.exit_code == 1 and "WARNING" in r.output and "not feasible" in r.output
+    assert out.read_text().count("\n") == 1 + sum(len(x.smoothed) for x in fleet_plan.results)
+    r = runner.invoke(app, ["export", str(tmp_path), "--format", "qgc"])
+    assert r.exit_code == 2 and "unknown export format 'qgc'" in r.output
+    assert "csv" in runner.invoke(app, ["export", "--list"]).output
