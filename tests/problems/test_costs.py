@@ -285,12 +285,9 @@ def test_penalized_length_cost() -> None:
     )
 
 
-def test_path_times_and_terrain_violation() -> None:
+def test_path_times_and_hrmaga_altitude() -> None:
     p = np.array([[[0.0, 0.0, 0.0], [3.0, 4.0, 0.0], [3.0, 4.0, 0.0], [3.0, 4.0, 10.0]]])
     np.testing.assert_allclose(C.path_times(p, 5.0, 2.0), [[2.0, 3.0, 3.0, 5.0]])
-    mc = np.array([[1.0, -2.0, 0.5, -0.25], [np.inf, 3.0, 0.0, 0.0]])
-    np.testing.assert_allclose(C.terrain_violation(mc), [2.25, 0.0])
-    np.testing.assert_allclose(C.terrain_violation(mc, 1.0), [4.75, 2.0])
     np.testing.assert_allclose(
         C.hrmaga_altitude_cost(np.array([[1.0, 2.0], [3.0, -1.0]])), [3.0, 2.0]
     )

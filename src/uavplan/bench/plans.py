@@ -16,8 +16,6 @@ from typing import Any
 
 import numpy as np
 
-SCALES = ("smoke", "paper")
-
 
 class PlanError(ValueError):
     """An unknown plan or scale, or bad overrides."""

@@ -10,7 +10,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import time
@@ -292,6 +291,3 @@ def _iter_dask_client(chunks: list[list[RunSpec]], client: Any) -> Iterator[list
         client.cancel(futures)
 
 
-def load_manifest(out: str | Path) -> dict[str, Any]:
-    with open(Path(out) / "manifest.json") as f:
-        return dict(json.load(f))

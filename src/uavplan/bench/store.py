@@ -15,7 +15,7 @@ from __future__ import annotations
 import os
 import time
 import uuid
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -82,10 +82,6 @@ class ResultStore:
             or time.monotonic() - self._last_flush >= self.flush_seconds
         ):
             self.flush()
-
-    def add_many(self, rows: Iterable[Mapping[str, Any]]) -> None:
-        for r in rows:
-            self.add(r)
 
     def flush(self) -> Path | None:
         """Write the buffered rows as one shard, atomically. Returns its path (or None)."""

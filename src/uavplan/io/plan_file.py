@@ -179,10 +179,6 @@ class Trajectory:
     def dim(self) -> int:
         return int(self.points.shape[1])
 
-    @property
-    def times_valid(self) -> bool:
-        return bool(np.all(np.diff(self.times) >= 0))
-
     def position(self, t: float) -> FloatArray:
         """Position at time ``t`` (clamped to the flight), metres."""
         return np.array([np.interp(t, self.times, self.points[:, k]) for k in range(self.dim)])

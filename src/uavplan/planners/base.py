@@ -380,12 +380,6 @@ class Termination:
             stop = True
         return stop
 
-    def out_of_evaluations_or_time(self, evaluations: int) -> bool:
-        """The limits other than iterations and the callback (for a stop between iterations)."""
-        if self.max_evaluations is not None and evaluations >= self.max_evaluations:
-            return True
-        return self.max_time is not None and time.perf_counter() - self.t0 >= self.max_time
-
 
 class Tracker:
     """What a run records: evaluations, the incumbent (the best path offered, a feasible one

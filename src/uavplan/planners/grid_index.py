@@ -194,8 +194,10 @@ class GridIndex:
         self._box_hi = pad3(hi)
         if np.any(self._box_hi < self._box_lo):
             raise ValueError("GridIndex needs lo <= hi")
-        self._pts = np.zeros((max(int(capacity), 1), 3))
-        self._nxt = np.full(len(self._pts), -1, dtype=np.int64)
+        #: the points' storage (capacity, 3), 2-D points with z = 0; rows ``0..n-1`` are the
+        #: points (kernels that index points by number read it directly)
+        self.buffer = np.zeros((max(int(capacity), 1), 3))
+        self._nxt = np.full(len(self.buffer), -1, dtype=np.int64)
         self.n = 0
         self.scan_limit = 1.0
         self.set_cell(cell)
@@ -203,7 +205,7 @@ class GridIndex:
     @property
     def points(self) -> FloatArray:
         """The points so far, (n, dim) (a view)."""
-        return self._pts[: self.n, : self.dim]
+        return self.buffer[: self.n, : self.dim]
 
     @property
     def n_cells(self) -> int:
@@ -241,20 +243,20 @@ class GridIndex:
         self._lo = lo
         self._dims = dims
         self._head = np.full(int(np.prod(dims)), -1, dtype=np.int64)
-        _grid_rebuild(self._pts, self.n, self._head, self._nxt, self._lo, self.cell, self._dims)
+        _grid_rebuild(self.buffer, self.n, self._head, self._nxt, self._lo, self.cell, self._dims)
 
     def add(self, p: FloatArray) -> int:
         """Add a point; returns its index."""
-        if self.n == len(self._pts):
-            cap = 2 * len(self._pts)
+        if self.n == len(self.buffer):
+            cap = 2 * len(self.buffer)
             pts = np.zeros((cap, 3))
-            pts[: self.n] = self._pts
+            pts[: self.n] = self.buffer
             nxt = np.full(cap, -1, dtype=np.int64)
             nxt[: self.n] = self._nxt
-            self._pts, self._nxt = pts, nxt
+            self.buffer, self._nxt = pts, nxt
         i = self.n
-        self._pts[i] = pad3(p)
-        _grid_insert(self._pts, i, self._head, self._nxt, self._lo, self.cell, self._dims)
+        self.buffer[i] = pad3(p)
+        _grid_insert(self.buffer, i, self._head, self._nxt, self._lo, self.cell, self._dims)
         self.n += 1
         return i
 
@@ -264,7 +266,7 @@ class GridIndex:
             raise ValueError("nearest of an empty GridIndex")
         limit = self.scan_limit * self.n
         i, d2 = _grid_nearest(
-            self._pts,
+            self.buffer,
             self.n,
             self._head,
             self._nxt,
@@ -282,8 +284,9 @@ class GridIndex:
         out = np.empty(64, dtype=np.int64)
         while True:
             k = _grid_near(
-                self._pts, self._head, self._nxt, self._lo, self.cell, self._dims, qq, float(r), out
-            )
+                self.buffer, self._head, self._nxt, self._lo, self.cell, self._dims, qq, float(r),
+                out,
+            )  # fmt: skip
             if k <= len(out):
                 return np.sort(out[:k])
             out = np.empty(2 * k, dtype=np.int64)

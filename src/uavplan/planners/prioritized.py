@@ -83,8 +83,10 @@ from uavplan.planners.base import (
 from uavplan.problems.encoding import ENCODINGS, CartesianEncoding
 from uavplan.problems.path_problem import PRESETS, SEPARATION_TERM, PathProblem
 from uavplan.problems.validity import greedy_shortcut
+from uavplan.smoothing.dubins import drop_consecutive_duplicates
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
+from uavplan.world.tolerances import DUPLICATE_TOL
 
 FloatArray = NDArray[np.float64]
 
@@ -445,9 +447,7 @@ def _pose_times(waypoints: FloatArray, times: FloatArray, variant: str) -> Float
     """Planned times of the poses that :func:`smooth_fleet`'s ``variant`` smooths through: the
     kept waypoints' own times ("through") or the start, the segment midpoints (the mean of
     their ends' times) and the goal ("corners"), with the same duplicate dropping."""
-    from uavplan.smoothing.dubins import _drop_consecutive_duplicates
-
-    keep = _drop_consecutive_duplicates(waypoints, 1e-9)
+    keep = drop_consecutive_duplicates(waypoints, DUPLICATE_TOL)
     t = np.asarray(times, dtype=np.float64)[keep]
     if variant == "through" or t.shape[0] < 2:
         return t

@@ -124,6 +124,7 @@ from uavplan.planners.grid_index import GridIndex, pad3
 from uavplan.problems.path_problem import LOOKUP
 from uavplan.problems.validity import MotionValidator, greedy_shortcut
 from uavplan.world.scenario import Scenario, Task
+from uavplan.world.tolerances import REWIRE_TOL
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -131,8 +132,6 @@ BoolArray = NDArray[np.bool_]
 
 #: Samples drawn from the generator at a time.
 SAMPLE_BLOCK = 256
-#: A rewire must shorten the cost-to-come by more than this (metres): no churn on round-off.
-REWIRE_TOL = 1e-9
 
 
 # ------------------------------------------------------------------------------ configuration
@@ -329,7 +328,7 @@ class RRTStarTree:
         bhi = np.maximum.reduce([scenario.bounds.hi, self.start, self.goal])
         side = float(np.prod((bhi - blo)[: self.dim])) ** (1.0 / self.dim)
         self.grid = GridIndex(blo, bhi, max(config.near_radius, side))
-        cap = len(self.grid._pts)
+        cap = len(self.grid.buffer)
         self._parent = np.full(cap, -1, dtype=np.int64)
         self._cost = np.zeros(cap)
         self._first_child = np.full(cap, -1, dtype=np.int64)
@@ -388,7 +387,7 @@ class RRTStarTree:
         return pad3(self.goal) if self._goal_draw[i] else self._samples[i]
 
     def _grow(self) -> None:
-        cap = len(self.grid._pts)
+        cap = len(self.grid.buffer)
         for name, fill in (("_parent", -1), ("_cost", 0), ("_first_child", -1), ("_next_sib", -1)):
             old = getattr(self, name)
             new = np.full(cap, fill, dtype=old.dtype)
@@ -406,7 +405,7 @@ class RRTStarTree:
         i_near, d_near = self.grid.nearest(q)
         if d_near <= 0.0:
             return False
-        x_near = self.grid._pts[i_near]
+        x_near = self.grid.buffer[i_near]
         x_new = q.copy() if d_near <= cfg.step else x_near + (q - x_near) * (cfg.step / d_near)
         cand = self.grid.near(x_new, r)
         pos = int(np.searchsorted(cand, i_near))
@@ -417,7 +416,7 @@ class RRTStarTree:
         want_goal = dg <= cfg.goal_radius
         k = len(cand)
         edges = np.empty((k + int(want_goal), 2, d))
-        edges[:k, 0] = self.grid._pts[cand, :d]
+        edges[:k, 0] = self.grid.buffer[cand, :d]
         edges[:k, 1] = x_new[:d]
         if want_goal:
             edges[k, 0] = x_new[:d]
@@ -427,11 +426,11 @@ class RRTStarTree:
         if not ok[pos]:
             return False
         new = self.grid.add(x_new)
-        if len(self._parent) < len(self.grid._pts):
+        if len(self._parent) < len(self.grid.buffer):
             self._grow()
         self.rewires += int(
             _insert_rewire(
-                self.grid._pts,
+                self.grid.buffer,
                 self._parent,
                 self._cost,
                 self._first_child,
@@ -464,7 +463,7 @@ class RRTStarTree:
             return None
         nodes = np.asarray(self.goal_nodes, dtype=np.int64)
         total = self._cost[nodes] + np.linalg.norm(
-            self.grid._pts[nodes, : self.dim] - self.goal, axis=1
+            self.grid.buffer[nodes, : self.dim] - self.goal, axis=1
         )
         return int(nodes[int(np.argmin(total))])
 
@@ -480,7 +479,7 @@ class RRTStarTree:
     def path_of(self, idx: IntArray) -> FloatArray:
         """Waypoints of the nodes ``idx`` plus the exact goal (not repeated if the last node is
         the goal)."""
-        p = self.grid._pts[idx, : self.dim]
+        p = self.grid.buffer[idx, : self.dim]
         if np.array_equal(p[-1], self.goal):
             return np.asarray(p.copy())
         return np.asarray(np.vstack([p, self.goal[None]]))

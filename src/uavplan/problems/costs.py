@@ -169,16 +169,6 @@ def _smoothness_spso_kernel(p, turning_max, climb_max):  # pragma: no cover - nu
     return out
 
 
-# ---------------------------------------------------------------------------- terrain
-def terrain_violation(min_clearance: FloatArray, required: float = 0.0) -> FloatArray:
-    """Sum over segments of how far each dips below the required clearance, metres, (pop,).
-
-    ``min_clearance``: (pop, n - 1) exact minimum of z - h along each segment (checked
-    continuously, see :meth:`uavplan.world.terrain.Terrain.min_clearance`).
-    """
-    return np.asarray(np.maximum(required - min_clearance, 0.0).sum(axis=1))
-
-
 # ---------------------------------------------------------------------------- HR-MAGA
 def hrmaga_altitude_cost(mean_heights: FloatArray) -> FloatArray:
     """HR-MAGA Eq. (8): sum over segments of the mean terrain height under the segment.

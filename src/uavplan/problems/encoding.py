@@ -220,8 +220,6 @@ class SphericalEncoding:
         return self.problem.evaluate(self.decode(X))
 
 
-Encoding = CartesianEncoding | SphericalEncoding
-
 ENCODINGS: dict[str, type[CartesianEncoding] | type[SphericalEncoding]] = {
     "cartesian": CartesianEncoding,
     "spherical": SphericalEncoding,

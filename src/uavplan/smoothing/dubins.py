@@ -40,6 +40,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from uavplan.world.tolerances import DUPLICATE_TOL
+
 FloatArray = NDArray[np.float64]
 Pose = tuple[float, float, float]
 
@@ -370,7 +372,7 @@ class SmoothedPath:
         return discrete_curvature(self.points)
 
 
-def _drop_consecutive_duplicates(p: FloatArray, atol: float) -> NDArray[np.intp]:
+def drop_consecutive_duplicates(p: FloatArray, atol: float) -> NDArray[np.intp]:
     """Indices of the rows of ``p`` (n, d) kept after dropping rows within ``atol`` m of the
     last kept row; returns (k,) int, first row always kept."""
     keep = [0]
@@ -387,7 +389,7 @@ def smooth_path(
     headings: ArrayLike | None = None,
     *,
     kinds: Sequence[str] = CSC_KINDS,
-    duplicate_tol: float = 1e-9,
+    duplicate_tol: float = DUPLICATE_TOL,
 ) -> SmoothedPath:
     """Smooth a 3-D waypoint path with Dubins CSC curves (PPSwarm Sect. 4.4).
 
@@ -415,7 +417,7 @@ def smooth_path(
         raise ValueError(f"turn_radius must be positive and finite, got {turn_radius!r}")
     if not (step > 0.0 and math.isfinite(step)):
         raise ValueError(f"step must be positive and finite, got {step!r}")
-    keep = _drop_consecutive_duplicates(p, duplicate_tol)
+    keep = drop_consecutive_duplicates(p, duplicate_tol)
     wp = p[keep].copy()
     if headings is None:
         hd = waypoint_headings(wp)
@@ -468,7 +470,7 @@ def midpoint_poses(waypoints: ArrayLike) -> tuple[FloatArray, FloatArray]:
     path of n >= 2 distinct waypoints; consecutive duplicates are dropped first.
     """
     p = np.asarray(waypoints, dtype=np.float64)
-    p = p[_drop_consecutive_duplicates(p, 1e-9)]
+    p = p[drop_consecutive_duplicates(p, DUPLICATE_TOL)]
     if p.shape[0] < 2:
         return p.copy(), waypoint_headings(p)
     seg = np.diff(p, axis=0)

@@ -112,14 +112,6 @@ class VerifyReport:
             out[v.kind] = out.get(v.kind, 0) + 1
         return out
 
-    def by_uav(self) -> dict[str, int]:
-        """Violations per UAV id (a separation violation counts for both UAVs)."""
-        out = dict.fromkeys(self.uav_ids, 0)
-        for v in self.violations:
-            for u in v.uavs:
-                out[u] = out.get(u, 0) + 1
-        return out
-
     def to_dict(self) -> dict[str, Any]:
         return {
             "format": "uavplan.verify/1",

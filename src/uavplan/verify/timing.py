@@ -17,6 +17,7 @@ from uavplan.verify.report import (
     fmt_point,
     fmt_points,
 )
+from uavplan.world.tolerances import VERIFY_ROUNDING
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -50,7 +51,7 @@ def check_speed(traj: Trajectory, speed: float) -> list[Violation]:
     out = []
     d = np.linalg.norm(np.diff(traj.points, axis=0), axis=1)
     dt = np.diff(traj.times)
-    allowed = speed * (1 + SPEED_RTOL) * dt + 1e-6 * (speed + 2.0)
+    allowed = speed * (1 + SPEED_RTOL) * dt + VERIFY_ROUNDING * (speed + 2.0)
     for k in np.flatnonzero((dt >= 0) & (d > allowed)):
         v = float(d[k] / dt[k]) if dt[k] > 0 else math.inf
         t = float(traj.times[k])

@@ -11,6 +11,8 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
+from uavplan.world.tolerances import BOUNDS_TOL, HULL_GROWTH_REL
+
 FloatArray = NDArray[np.float64]
 
 
@@ -782,11 +784,11 @@ def scene2d_batch(paths, centers, radii, verts, starts, margins, lo, hi):  # pra
     box = _polygon_boxes(verts, starts)
     convex = _polygon_convexity(verts, starts)
     hull_v, hull_s = _convex_hulls(verts, starts)
-    delta = 1e-9 * (1.0 + np.max(np.abs(verts))) if verts.shape[0] else 0.0
+    delta = HULL_GROWTH_REL * (1.0 + np.max(np.abs(verts))) if verts.shape[0] else 0.0
     cap2 = np.empty(K)
     for k in range(K):
         cap2[k] = max(margins[k], 0.0) ** 2
-    tol = 1e-9
+    tol = BOUNDS_TOL
     for p in prange(P):
         ts = np.empty(maxv + 2)
         total = 0.0

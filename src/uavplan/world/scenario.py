@@ -19,6 +19,7 @@ from uavplan.world.obstacles import (
     UncertainArea,
 )
 from uavplan.world.terrain import Terrain
+from uavplan.world.tolerances import BAND_TOL, BOUNDS_TOL
 
 FloatArray = NDArray[np.float64]
 
@@ -52,7 +53,7 @@ class Bounds:
     def hi(self) -> FloatArray:
         return np.asarray(self.upper)
 
-    def contains(self, points: FloatArray, tol: float = 1e-9) -> NDArray[np.bool_]:
+    def contains(self, points: FloatArray, tol: float = BOUNDS_TOL) -> NDArray[np.bool_]:
         p = np.asarray(points, dtype=np.float64)[..., : self.dim]
         return np.asarray(np.all((p >= self.lo - tol) & (p <= self.hi + tol), axis=-1))
 
@@ -188,7 +189,7 @@ class Scenario:
             if self.altitude is not None:
                 h = z - g if self.altitude.reference == "ground" else z
                 what = "above ground" if self.altitude.reference == "ground" else "altitude"
-                if not (self.altitude.min - 1e-9 <= h <= self.altitude.max + 1e-9):
+                if not (self.altitude.min - BAND_TOL <= h <= self.altitude.max + BAND_TOL):
                     out.append(
                         f"{what} {h:.1f} m outside the band [{self.altitude.min:g}, "
                         f"{self.altitude.max:g}]"

@@ -1,11 +1,19 @@
 """Tolerances, in one place (metres and seconds unless stated).
 
-Planning checks use :data:`BAND_TOL`; the independent verifier its own, looser
-:data:`VERIFY_TOL` (it reads plans rounded to 6 decimals).
+Planning checks use :data:`BAND_TOL` and :data:`BOUNDS_TOL`; the independent verifier its own,
+looser :data:`VERIFY_TOL` (it reads plans rounded to 6 decimals). Numerical guards that belong to
+one algorithm's arithmetic stay named beside it: Dubins round-off allowances
+(``uavplan.smoothing.dubins._EPS``, ``_MAX_SNAP``, ``_SAME_CIRCLE``), the visibility graph's
+offsets (``uavplan.world.visibility.OFFSET_REL``, ``ANGLE_TOL``), RSCDWOA's ``CHAOS_EPS``.
 """
 
 #: A waypoint may leave the altitude band by this much (round-off of height arithmetic).
 BAND_TOL = 1e-9
+#: A point may leave the scenario's box by this much.
+BOUNDS_TOL = 1e-9
+#: 2-D polygons' convex hulls are grown by this fraction of the scene's size before a segment
+#: that misses a hull is rejected without the exact test (never rejects a touching segment).
+HULL_GROWTH_REL = 1e-9
 #: Duplicate waypoints closer than this are one (Dubins smoothing, fleet pose times).
 DUPLICATE_TOL = 1e-9
 #: RRT*: a rewire must shorten the cost-to-come by more than this (no churn on round-off).
@@ -14,3 +22,6 @@ REWIRE_TOL = 1e-9
 VERIFY_TOL = 1e-6
 #: The verifier's relative slack on the speed limit.
 VERIFY_SPEED_RTOL = 1e-6
+#: The verifier's length slack per segment for plan files' 6-decimal rounding: this many metres
+#: per (speed + 2) m/s of speed.
+VERIFY_ROUNDING = 1e-6
