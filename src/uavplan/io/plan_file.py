@@ -44,8 +44,8 @@ from uavplan import __version__
 from uavplan.io.atomic import write_json_atomic
 
 if TYPE_CHECKING:
-    from uavplan.planners.base import FleetResult, PlanResult
     from uavplan.planners.fleet_plan import FleetPlan
+    from uavplan.planners.results import FleetResult, PlanResult
 
 FloatArray = NDArray[np.float64]
 

@@ -10,22 +10,12 @@ from __future__ import annotations
 from typing import Any
 
 from uavplan._discovery import import_submodules
-from uavplan.planners.base import (
-    FleetPlanner,
-    FleetResult,
-    Outcome,
-    Planner,
-    PlannerConfig,
-    PlannerEntry,
-    PlannerError,
-    PlanResult,
-    Run,
-    describe_options,
-    option,
-    register_planner,
-    registry,
-)
+from uavplan.planners.base import FleetPlanner, Planner
 from uavplan.planners.optimizer_planner import OptimizerPlanner
+from uavplan.planners.options import PlannerConfig, PlannerError, describe_options, option
+from uavplan.planners.registry import PlannerEntry, register_planner, registry
+from uavplan.planners.results import FleetResult, PlanResult
+from uavplan.planners.run import Outcome, Run
 
 import_submodules(__name__, __path__)  # registers every planner module's planners
 

@@ -10,7 +10,9 @@ from typing import Any
 import numpy as np
 
 from uavplan.optimizers.base import Budget
-from uavplan.planners.base import FleetPlanner, FleetResult, Planner, PlanResult, ProgressCallback
+from uavplan.planners.base import FleetPlanner, Planner
+from uavplan.planners.results import FleetResult, PlanResult
+from uavplan.planners.run import ProgressCallback
 from uavplan.world.scenario import Scenario
 
 

@@ -18,15 +18,10 @@ from typing import Any
 from uavplan import optimizers
 from uavplan.optimizers.base import fit_schedule
 from uavplan.optimizers.constraints import RULES, Constrained
-from uavplan.planners.base import (
-    Planner,
-    PlannerConfig,
-    Run,
-    add_provider,
-    is_registered,
-    option,
-    register_planner,
-)
+from uavplan.planners.base import Planner
+from uavplan.planners.options import PlannerConfig, option
+from uavplan.planners.registry import add_provider, is_registered, register_planner
+from uavplan.planners.run import Run
 from uavplan.problems.encoding import ENCODINGS
 
 

@@ -17,8 +17,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from uavplan.planners.base import register_planner
 from uavplan.planners.prioritized import PrioritizedPlanner
+from uavplan.planners.registry import register_planner
 
 #: PPSwarm Table 1.
 PPSWARM: dict[str, Any] = {

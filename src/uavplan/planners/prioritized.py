@@ -70,16 +70,10 @@ from numpy.typing import NDArray
 from uavplan import optimizers
 from uavplan.optimizers.base import Budget, OptimizerConfig
 from uavplan.optimizers.constraints import RULES, Constrained
-from uavplan.planners.base import (
-    FleetOutcome,
-    FleetPlanner,
-    FleetPlannerConfig,
-    PlannerError,
-    PlanResult,
-    ProgressCallback,
-    make_result,
-    option,
-)
+from uavplan.planners.base import FleetOutcome, FleetPlanner
+from uavplan.planners.options import FleetPlannerConfig, PlannerError, option
+from uavplan.planners.results import PlanResult, make_result
+from uavplan.planners.run import ProgressCallback
 from uavplan.problems.encoding import ENCODINGS, CartesianEncoding
 from uavplan.problems.path_problem import PRESETS, SEPARATION_TERM, PathProblem
 from uavplan.problems.validity import greedy_shortcut

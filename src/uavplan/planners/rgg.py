@@ -53,15 +53,10 @@ from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
 from uavplan.optimizers.base import Budget
-from uavplan.planners.base import (
-    Outcome,
-    Planner,
-    PlannerConfig,
-    PlannerError,
-    Run,
-    option,
-    register_planner,
-)
+from uavplan.planners.base import Planner
+from uavplan.planners.options import PlannerConfig, PlannerError, option
+from uavplan.planners.registry import register_planner
+from uavplan.planners.run import Outcome, Run
 from uavplan.problems.path_problem import LOOKUP
 from uavplan.problems.validity import MotionValidator
 from uavplan.world.scenario import Scenario, Task

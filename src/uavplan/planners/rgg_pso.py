@@ -39,15 +39,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.optimizers.pso import PSO, PSOConfig
-from uavplan.planners.base import (
-    Outcome,
-    Planner,
-    PlannerConfig,
-    Run,
-    option,
-    register_planner,
-)
+from uavplan.planners.base import Planner
+from uavplan.planners.options import PlannerConfig, option
+from uavplan.planners.registry import register_planner
 from uavplan.planners.rgg import DEFAULT_GAMMA, feasibility_problem, rgg_candidates
+from uavplan.planners.run import Outcome, Run
 from uavplan.problems.encoding import CartesianEncoding
 from uavplan.problems.path_problem import PathProblem
 from uavplan.problems.validity import MotionValidator, shortest_subsequence

@@ -110,17 +110,11 @@ from numba import njit
 from numpy.typing import NDArray
 
 from uavplan.optimizers.base import Budget
-from uavplan.planners.base import (
-    Options,
-    Outcome,
-    Planner,
-    PlannerConfig,
-    PlannerError,
-    Run,
-    option,
-    register_planner,
-)
+from uavplan.planners.base import Planner
 from uavplan.planners.grid_index import GridIndex, pad3
+from uavplan.planners.options import Options, PlannerConfig, PlannerError, option
+from uavplan.planners.registry import register_planner
+from uavplan.planners.run import Outcome, Run
 from uavplan.problems.path_problem import LOOKUP
 from uavplan.problems.validity import MotionValidator, greedy_shortcut
 from uavplan.world.scenario import Scenario, Task
