@@ -111,10 +111,9 @@ class Planner(ABC):
     def _default_config(self) -> Options:
         return self.Config()
 
-    def optimizer_name(self, config: Options | None = None) -> str | None:
+    def optimizer_name(self) -> str | None:
         """The inner population optimizer's registry name (None: the planner has none)."""
-        cfg = config if config is not None else getattr(self, "config", None)
-        named = getattr(cfg, "optimizer", None) if cfg is not None else None
+        named = getattr(self.config, "optimizer", None)
         return str(named) if named is not None else self.inner_optimizer
 
     def configure(self, base: Options, options: Mapping[str, Any]) -> Options:
