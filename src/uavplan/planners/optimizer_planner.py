@@ -12,6 +12,7 @@ methods return their best particle).
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 from typing import Any
 
@@ -85,9 +86,10 @@ class OptimizerPlanner(Planner):
 
 
 def _summary(name: str) -> str:
-    doc = (optimizers.get(name).__doc__ or "").strip().split("\n")[0]
-    doc = doc.replace(" (see the module docstring)", "")
-    return f"{doc} (optimizer over waypoints)"
+    cls = optimizers.get(name)
+    doc = cls.__doc__ or sys.modules[cls.__module__].__doc__ or name
+    first = doc.strip().split("\n")[0].replace(" (see the module docstring)", "")
+    return f"{first} (optimizer over waypoints)"
 
 
 def _provide() -> None:
