@@ -180,11 +180,27 @@ def test_malformed_tasks_and_budgets_are_refused(name: str) -> None:
         p.plan(sc, outside, budget=5, seed=0)
     with pytest.raises(PlannerError, match="no task 'nope'"):
         p.plan(sc, "nope", budget=5, seed=0)
+    other_dim = Task("flat", tuple(sc.tasks[0].start[:2]) + (1.0,) * (sc.dim == 2),
+                     tuple(sc.tasks[0].goal[:2]) + (1.0,) * (sc.dim == 2))  # fmt: skip
+    with pytest.raises(PlannerError, match="coordinates, the scenario is"):
+        p.plan(sc, other_dim if sc.dim == 2 else Task("flat", (1.0, 1.0), (2.0, 2.0)), budget=5)
     with pytest.raises(PlannerError, match="budget"):
         p.plan(sc, budget=0, seed=0)
     if isinstance(p, FleetPlanner):
         with pytest.raises(PlannerError, match="outside the bounds"):
             p.plan_fleet(Scenario(**{**sc.__dict__, "tasks": (outside,), "metadata": {}}))
+
+
+@pytest.mark.parametrize("rule", ["cost", "inf", "feasibility-first"])
+def test_every_constraint_rule_runs_with_every_optimizer_planner(rule: str) -> None:
+    sc = easy_3d()
+    for name in SINGLE:
+        p = get_planner(name)
+        if "constraints" not in p.option_names():
+            continue
+        r = quick(name, constraints=rule).plan(sc, budget=8, seed=2)
+        assert r.iterations == 8 and len(r.feasible_history) == 8, name
+        assert np.isfinite(r.cost) or not r.feasible
 
 
 def test_named_configurations_share_one_class() -> None:

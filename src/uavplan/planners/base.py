@@ -367,6 +367,7 @@ class FleetPlanner(Planner):
     ) -> PlanResult:
         """A fleet of one: ``task`` alone."""
         t = task if isinstance(task, Task) else _task(scenario, task)
+        self.check_input(scenario, t)
         one = dataclasses.replace(scenario, tasks=(t,))
         return self.plan_fleet(one, budget, seed, callback).results[0]
 

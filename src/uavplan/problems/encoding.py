@@ -91,9 +91,17 @@ class CartesianEncoding:
         return ev.cost
 
     def evaluate_cv(self, X: FloatArray, exact: bool = True) -> tuple[FloatArray, FloatArray]:
-        """Cost and constraint violation apart (see :meth:`PathProblem.evaluate_cv`)."""
+        """Cost and constraint violation apart (see :meth:`PathProblem.evaluate_cv`); with
+        ``track_feasibility`` the best cost among the paths with no violation joins
+        :attr:`feasible_history`, as :meth:`evaluate` does."""
         self.evaluations += len(X)
-        return self.problem.evaluate_cv(self.decode(X), exact)
+        f, cv = self.problem.evaluate_cv(self.decode(X), exact)
+        if self.track_feasibility:
+            ok = (cv == 0) & np.isfinite(f)
+            best = float(np.min(f[ok], initial=np.inf))
+            prev = self.feasible_history[-1] if self.feasible_history else np.inf
+            self.feasible_history.append(min(prev, best))
+        return f, cv
 
     def evaluate_full(self, X: FloatArray) -> Evaluation:
         return self.problem.evaluate(self.decode(X))
