@@ -29,7 +29,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
-from uavplan.optimizers.base import OptimizerError
+from uavplan.optimizers.base import OptimizerError, Problem
 
 FloatArray = NDArray[np.float64]
 
@@ -40,19 +40,9 @@ FEASIBILITY_FIRST_BASE = 1e7
 
 
 @runtime_checkable
-class ConstrainedProblem(Protocol):
-    """A box-bounded problem with the cost and the constraint violation apart."""
-
-    @property
-    def dim(self) -> int: ...
-
-    @property
-    def lower(self) -> FloatArray: ...
-
-    @property
-    def upper(self) -> FloatArray: ...
-
-    def evaluate(self, X: FloatArray) -> FloatArray: ...
+class ConstrainedProblem(Problem, Protocol):
+    """A box-bounded problem (:class:`~uavplan.optimizers.base.Problem`) with the cost and the
+    constraint violation apart."""
 
     def evaluate_cv(self, X: FloatArray, exact: bool = True) -> tuple[FloatArray, FloatArray]:
         """``(f, cv)`` of ``X`` (pop, dim). With ``exact=False`` the problem may report any
