@@ -12,16 +12,20 @@
 * ``uavs``: one record per UAV: ``id``, ``waypoints`` ``[[x, y(, z)], ...]`` and ``times``
   (the planned timed polyline), ``cost``, ``terms``, ``cost_model``, ``feasible``,
   ``violations``, ``length``, ``evaluations``, ``iterations``, ``wall_time``, ``history``,
-  ``first_feasible_iteration``, ``info`` (the planner's figures), and optionally ``smoothed``
-  (``points``, ``times``, ``clear``, ``violations``: the Dubins-smoothed flight).
+  ``first_feasible_iteration``, ``info`` (the planner's figures), ``flown`` (``kind``:
+  ``smoothed`` or ``polyline``, ``points``, ``times``, ``feasible``, ``violations``: the
+  trajectory the UAV is to fly and that the plan guarantees; ``feasible`` includes the UAV's
+  kinematic limits), and optionally ``smoothed`` (``points``, ``times``, ``clear``,
+  ``violations``: a Dubins-smoothed version that the plan does not declare, informative).
 
 JSON has no infinity: infinite costs are the strings ``"inf"``/``"-inf"``. Coordinates and times
 are rounded to 6 decimals (micrometres, microseconds).
 
 **Reading** (:func:`read_plan_file`, :func:`parse_plan`) returns a typed :class:`PlanFile` whose
-UAVs give their trajectories (:meth:`UAVPlan.trajectory`: planned or smoothed, as
+UAVs give their trajectories (:meth:`UAVPlan.trajectory`: flown, planned or smoothed, as
 :class:`Trajectory`); it reads format 2 and format 1 (no top-level ``feasible``, no per-UAV
-``cost_model`` and ``info``), and a bare ``{"uavs": [{"id", "waypoints", "times"}, ...]}``. A
+``cost_model``, ``info`` and ``flown``: the planned polyline is then what is flown), and a bare
+``{"uavs": [{"id", "waypoints", "times"}, ...]}``. A
 file it cannot read raises :class:`PlanFormatError` with one line naming the file, the field
 and the value.
 """
@@ -50,6 +54,9 @@ if TYPE_CHECKING:
 FloatArray = NDArray[np.float64]
 
 PLAN_FORMAT = "uavplan.plan/2"
+#: Which trajectory of a UAV: the one it is to fly (declared), its planned polyline, or the
+#: informative smoothed version.
+TrajectoryKind = Literal["flown", "planned", "smoothed"]
 #: Every format this module reads.
 READABLE_FORMATS = ("uavplan.plan/1", PLAN_FORMAT)
 FRAME = "local ENU metres: x east, y north, z up (absolute altitude)"
@@ -110,6 +117,14 @@ def uav_record(r: PlanResult) -> dict[str, Any]:
         "history": [_num(v) for v in np.asarray(r.history)],
         "first_feasible_iteration": r.first_feasible_iteration,
         "info": _plain(r.info),
+    }
+    pts, ts = r.flown_trajectory()
+    rec["flown"] = {
+        "kind": r.flown_kind if r.flown is not None else "polyline",
+        "points": _points(pts),
+        "times": _points(ts),
+        "feasible": r.flown_feasible,
+        "violations": list(r.flown_violations if r.flown_ok is not None else r.violations),
     }
     if r.smoothed is not None:
         rec["smoothed"] = {
@@ -191,8 +206,10 @@ class UAVPlan:
     Attributes:
         id: the UAV id; planned: its planned timed polyline (``waypoints``, ``times``).
         feasible, cost, cost_model, violations: what the planner said of it (None: not said).
-        smoothed: the smoothed flight (None if none); smoothed_clear, smoothed_violations: what
+        smoothed: a smoothed version (None if none); smoothed_clear, smoothed_violations: what
             the planner said of that.
+        flown: the declared trajectory (None: not declared, format 1), flown_kind,
+            flown_feasible (the plan's guarantee), flown_violations.
         record: the whole record as read.
     """
 
@@ -205,11 +222,19 @@ class UAVPlan:
     smoothed: Trajectory | None = None
     smoothed_clear: bool | None = None
     smoothed_violations: tuple[str, ...] = ()
+    flown: Trajectory | None = None
+    flown_kind: str = "polyline"
+    flown_feasible: bool | None = None
+    flown_violations: tuple[str, ...] = ()
     record: Mapping[str, Any] = field(default_factory=dict)
 
-    def trajectory(self, kind: Literal["planned", "smoothed"] = "planned") -> Trajectory:
+    def trajectory(self, kind: TrajectoryKind = "flown") -> Trajectory:
+        """``flown`` (declared; the planned polyline when the file declares none),
+        ``planned`` (the polyline) or ``smoothed`` (the informative smoothed version)."""
         if kind == "planned":
             return self.planned
+        if kind == "flown":
+            return self.flown if self.flown is not None else self.planned
         if self.smoothed is None:
             raise PlanFormatError([f"{self.id}: no smoothed path"])
         return self.smoothed
@@ -234,7 +259,7 @@ class PlanFile:
     dim: int
     source: str = "plan"
 
-    def trajectories(self, kind: Literal["planned", "smoothed"] = "planned") -> list[Trajectory]:
+    def trajectories(self, kind: TrajectoryKind = "flown") -> list[Trajectory]:
         """Every UAV's trajectory of ``kind``; PlanFormatError naming the first UAV without a
         smoothed path when ``kind="smoothed"``."""
         out = []
@@ -382,6 +407,22 @@ def parse_plan(data: Any, dim: int | None = None, source: str = "plan") -> PlanF
             clear = _opt_bool(sm, "clear", f"{here}.smoothed")
             smoothed = _timed(sm, "points", f"{here}.smoothed", d, uid, clear)
             sm_viol = _names(sm, "violations", f"{here}.smoothed")
+        flown = None
+        fl_kind = "polyline"
+        fl_ok: bool | None = None
+        fl_viol: tuple[str, ...] = ()
+        fl = rec.get("flown")
+        if fl is not None:
+            if not isinstance(fl, Mapping):
+                raise PlanFormatError([f"{here}.flown: expected an object, got {_short(fl)}"])
+            fl_kind = fl.get("kind", "polyline")
+            if fl_kind not in ("smoothed", "polyline"):
+                raise PlanFormatError(
+                    [f"{here}.flown.kind: {_short(fl_kind)} is not smoothed or polyline"]
+                )
+            fl_ok = _opt_bool(fl, "feasible", f"{here}.flown")
+            flown = _timed(fl, "points", f"{here}.flown", d, uid, fl_ok)
+            fl_viol = _names(fl, "violations", f"{here}.flown")
         cost = rec.get("cost")
         cm = rec.get("cost_model")
         out.append(
@@ -395,6 +436,10 @@ def parse_plan(data: Any, dim: int | None = None, source: str = "plan") -> PlanF
                 smoothed=smoothed,
                 smoothed_clear=clear,
                 smoothed_violations=sm_viol,
+                flown=flown,
+                flown_kind=fl_kind,
+                flown_feasible=fl_ok,
+                flown_violations=fl_viol,
                 record=rec,
             )
         )
@@ -473,6 +518,16 @@ class SmoothedSpec(_Spec):
     violations: list[str] = Field(default_factory=list)
 
 
+class FlownSpec(_Spec):
+    """The trajectory a UAV is to fly, as the plan declares and guarantees it."""
+
+    kind: Literal["smoothed", "polyline"] = "polyline"
+    points: list[list[float]] = Field(description="[[x, y(, z)], ...] metres, straight between")
+    times: list[float] = Field(description="seconds, one per point, non-decreasing")
+    feasible: bool | None = Field(None, description="passes every check, kinematic limits included")
+    violations: list[str] = Field(default_factory=list)
+
+
 class UAVSpec(_Spec):
     """One UAV's planned path and how it was found."""
 
@@ -491,6 +546,7 @@ class UAVSpec(_Spec):
     history: list[Number] = Field(default_factory=list)
     first_feasible_iteration: int | None = None
     info: dict[str, Any] = Field(default_factory=dict)
+    flown: FlownSpec | None = None
     smoothed: SmoothedSpec | None = None
 
 

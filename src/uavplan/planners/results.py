@@ -40,6 +40,10 @@ class PlanResult:
         smoothed, smoothed_times, smoothed_ok, smoothed_violations: a flyable version of
             ``waypoints`` (Dubins-smoothed dense polyline (m, dim) and its times (m,)), whether
             it keeps every clearance and what it breaks (None: not smoothed).
+        flown, flown_times, flown_kind, flown_ok, flown_violations: the trajectory the UAV is
+            to fly and that the plan guarantees (``"smoothed"`` or ``"polyline"``), whether it
+            passes every check, kinematic limits included, and what it breaks (None: not
+            declared; the planned polyline is then what is flown).
     """
 
     uav_id: str
@@ -67,6 +71,24 @@ class PlanResult:
     smoothed_times: FloatArray | None = None
     smoothed_ok: bool | None = None
     smoothed_violations: tuple[str, ...] = ()
+    flown: FloatArray | None = None
+    flown_times: FloatArray | None = None
+    flown_kind: str = "polyline"
+    flown_ok: bool | None = None
+    flown_violations: tuple[str, ...] = ()
+
+    def flown_trajectory(self) -> tuple[FloatArray, FloatArray]:
+        """The trajectory this UAV is to fly, points (m, dim) and times (m,): :attr:`flown`
+        when declared, else the planned polyline."""
+        if self.flown is None or self.flown_times is None:
+            return self.waypoints, self.times
+        return self.flown, self.flown_times
+
+    @property
+    def flown_feasible(self) -> bool:
+        """What the plan guarantees of the flown trajectory (the polyline's verdict until a
+        flight is declared)."""
+        return self.feasible if self.flown_ok is None else bool(self.flown_ok)
 
     @property
     def length(self) -> float:
