@@ -109,6 +109,16 @@ BAD: list[tuple[str, Callable[[Path], Any], list[tuple[str, str]]]] = [
         [('uav.colour = "red"', "unknown key")],
     ),
     (
+        "slow.yaml",
+        lambda d: flat(uav={"speed": 10, "min_speed": 12}),
+        [("uav.min_speed = 12", "min_speed 12 m/s is above speed 10 m/s")],
+    ),
+    (
+        "climb.yaml",
+        lambda d: flat(uav={"max_climb_angle": 120}),
+        [("uav.max_climb_angle = 120", "less than or equal to 90")],
+    ),
+    (
         "dem.yaml",
         lambda d: flat(terrain={"file": "missing.tif"}, bounds=None),
         [('terrain.file = "missing.tif"', "DEM file not found")],
@@ -185,6 +195,7 @@ def test_export_then_check_and_load(tmp_path: Path, name: str, suffix: str) -> N
     assert r.exit_code == 0 and r.stdout.strip() == "ok"
     a, b = load_builtin(name), load_scenario(target)
     assert a.tasks == b.tasks and a.bounds == b.bounds and a.cylinders == b.cylinders
+    assert a.uav == b.uav  # the kinematic limits too
     assert a.circles == b.circles and a.polygons == b.polygons and a.altitude == b.altitude
     assert a.danger_areas == b.danger_areas and a.uncertain_areas == b.uncertain_areas
     r = run("show", str(target))
@@ -198,6 +209,11 @@ def test_schema_is_json() -> None:
     assert sch["type"] == "object"
     for key in ("name", "bounds", "terrain", "cylinders", "tasks", "planning", "uav", "task_z"):
         assert key in sch["properties"]
+    uav = sch["$defs"]["UAVSpec"]["properties"]
+    assert uav["turn_radius"]["default"] == 0
+    for key in ("min_speed", "max_speed", "max_climb_angle", "max_descent_angle"):
+        assert "description" in uav[key], key
+    assert "degrees" in uav["max_climb_angle"]["description"]
 
 
 @pytest.mark.parametrize("case", BAD, ids=[c[0] for c in BAD])

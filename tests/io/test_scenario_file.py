@@ -25,6 +25,7 @@ from uavplan.io.scenario_file import (
 )
 from uavplan.scenarios import builtin_names, builtin_path, list_builtin, load_builtin, resolve
 from uavplan.world import (
+    UAV,
     AltitudeBand,
     Bounds,
     Circle,
@@ -272,7 +273,8 @@ def test_full_spec_round_trip_and_terrain_file_rebased(tmp_path: Path) -> None:
     assert s.cylinders[2].z_max == pytest.approx(50 + float(s.terrain.height(400, 350)))
     assert s.cylinders[0].infinite and s.cylinders[1].z_max == 80
     assert s.cost == "ppswarm" and s.n_waypoints == 7
-    assert s.uav.speed == 15 and s.uav.turn_radius == 20
+    assert s.uav.speed == 15 and s.uav.size == 0.5
+    assert s.uav.turn_radius == 0 and s.uav.min_speed == 0  # no kinematic limits by default
     # default bounds: terrain extent; z [min h, max h + band max]
     assert s.bounds.lower == (100, 200, 0) and s.bounds.upper == (490, 490, 68 + 100)
     for suffix in (".yaml", ".json"):
@@ -319,6 +321,91 @@ def test_programmatic_scenario_round_trip(tmp_path: Path) -> None:
     )
     assert scenario_to_dict(on_map)["terrain"] == {"builtin": "spso"}
     assert_same(on_map, load_scenario(save_scenario(on_map, tmp_path / "m.yaml")))
+
+
+UAV_LIMITS = {
+    "speed": 20,
+    "turn_radius": 20,
+    "s1": 15,
+    "s2": 10,
+    "min_speed": 10,
+    "max_speed": 25.5,
+    "max_climb_angle": 30,
+    "max_descent_angle": 22.5,
+}
+
+
+@pytest.mark.parametrize("suffix", [".yaml", ".json"])
+def test_uav_limits_round_trip(tmp_path: Path, suffix: str) -> None:
+    s = load_scenario(write(tmp_path / f"u{suffix}", flat3d(uav=UAV_LIMITS)))
+    assert s.uav == UAV(
+        speed=20, turn_radius=20, min_speed=10, max_speed=25.5, max_climb_angle=30,
+        max_descent_angle=22.5,
+    )  # fmt: skip
+    assert s.uav.v_max == 25.5
+    again = load_scenario(save_scenario(s, tmp_path / f"again{suffix}"))
+    assert again.uav == s.uav
+    assert scenario_to_dict(again)["uav"] == UAV_LIMITS
+    # a Scenario built in code: load -> save -> load gives an equal UAV, with or without limits
+    for uav in (s.uav, UAV(), UAV(speed=12, min_speed=3), UAV(max_climb_angle=90)):
+        code = Scenario(
+            "code", Bounds((0, 0, 0), (100, 100, 50)), (Task("a", (5, 5, 10), (95, 95, 10)),),
+            uav=uav,
+        )  # fmt: skip
+        spec = spec_from_scenario(code)
+        assert scenario_from_dict(spec.model_dump()).uav == uav
+        assert load_scenario(save_scenario(code, tmp_path / f"code{suffix}")).uav == uav
+    # limits not given are left out of the written file (null means the default)
+    written = scenario_to_dict(spec_from_scenario(code))["uav"]
+    assert "max_speed" not in written and "max_descent_angle" not in written
+
+
+def test_ppswarm_uav_limits() -> None:
+    for k in (1, 2, 3, 4):
+        u = load_builtin(f"ppswarm{k}").uav
+        assert u == UAV(
+            speed=20, turn_radius=20, s1=15, s2=10, min_speed=10, max_climb_angle=30,
+            max_descent_angle=30,
+        )  # fmt: skip
+        assert u.v_max == 20
+
+
+UAV_CASES: list[tuple[dict[str, Any], str, str]] = [
+    ({"speed": 20, "min_speed": 30}, "uav.min_speed = 30",
+     "min_speed 30 m/s is above speed 20 m/s (need min_speed <= speed)"),
+    ({"min_speed": 25}, "uav.min_speed = 25", "above speed 20 m/s"),  # the default speed
+    ({"speed": 20, "max_speed": 15}, "uav.max_speed = 15",
+     "max_speed 15 m/s is below speed 20 m/s (need speed <= max_speed)"),
+    ({"min_speed": -1}, "uav.min_speed = -1", "greater than or equal to 0"),
+    ({"max_speed": 0}, "uav.max_speed = 0", "greater than 0"),
+    ({"max_climb_angle": 0}, "uav.max_climb_angle = 0", "greater than 0"),
+    ({"max_descent_angle": 95}, "uav.max_descent_angle = 95", "less than or equal to 90"),
+    ({"max_climb_angle": True}, "uav.max_climb_angle = true", "not true/false"),
+    ({"turn_radius": -5}, "uav.turn_radius = -5", "greater than or equal to 0"),
+    ({"min_speed": ".nan"}, "uav.min_speed", "finite number"),
+    ({"max_climb": 30}, "uav.max_climb", "did you mean 'max_climb_angle'"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("uav", "where", "reason"), UAV_CASES, ids=[c[1] for c in UAV_CASES])
+def test_uav_problem_lines(tmp_path: Path, uav: dict[str, Any], where: str, reason: str) -> None:
+    data = flat3d(uav={k: (math.nan if v == ".nan" else v) for k, v in uav.items()})
+    path = write(tmp_path / "uav.yaml", data)
+    problems = problems_of(path)
+    assert has_line(problems, f"{path}: {where}", reason), problems
+    assert len(problems) == 1, problems
+
+
+def test_uav_problems_with_others_still_checked(tmp_path: Path) -> None:
+    data = flat3d(
+        uav={"speed": 10, "min_speed": 12, "max_speed": 8},
+        tasks=[{"start": [500, 5, 10], "goal": [95, 95, 10]}],
+    )
+    problems = problems_of(write(tmp_path / "both.yaml", data))
+    assert has_line(problems, "uav.min_speed = 12", "above speed 10 m/s")
+    assert has_line(problems, "uav.max_speed = 8", "below speed 10 m/s")
+    assert has_line(problems, "tasks[0].start", "outside the bounds")
+    assert len(problems) == 3
 
 
 def test_dict_and_spec_inputs(tmp_path: Path) -> None:

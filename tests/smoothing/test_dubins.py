@@ -278,8 +278,12 @@ def test_round_off_regressions(q0, q1, rho, length):
     assert ang_dist(end[2], q1[2]) < 1e-12
 
 
-def test_paper_radius_is_the_uav_default():
-    assert UAV().turn_radius == 20.0
+def test_paper_radius_is_the_ppswarm_scenarios():
+    from uavplan.scenarios import resolve
+
+    assert UAV().turn_radius == 0.0  # no limit unless a scenario declares one
+    for i in range(1, 5):
+        assert resolve(f"ppswarm{i}").uav.turn_radius == 20.0
 
 
 def test_errors():

@@ -3,7 +3,9 @@
 Prints every violation, then a summary (UAVs, pairs checked, minimum separation, violations by
 kind). Exit codes: 0 no violation, 1 some violation, 2 bad input (a missing or unreadable file,
 invalid JSON, a missing or malformed field, mismatched lengths, an unusable scenario), reported on
-stderr as one line naming the file, the field and the value, without a traceback. What is checked:
+stderr as one line naming the file, the field and the value, without a traceback. It checks each
+UAV's flown trajectory with its kinematic limits by default, the planned polylines geometrically
+with ``--polylines``, the informative smoothed paths with ``--smoothed``. What is checked:
 :mod:`uavplan.verify` and ``docs/verify.md``.
 """
 
@@ -19,6 +21,7 @@ from rich.console import Console
 from uavplan.cli._common import fail
 
 if TYPE_CHECKING:
+    from uavplan.io.plan_file import TrajectoryKind
     from uavplan.verify import VerifyReport
 
 
@@ -26,13 +29,22 @@ def _m(v: float) -> str:
     return f"{v:.3f}".rstrip("0").rstrip(".") if v == v and abs(v) != float("inf") else str(v)
 
 
+#: How the summary names what was checked.
+_CHECKED = {
+    "flown": "flown trajectories",
+    "planned": "planned polylines",
+    "smoothed": "smoothed paths",
+}
+
+
 def summary_lines(report: VerifyReport, plan_name: str) -> list[str]:
     """The summary printed after the violations, as plain text lines."""
     n = len(report.uav_ids)
+    what = _CHECKED.get(report.trajectory, report.trajectory)
+    limits = "with kinematic limits" if report.kinematics else "geometric, no kinematic limits"
     lines = [
         f"plan: {plan_name} against scenario {report.scenario}: {n} UAV{'s' * (n != 1)}, "
-        f"{report.n_segments} segment{'s' * (report.n_segments != 1)}"
-        + (" (smoothed paths)" if report.smoothed else "")
+        f"{report.n_segments} segment{'s' * (report.n_segments != 1)} ({what}, {limits})"
     ]
     lines.append(
         f"pairs: {report.pairs_total}, {report.pairs_checked} checked exactly after pruning"
@@ -64,7 +76,18 @@ def verify(
     smoothed: Annotated[
         bool,
         typer.Option(
-            "--smoothed", help="Verify each UAV's smoothed path instead of its waypoints."
+            "--smoothed",
+            help="Verify each UAV's informative smoothed path (with kinematic limits) instead "
+            "of its flown trajectory.",
+        ),
+    ] = False,
+    polylines: Annotated[
+        bool,
+        typer.Option(
+            "--polylines",
+            help="Verify each UAV's planned polyline geometrically (clearances, separation, "
+            "times, maximum speed; no turn, climb or minimum-speed limit) instead of its flown "
+            "trajectory.",
         ),
     ] = False,
     max_show: Annotated[
@@ -76,12 +99,18 @@ def verify(
 ) -> None:
     """Check PLAN_FILE against SCENARIO independently of the planner: UAV-UAV separation over
     continuous time, obstacles, terrain and altitude band along every segment, bounds, times and
-    speed. Exit 0 if all pass, 1 on any violation, 2 on bad input."""
+    speed, and the UAV's kinematic limits (turn radius, climb and descent angles, minimum speed).
+    By default each UAV's flown trajectory (its planned polyline where the plan declares none).
+    Exit 0 if all pass, 1 on any violation, 2 on bad input."""
     from uavplan.io.plan_file import PlanFormatError, load_plan_json, parse_plan, plan_path
     from uavplan.io.scenario_file import ScenarioFileError
     from uavplan.scenarios import resolve
     from uavplan.verify import verify_trajectories
+    from uavplan.verify.verifier import TRAJECTORIES
 
+    if smoothed and polylines:
+        raise fail("--smoothed and --polylines: give at most one")
+    kind: TrajectoryKind = "smoothed" if smoothed else ("planned" if polylines else "flown")
     try:
         data = load_plan_json(plan_file)
     except PlanFormatError as exc:
@@ -95,10 +124,17 @@ def verify(
     shown = plan_path(plan_file)
     try:
         pf = parse_plan(data, world.dim, source=str(shown))
-        trajs = pf.trajectories("smoothed" if smoothed else "planned")
+        trajs = pf.trajectories(kind)
     except PlanFormatError as exc:
         raise fail(exc.problems[0]) from None
-    report = verify_trajectories(trajs, world, pf.scenario, smoothed)
+    report = verify_trajectories(
+        trajs,
+        world,
+        pf.scenario,
+        smoothed=smoothed,
+        kinematics=TRAJECTORIES[kind],
+        trajectory=kind,
+    )
 
     out = Console(highlight=False, soft_wrap=True)
     limit = max_show if max_show > 0 else len(report.violations)

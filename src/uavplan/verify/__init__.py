@@ -9,7 +9,8 @@ visibility) directly; ``tests/verify/test_independence.py`` lists what it may im
 plans through :mod:`uavplan.io.plan_file` and the scenario as data.
 
 Modules: :mod:`~uavplan.verify.report` (violations, the report), :mod:`~uavplan.verify.timing`
-(times, speed, bounds), :mod:`~uavplan.verify.obstacles` (cylinders, circles, polygons),
+(times, speed, bounds), :mod:`~uavplan.verify.kinematics` (turn radius, climb and descent
+angles), :mod:`~uavplan.verify.obstacles` (cylinders, circles, polygons),
 :mod:`~uavplan.verify.terrain` (terrain, altitude band), :mod:`~uavplan.verify.separation`
 (UAV pairs and moving obstacles over continuous time), :mod:`~uavplan.verify.verifier` (all of
 them on a plan).

@@ -25,6 +25,8 @@ SPEED_RTOL = VERIFY_TOL
 KINDS = (
     "times",
     "speed",
+    "turn",
+    "climb",
     "bounds",
     "separation",
     "cylinder",
@@ -34,6 +36,7 @@ KINDS = (
     "terrain",
     "altitude",
 )
+
 
 @dataclass(frozen=True)
 class Violation:
@@ -75,7 +78,12 @@ class VerifyReport:
 
     Attributes:
         scenario: the scenario's name; plan_scenario: the name the plan gives (None if absent).
-        smoothed: whether the smoothed paths were verified instead of the waypoints.
+        smoothed: whether the informative smoothed paths were verified.
+        trajectory: which trajectories were verified: ``"flown"`` (each UAV's declared flown
+            trajectory, its planned polyline where the plan declares none), ``"planned"`` (the
+            planned polylines) or ``"smoothed"``.
+        kinematics: whether the UAV's kinematic limits were checked (turn radius, climb and
+            descent angles, minimum speed); the maximum speed is always checked.
         uav_ids: the UAVs, in plan order; n_segments: segments checked over all UAVs.
         s2: the required UAV-UAV separation, metres.
         pairs_total: ``n (n - 1) / 2``; pairs_checked: pairs left after pruning, checked exactly.
@@ -96,6 +104,8 @@ class VerifyReport:
     min_separation: float = math.inf
     min_separation_pair: tuple[str, str] | None = None
     min_separation_time: float | None = None
+    trajectory: str = "flown"
+    kinematics: bool = True
     violations: list[Violation] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
 
@@ -118,6 +128,8 @@ class VerifyReport:
             "scenario": self.scenario,
             "plan_scenario": self.plan_scenario,
             "smoothed": self.smoothed,
+            "trajectory": self.trajectory,
+            "kinematics": self.kinematics,
             "ok": self.ok,
             "uavs": len(self.uav_ids),
             "segments": self.n_segments,

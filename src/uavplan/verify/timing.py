@@ -1,4 +1,5 @@
-"""Timing and box checks of one trajectory: non-decreasing times, the speed limit, the bounds."""
+"""Timing and box checks of one trajectory: non-decreasing times, the speed limits (maximum and
+minimum), the bounds."""
 
 from __future__ import annotations
 
@@ -44,17 +45,28 @@ def check_times(traj: Trajectory) -> list[Violation]:
     return out
 
 
-def check_speed(traj: Trajectory, speed: float) -> list[Violation]:
-    """The implied speed of every segment must not exceed ``speed * (1 + 1e-6)`` m/s (plus
-    ``1e-6 (speed + 2)`` m of length slack for the rounding of plan files). Segments going back in
-    time are left to :func:`check_times`."""
+def check_speed(traj: Trajectory, speed: float, min_speed: float = 0.0) -> list[Violation]:
+    """The implied speed ``|dp| / dt`` of every segment must lie in ``[min_speed, speed]`` m/s.
+
+    Maximum: at most ``speed * (1 + 1e-6)`` m/s, plus ``1e-6 (speed + 2)`` m of length slack for
+    the rounding of plan files; a segment of zero duration that moves is an instantaneous jump
+    (infinitely fast). Minimum (only when ``min_speed > 0``): every segment with ``dt > 0`` at
+    least ``min_speed * (1 - 1e-6)`` m/s, less ``1e-6 (min_speed + 2)`` m of length slack; a
+    segment that stays put for a while (a hover) flies at 0 m/s. Segments going back in time are
+    left to :func:`check_times`. One violation per offending segment."""
     out = []
     d = np.linalg.norm(np.diff(traj.points, axis=0), axis=1)
     dt = np.diff(traj.times)
     allowed = speed * (1 + SPEED_RTOL) * dt + VERIFY_ROUNDING * (speed + 2.0)
-    for k in np.flatnonzero((dt >= 0) & (d > allowed)):
+    fast = (dt >= 0) & (d > allowed)
+    slow = np.zeros_like(fast)
+    if min_speed > 0:
+        needed = min_speed * (1 - SPEED_RTOL) * dt - VERIFY_ROUNDING * (min_speed + 2.0)
+        slow = (dt > 0) & (d < needed)
+    for k in np.flatnonzero(fast | slow):
         v = float(d[k] / dt[k]) if dt[k] > 0 else math.inf
         t = float(traj.times[k])
+        bound, word = (speed, "limit") if fast[k] else (min_speed, "minimum")
         out.append(
             Violation(
                 "speed",
@@ -62,8 +74,8 @@ def check_speed(traj: Trajectory, speed: float) -> list[Violation]:
                 t,
                 (fmt_point(traj.points[k]), fmt_point(traj.points[k + 1])),
                 v,
-                speed,
-                f"{traj.id}: segment {k} at {fmt_num(v)} m/s (limit {speed:g} m/s): "
+                bound,
+                f"{traj.id}: segment {k} at {fmt_num(v)} m/s ({word} {bound:g} m/s): "
                 f"{d[k]:.3f} m in {dt[k]:g} s from t={t:g} s",
             )
         )

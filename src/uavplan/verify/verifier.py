@@ -9,6 +9,10 @@ and does its own geometry, so that a bug in the planner's geometry cannot hide i
 
 Semantics (frame: metres, x east, y north, z up, absolute altitudes; seconds):
 
+* **Which trajectories.** :func:`verify_plan` checks each UAV's ``flown`` trajectory by default
+  (the one the plan declares it is to fly; the planned polyline where the plan declares none),
+  or the planned polylines, or the informative smoothed paths (``trajectory=``).
+
 * **Timed paths.** A UAV flies its polyline piecewise-linearly in time between
   ``(times[k], waypoints[k])``. It is in the air only during ``[times[0], times[-1]]`` (it takes
   off at its start and lands at its goal); before and after it is no hazard. A repeated time with
@@ -41,11 +45,21 @@ Semantics (frame: metres, x east, y north, z up, absolute altitudes; seconds):
   ``[min, max]`` along the whole segment (exact, with the same per-cell quadratic for the minimum
   and the maximum; ground is 0 without terrain); with ``"absolute"``, ``z`` stays in
   ``[min, max]`` (linear along a segment, so the waypoints suffice).
-* **Timing.** ``times`` must be non-decreasing (``times``); the implied speed of a segment must
-  not exceed ``scenario.uav.speed * (1 + 1e-6)`` (``speed``), with an extra ``1e-6 (v + 2)`` m of
-  slack per segment for the 6-decimal rounding of ``plan.json``. A UAV whose times decrease is left
-  out of the separation and moving-obstacle checks (its motion is undefined) and a warning says
-  so.
+* **Timing.** ``times`` must be non-decreasing (``times``); the implied speed ``|dp| / dt`` of a
+  segment must not exceed ``v = scenario.uav.v_max`` (``max_speed``, else ``speed``) times
+  ``1 + 1e-6`` (``speed``), with an extra ``1e-6 (v + 2)`` m of slack per segment for the
+  6-decimal rounding of ``plan.json``. A UAV whose times decrease is left out of the separation
+  and moving-obstacle checks (its motion is undefined) and a warning says so.
+* **Kinematics** (:mod:`uavplan.verify.kinematics`; only with ``kinematics=True``, the flown and
+  smoothed trajectories, and only for the limits the UAV declares): the minimum speed
+  (``speed``: every segment with ``dt > 0`` at least ``min_speed (1 - 1e-6)``, less
+  ``1e-6 (min_speed + 2)`` m; a hover flies at 0 m/s), the climb and descent angles (``climb``,
+  3-D: ``atan2(dz, h)`` of every segment that moves, within ``max_climb_angle`` /
+  ``max_descent_angle`` + ``ANGLE_TOL_DEG``) and the turn radius of the horizontal track
+  (``turn``: at every interior point, a heading change of at most ``MAX_SAMPLE_TURN_DEG`` and a
+  discrete curvature ``theta / mean(L_a, L_b)`` at most ``(1 + TURN_RTOL) / turn_radius``).
+  A planned polyline is a geometric path: checked with ``kinematics=False`` it gets clearances,
+  separation, times and the maximum speed only.
 * **Warnings** (not violations): the plan's scenario name differs from the scenario's; a UAV's
   first or last point differs from its task's start or goal; a UAV the plan calls feasible
   fails a check.
@@ -62,7 +76,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from uavplan.io.plan_file import Trajectory, parse_plan
+from uavplan.io.plan_file import Trajectory, TrajectoryKind, parse_plan
+from uavplan.verify.kinematics import check_climb, check_turn
 from uavplan.verify.obstacles import check_circles, check_cylinders, check_polygons
 from uavplan.verify.report import (
     KINDS,
@@ -80,21 +95,45 @@ IntArray = NDArray[np.int64]
 
 
 # ================================================================================ everything
+#: The trajectories :func:`verify_plan` can check, and whether their kinematics are checked.
+TRAJECTORIES: dict[str, bool] = {"flown": True, "planned": False, "smoothed": True}
+
+
 def verify_trajectories(
     trajs: Sequence[Trajectory],
     scenario: Scenario,
     plan_scenario: str | None = None,
     smoothed: bool = False,
+    kinematics: bool = True,
+    *,
+    trajectory: str | None = None,
 ) -> VerifyReport:
-    """Run every check on parsed trajectories (see the module docstring)."""
+    """Run every check on parsed trajectories (see the module docstring).
+
+    Args:
+        trajs: one timed polyline per UAV.
+        scenario: the world to check against.
+        plan_scenario: the scenario name the plan gives (a warning if it differs).
+        smoothed: the trajectories are the plan's informative smoothed paths (for the report).
+        kinematics: also check the UAV's kinematic limits (turn radius, climb and descent
+            angles, minimum speed); the maximum speed is checked either way.
+        trajectory: what the trajectories are, for the report (``"flown"``, ``"planned"`` or
+            ``"smoothed"``); default ``"smoothed"`` with ``smoothed``, else ``"flown"`` with
+            ``kinematics`` and ``"planned"`` without.
+    """
     sc = scenario
+    u = sc.uav
+    if trajectory is None:
+        trajectory = "smoothed" if smoothed else ("flown" if kinematics else "planned")
     report = VerifyReport(
         scenario=sc.name,
         plan_scenario=plan_scenario,
-        smoothed=smoothed,
+        smoothed=smoothed or trajectory == "smoothed",
         uav_ids=[t.id for t in trajs],
         n_segments=sum(len(t.times) - 1 for t in trajs),
-        s2=float(sc.uav.s2),
+        s2=float(u.s2),
+        trajectory=trajectory,
+        kinematics=kinematics,
     )
     if plan_scenario is not None and plan_scenario != sc.name:
         report.warnings.append(
@@ -125,7 +164,10 @@ def verify_trajectories(
             )
         else:
             timed.append(tr)
-        vs += check_speed(tr, float(sc.uav.speed))
+        vs += check_speed(tr, u.v_max, float(u.min_speed) if kinematics else 0.0)
+        if kinematics:
+            vs += check_turn(tr, float(u.turn_radius))
+            vs += check_climb(tr, u.max_climb_angle, u.max_descent_angle)
         vs += check_bounds(tr, sc.bounds.lower, sc.bounds.upper)
         if tr.dim == 3 and sc.cylinders:
             vs += check_cylinders(tr, sc.cylinders)
@@ -154,20 +196,41 @@ def verify_trajectories(
 
 
 def verify_plan(
-    plan: Mapping[str, Any], scenario: Scenario, smoothed: bool = False
+    plan: Mapping[str, Any],
+    scenario: Scenario,
+    smoothed: bool = False,
+    trajectory: TrajectoryKind = "flown",
 ) -> VerifyReport:
     """Verify a decoded ``plan.json`` against ``scenario`` (see the module docstring).
 
     Args:
         plan: the decoded plan (``{"format", "scenario", "uavs": [{"id", "waypoints", "times",
-            ...}, ...]}``).
+            "flown", ...}, ...]}``).
         scenario: the world to check against.
-        smoothed: verify each UAV's ``smoothed`` polyline instead of its waypoints.
+        smoothed: the same as ``trajectory="smoothed"`` (kept for compatibility).
+        trajectory: which trajectory of each UAV: ``"flown"`` (its declared ``flown`` block, the
+            planned polyline where the plan declares none) and ``"smoothed"`` (the informative
+            smoothed paths) are checked with the UAV's kinematic limits; ``"planned"`` (the
+            planned polylines, geometric paths) without them.
 
     Raises:
         PlanFormatError: the plan cannot be read (a missing or malformed field, mismatched
             lengths, points of the wrong dimension, no smoothed path with ``smoothed=True``).
+        ValueError: an unknown ``trajectory``, or ``smoothed=True`` with ``"planned"``.
     """
+    if trajectory not in TRAJECTORIES:
+        raise ValueError(f"trajectory must be one of {', '.join(TRAJECTORIES)}, got {trajectory!r}")
+    if smoothed:
+        if trajectory == "planned":
+            raise ValueError("smoothed=True verifies the smoothed paths, not the planned ones")
+        trajectory = "smoothed"
     pf = parse_plan(plan, scenario.dim)
-    trajs = pf.trajectories("smoothed" if smoothed else "planned")
-    return verify_trajectories(trajs, scenario, pf.scenario, smoothed)
+    trajs = pf.trajectories(trajectory)
+    return verify_trajectories(
+        trajs,
+        scenario,
+        pf.scenario,
+        smoothed=trajectory == "smoothed",
+        kinematics=TRAJECTORIES[trajectory],
+        trajectory=trajectory,
+    )

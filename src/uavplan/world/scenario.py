@@ -60,20 +60,62 @@ class Bounds:
 
 @dataclass(frozen=True)
 class UAV:
-    """UAV limits: cruise ``speed`` m/s, minimum ``turn_radius`` m, safety distance ``s1`` to
-    threats and ``s2`` between UAVs (PPSwarm Sect. 5.1: 20 m/s, 20 m, 15 m, 10 m), ``size`` m."""
+    """A UAV's limits.
+
+    Attributes:
+        speed: cruise speed, m/s (> 0); planners time their paths with it.
+        turn_radius: minimum turn radius of the horizontal track, m (>= 0; 0: no limit, the UAV
+            turns in place).
+        s1: safety distance to threats, m; s2: safety distance between UAVs, m; size: m.
+        min_speed: slowest allowed speed, m/s (>= 0; 0: it may hover).
+        max_speed: fastest allowed speed, m/s (>= speed; None: ``speed``; see :attr:`v_max`).
+        max_climb_angle, max_descent_angle: steepest climb and descent, degrees from the
+            horizontal in (0, 90] (None: no limit).
+
+    Defaults: PPSwarm Sect. 5.1 for speed, s1 and s2 (20 m/s, 15 m, 10 m); no turn, climb or
+    minimum-speed limit (the PPSwarm scenario files set the paper's 20 m turn radius).
+    """
 
     speed: float = 20.0
-    turn_radius: float = 20.0
+    turn_radius: float = 0.0
     s1: float = 15.0
     s2: float = 10.0
     size: float = 1.0
+    min_speed: float = 0.0
+    max_speed: float | None = None
+    max_climb_angle: float | None = None
+    max_descent_angle: float | None = None
 
     def __post_init__(self) -> None:
-        for name in ("speed", "turn_radius", "s1", "s2", "size"):
+        for name in ("speed", "turn_radius", "s1", "s2", "size", "min_speed"):
             value = getattr(self, name)
             if not np.isfinite(value) or value < 0 or (name == "speed" and value == 0):
-                raise ValueError(f"uav {name} must be {'positive' if name == 'speed' else '>= 0'}")
+                raise ValueError(
+                    f"uav {name} must be a finite number "
+                    f"{'> 0' if name == 'speed' else '>= 0'}, got {value!r}"
+                )
+        if self.min_speed > self.speed:
+            raise ValueError(
+                f"uav min_speed {self.min_speed:g} m/s is above speed {self.speed:g} m/s "
+                "(need min_speed <= speed)"
+            )
+        if self.max_speed is not None:
+            if not np.isfinite(self.max_speed):
+                raise ValueError(f"uav max_speed must be a finite number, got {self.max_speed!r}")
+            if self.max_speed < self.speed:
+                raise ValueError(
+                    f"uav max_speed {self.max_speed:g} m/s is below speed {self.speed:g} m/s "
+                    "(need speed <= max_speed)"
+                )
+        for name in ("max_climb_angle", "max_descent_angle"):
+            value = getattr(self, name)
+            if value is not None and not (np.isfinite(value) and 0 < value <= 90):
+                raise ValueError(f"uav {name} must be in (0, 90] degrees, got {value!r}")
+
+    @property
+    def v_max(self) -> float:
+        """The fastest allowed speed, m/s: ``max_speed`` if given, else ``speed``."""
+        return float(self.speed if self.max_speed is None else self.max_speed)
 
 
 @dataclass(frozen=True)

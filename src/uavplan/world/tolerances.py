@@ -18,6 +18,10 @@ HULL_GROWTH_REL = 1e-9
 DUPLICATE_TOL = 1e-9
 #: RRT*: a rewire must shorten the cost-to-come by more than this (no churn on round-off).
 REWIRE_TOL = 1e-9
+#: Planning's relative slack on the speed limits (round-off of times computed from lengths).
+SPEED_RTOL = 1e-9
+#: Planning's length slack per segment on the speed limits, metres.
+SPEED_SLACK = 1e-9
 #: Distances and clearances the verifier accepts below the required value.
 VERIFY_TOL = 1e-6
 #: The verifier's relative slack on the speed limit.
@@ -25,3 +29,12 @@ VERIFY_SPEED_RTOL = 1e-6
 #: The verifier's length slack per segment for plan files' 6-decimal rounding: this many metres
 #: per (speed + 2) m/s of speed.
 VERIFY_ROUNDING = 1e-6
+#: A turn-radius estimate from a trajectory's samples may fall this fraction below the required
+#: radius: samples of an arc of radius R at spacing h <= R / 4 estimate its curvature within that
+#: (the estimate theta / mean chord exceeds 1 / R by the factor (phi / 2) / sin(phi / 2)).
+TURN_RTOL = 0.01
+#: Degrees: a trajectory whose heading changes by more than this at one point cannot be checked
+#: for turn radius from its samples, and fails the turn check when a turn radius is declared.
+MAX_SAMPLE_TURN_DEG = 30.0
+#: Degrees of slack on the climb and descent angle limits (coordinates rounded to 6 decimals).
+ANGLE_TOL_DEG = 1e-4

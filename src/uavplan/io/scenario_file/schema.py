@@ -28,6 +28,8 @@ def _no_bool(value: Any) -> Any:
 Num = Annotated[float, BeforeValidator(_no_bool)]
 PosNum = Annotated[float, BeforeValidator(_no_bool), Field(gt=0)]
 NonNegNum = Annotated[float, BeforeValidator(_no_bool), Field(ge=0)]
+#: Degrees in (0, 90].
+Angle = Annotated[float, BeforeValidator(_no_bool), Field(gt=0, le=90)]
 XY = Annotated[list[Num], Field(min_length=2, max_length=2)]
 Point = Annotated[list[Num], Field(min_length=2, max_length=3)]
 
@@ -171,13 +173,55 @@ class AltitudeSpec(_Spec):
 
 
 class UAVSpec(_Spec):
-    """UAV limits (defaults: PPSwarm Sect. 5.1)."""
+    """UAV limits (speed, s1, s2 as PPSwarm Sect. 5.1; no turn, climb or minimum-speed limit
+    unless given)."""
 
-    speed: PosNum = Field(20.0, description="Cruise speed, m/s (> 0).")
-    turn_radius: NonNegNum = Field(20.0, description="Minimum turn radius, metres.")
+    speed: PosNum = Field(
+        20.0, description="Cruise speed, m/s (> 0); planners time their paths with it."
+    )
+    turn_radius: NonNegNum = Field(
+        0.0,
+        description="Minimum turn radius of the horizontal track, metres (>= 0; 0 = no limit, "
+        "the UAV turns in place).",
+    )
     s1: NonNegNum = Field(15.0, description="Safety distance to threats, metres.")
     s2: NonNegNum = Field(10.0, description="Safety distance between UAVs, metres.")
     size: NonNegNum = Field(1.0, description="UAV size, metres.")
+    min_speed: NonNegNum = Field(
+        0.0,
+        description="Slowest allowed speed, m/s (0 <= min_speed <= speed; 0 = it may hover).",
+    )
+    max_speed: PosNum | None = Field(
+        None, description="Fastest allowed speed, m/s (>= speed); null = speed."
+    )
+    max_climb_angle: Angle | None = Field(
+        None,
+        description="Steepest climb, degrees above the horizontal, in (0, 90]; null = no limit.",
+    )
+    max_descent_angle: Angle | None = Field(
+        None,
+        description="Steepest descent, degrees below the horizontal, in (0, 90]; null = no limit.",
+    )
+
+    @field_validator("min_speed")
+    @classmethod
+    def _min_below_speed(cls, value: float, info: ValidationInfo) -> float:
+        speed = info.data.get("speed")
+        if speed is not None and value > speed:
+            raise ValueError(
+                f"min_speed {value:g} m/s is above speed {speed:g} m/s (need min_speed <= speed)"
+            )
+        return value
+
+    @field_validator("max_speed")
+    @classmethod
+    def _max_above_speed(cls, value: float | None, info: ValidationInfo) -> float | None:
+        speed = info.data.get("speed")
+        if value is not None and speed is not None and value < speed:
+            raise ValueError(
+                f"max_speed {value:g} m/s is below speed {speed:g} m/s (need speed <= max_speed)"
+            )
+        return value
 
 
 class TaskSpec(_Spec):

@@ -18,12 +18,29 @@ from uavplan.io.scenario_file.build import builtin_terrain
 from uavplan.io.scenario_file.errors import ScenarioFileError
 from uavplan.io.scenario_file.read import JSON_SUFFIXES, YAML_SUFFIXES, parse_scenario_spec
 from uavplan.io.scenario_file.schema import ScenarioSpec, dump_spec
-from uavplan.world import Scenario
+from uavplan.world import UAV, Scenario
 from uavplan.world.terrain import BUILTIN_TERRAINS
 
 
 def _num_or_none(v: float) -> float | None:
     return None if math.isinf(v) else float(v)
+
+
+def _uav_data(uav: UAV) -> dict[str, Any]:
+    """A UAV's block: every limit, the optional ones only when given (null means the default)."""
+    out: dict[str, Any] = {
+        "speed": uav.speed,
+        "turn_radius": uav.turn_radius,
+        "s1": uav.s1,
+        "s2": uav.s2,
+        "size": uav.size,
+        "min_speed": uav.min_speed,
+    }
+    for name in ("max_speed", "max_climb_angle", "max_descent_angle"):
+        value = getattr(uav, name)
+        if value is not None:
+            out[name] = value
+    return out
 
 
 def spec_from_scenario(scenario: Scenario) -> ScenarioSpec:
@@ -82,13 +99,7 @@ def spec_from_scenario(scenario: Scenario) -> ScenarioSpec:
             }
             for m in s.moving_obstacles
         ],
-        "uav": {
-            "speed": s.uav.speed,
-            "turn_radius": s.uav.turn_radius,
-            "s1": s.uav.s1,
-            "s2": s.uav.s2,
-            "size": s.uav.size,
-        },
+        "uav": _uav_data(s.uav),
         "task_z": "absolute",
         "tasks": [
             {"id": t.id, "start": list(t.start), "goal": list(t.goal), "start_time": t.start_time}
