@@ -57,8 +57,17 @@ def test_round_trip_keeps_the_trajectories_and_the_verdicts(fleet_plan, single_p
             if r.smoothed is not None:
                 assert u.smoothed is not None and u.smoothed_clear == r.smoothed_ok
                 np.testing.assert_allclose(u.smoothed.points, r.smoothed, atol=1e-6)
+            # the declared flight, with the planner's verdict on it
+            pts, ts = r.flown_trajectory()
+            assert u.flown is not None and u.flown_kind == r.flown_kind
+            assert u.flown_feasible == r.flown_feasible
+            np.testing.assert_allclose(u.flown.points, pts, atol=1e-6)
+            np.testing.assert_allclose(u.flown.times, ts, atol=1e-6)
             assert u.record["info"] == json.loads(json.dumps(u.record["info"]))
-    assert len(parse_plan(plan_document(fleet_plan)).trajectories("smoothed")) == 3
+    flown = parse_plan(plan_document(fleet_plan)).trajectories("flown")
+    assert len(flown) == 3 and all(r.flown_kind == "smoothed" for r in fleet_plan.results)
+    with pytest.raises(PlanFormatError, match="no smoothed path"):  # the default mode has none
+        parse_plan(plan_document(fleet_plan)).trajectories("smoothed")
 
 
 def test_format_1_still_loads() -> None:
@@ -155,9 +164,19 @@ def test_export_csv_and_the_infeasible_warning(tmp_path: Path, single_plan, flee
     doc["feasible"] = False
     (tmp_path / "bad.json").write_text(json.dumps(doc))
     out = tmp_path / "fleet.csv"
-    r = runner.invoke(app, ["export", str(tmp_path / "bad.json"), "-o", str(out), "--smoothed"])
+    r = runner.invoke(app, ["export", str(tmp_path / "bad.json"), "-o", str(out)])
     assert r.exit_code == 1 and "WARNING" in r.output and "not feasible" in r.output
-    assert out.read_text().count("\n") == 1 + sum(len(x.smoothed) for x in fleet_plan.results)
+    n_flown = sum(len(x.flown_trajectory()[0]) for x in fleet_plan.results)
+    assert out.read_text().count("\n") == 1 + n_flown  # the flown trajectories by default
+    assert n_flown > sum(len(x.waypoints) for x in fleet_plan.results)  # curves, not corners
+    # the polylines on request, said not to be what the plan guarantees
+    r = runner.invoke(app, ["export", str(tmp_path / "bad.json"), "-o", str(out), "--polylines"])
+    assert r.exit_code == 1 and "not the flown trajectories" in r.output
+    assert out.read_text().count("\n") == 1 + sum(len(x.waypoints) for x in fleet_plan.results)
+    r = runner.invoke(app, ["export", str(tmp_path / "bad.json"), "--polylines", "--smoothed"])
+    assert r.exit_code == 2 and "at most one" in r.output
+    r = runner.invoke(app, ["export", str(tmp_path / "bad.json"), "-o", str(out), "--smoothed"])
+    assert r.exit_code == 2 and "no smoothed path" in r.output
     r = runner.invoke(app, ["export", str(tmp_path), "--format", "qgc"])
     assert r.exit_code == 2 and "unknown export format 'qgc'" in r.output
     assert "csv" in runner.invoke(app, ["export", "--list"]).output

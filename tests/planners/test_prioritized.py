@@ -13,9 +13,9 @@ from uavplan.cli import app
 from uavplan.io.plan_file import plan_document
 from uavplan.optimizers.constraints import Constrained
 from uavplan.planners import PlannerError, get_planner
+from uavplan.planners.base import separated_problem
 from uavplan.planners.fleet_plan import FleetPlan, plan_all
 from uavplan.planners.prioritized import (
-    fleet_problem,
     polyline_with_n_vertices,
     resample_by_length,
 )
@@ -57,7 +57,7 @@ def test_fast_cost_equals_full_evaluation(fleet3: Scenario) -> None:
     other = fleet3.tasks[1]
     line = np.linspace(other.start, other.goal, 6)
     table.add(other.id, line, np.linspace(0, 40, 6))
-    problem = fleet_problem(fleet3, task, table)
+    problem = separated_problem(fleet3, task, table)
     paths = np.linspace(task.start, task.goal, 8)[None].repeat(200, axis=0)
     paths[:, 1:-1, :2] += rng.normal(0, 60, size=(200, 6, 2))
     xy = paths[:, 1:-1, :2]
@@ -90,10 +90,12 @@ def test_small_fleet_is_feasible_verified_and_deterministic(fleet3: Scenario) ->
     assert len(a.restart_costs) == 2 and a.cost == pytest.approx(np.min(a.restart_costs))
     assert len(a.history) == 2 * SMALL["n_iter"]
     d = plan_document(FleetPlan(fleet3, "ppswarm", {}, 5, a.results, a))
-    assert verify_plan(d, fleet3).ok
-    # the planner's own judgement of the smoothed paths agrees with the verifier's
-    rep = verify_plan(d, fleet3, smoothed=True)
-    assert rep.ok == all(r.smoothed_ok for r in a.results)
+    # the default mode guarantees the flights: each UAV flies a Dubins-smoothed, timed path
+    # (turn radius 20 m) that the verifier passes with the kinematic limits, and the planned
+    # polylines the flights were made from are clear too
+    assert all(r.flown_kind == "smoothed" and r.flown_ok for r in a.results)
+    assert verify_plan(d, fleet3).ok and verify_plan(d, fleet3, trajectory="planned").ok
+    assert a.info["flights"]["not_clear"] == []
 
 
 def test_head_on_swap_is_separated() -> None:
@@ -112,7 +114,7 @@ def test_head_on_swap_is_separated() -> None:
 
 def test_priority_orders(fleet3: Scenario) -> None:
     lengths = {t.id: float(np.linalg.norm(np.subtract(t.goal, t.start))) for t in fleet3.tasks}
-    opts = {**SMALL, "seeding": "uniform", "n_restart": 1, "n_iter": 2, "smooth": False}
+    opts = {**SMALL, "seeding": "uniform", "n_restart": 1, "n_iter": 2, "flight": "none"}
     lh = get_planner("prioritized", **{**opts, "order": "lh"}).plan_fleet(fleet3, seed=1)
     sh = get_planner("prioritized", **{**opts, "order": "sh"}).plan_fleet(fleet3, seed=1)
     assert list(lh.priority) == sorted(lengths, key=lambda k: -lengths[k])
@@ -121,7 +123,7 @@ def test_priority_orders(fleet3: Scenario) -> None:
 
 @pytest.mark.parametrize("opt", ["de", "spso"])
 def test_any_optimizer_runs_the_low_level(fleet3: Scenario, opt: str) -> None:
-    r = get_planner("prioritized", optimizer=opt, pop_size=12, n_iter=3, smooth=False).plan_fleet(
+    r = get_planner("prioritized", optimizer=opt, pop_size=12, n_iter=3, flight="none").plan_fleet(
         fleet3, seed=0
     )
     assert len(r.results) == 3 and all(x.evaluations == 36 for x in r.results)
@@ -141,10 +143,31 @@ def test_bad_options_and_2d() -> None:
 
 
 @pytest.mark.parametrize("timing", ["planned", "constant"])
-def test_smoothed_paths_keep_their_timing_and_agree_with_the_verifier(
+def test_flights_keep_their_timing_and_agree_with_the_verifier(
     fleet3: Scenario, timing: str
 ) -> None:
     r = get_planner("ppswarm", **SMALL, smooth_timing=timing).plan_fleet(fleet3, seed=5)
+    uav = fleet3.uav
+    for u in r.results:
+        p, t = u.flown_trajectory()
+        speed = np.linalg.norm(np.diff(p, axis=0), axis=1) / np.diff(t)
+        assert t[0] == pytest.approx(u.times[0]) and u.flown_kind == "smoothed"
+        if timing == "constant":
+            np.testing.assert_allclose(speed, uav.speed, rtol=1e-9)
+        else:  # within the UAV's speed range
+            assert np.all(speed <= uav.v_max * (1 + 1e-9))
+            assert np.all(speed >= uav.min_speed * (1 - 1e-9))
+    d = plan_document(FleetPlan(fleet3, "ppswarm", {}, 5, r.results, r))
+    assert verify_plan(d, fleet3).ok == r.feasible == all(u.flown_ok for u in r.results)
+
+
+@pytest.mark.parametrize("timing", ["planned", "constant"])
+def test_paper_mode_smooths_after_and_declares_the_polylines(
+    fleet3: Scenario, timing: str
+) -> None:
+    r = get_planner("ppswarm", **SMALL, smooth_timing=timing, flight="after").plan_fleet(
+        fleet3, seed=5
+    )
     v = fleet3.uav.speed
     for u in r.results:
         t, p = np.asarray(u.smoothed_times), np.asarray(u.smoothed)
@@ -155,9 +178,15 @@ def test_smoothed_paths_keep_their_timing_and_agree_with_the_verifier(
         else:  # never faster than the UAV, never earlier than planned at the goal
             assert np.all(speed <= v * (1 + 1e-9))
             assert t[-1] >= u.times[-1] - 1e-9
+        # what is declared flown is the polyline, and a 20 m turn radius cannot fly its corners
+        assert u.flown_kind == "polyline" and u.flown_ok is False
+        assert any("turn" in v for v in u.flown_violations)
     assert r.info["smoothing"]["timing"] == timing
+    assert r.planned_feasible and not r.feasible
     d = plan_document(FleetPlan(fleet3, "ppswarm", {}, 5, r.results, r))
     assert verify_plan(d, fleet3, smoothed=True).ok == all(u.smoothed_ok for u in r.results)
+    assert verify_plan(d, fleet3, trajectory="planned").ok
+    assert not verify_plan(d, fleet3).ok and d["feasible"] is False
 
 
 def test_separation_margin_plans_wider_than_s2() -> None:
@@ -168,12 +197,13 @@ def test_separation_margin_plans_wider_than_s2() -> None:
     sc = base.__class__(**{**base.__dict__, "tasks": tasks, "cylinders": ()})
     seps = {}
     for margin in (0.0, 100.0):
-        r = get_planner("ppswarm", **SMALL, separation_margin=margin, smooth=False).plan_fleet(
+        r = get_planner("ppswarm", **SMALL, separation_margin=margin, flight="none").plan_fleet(
             sc, seed=0
         )
-        assert r.feasible
-        rep = verify_plan(plan_document(FleetPlan(sc, "ppswarm", {}, 0, r.results, r)), sc)
-        assert rep.ok
+        assert r.planned_feasible and not r.feasible  # polylines only: never called flyable
+        d = plan_document(FleetPlan(sc, "ppswarm", {}, 0, r.results, r))
+        rep = verify_plan(d, sc, trajectory="planned")
+        assert rep.ok and not verify_plan(d, sc).ok
         seps[margin] = rep.min_separation
     assert seps[100.0] >= sc.uav.s2 + 100.0 - 1e-6
     assert seps[0.0] < sc.uav.s2 + 100.0  # the margin is what made the difference
@@ -193,12 +223,16 @@ def test_plan_and_verify_cli(tmp_path, fleet3: Scenario) -> None:
     assert res.exit_code == 0, res.output
     plan = json.loads((out / "plan.json").read_text())
     assert plan["separation_checked"] and plan["fleet"]["feasible"]
-    assert all("smoothed" in u and u["times"] for u in plan["uavs"])
+    assert all(u["flown"]["kind"] == "smoothed" and u["flown"]["feasible"] for u in plan["uavs"])
     res = runner.invoke(app, ["verify", str(out / "plan.json"), str(f)])
     assert res.exit_code == 0, res.output
-    # the same fleet planned independently (no separation) is written too, never checked
+    # a single-UAV planner plans the fleet in the prioritized frame, never UAVs alone
     fp = plan_all(fleet3, get_planner("pso", pop_size=10), 2, 0)
-    assert plan_document(fp)["separation_checked"] is False
+    doc = plan_document(fp)
+    assert doc["separation_checked"] is True and fp.fleet is not None
+    assert doc["feasible"] == fp.feasible == verify_plan(doc, fleet3).ok
+    with pytest.raises(PlannerError, match="rrt-star"):
+        plan_all(fleet3, get_planner("rrt-star"), 2, 0)
 
 
 @pytest.mark.parametrize("name", ["ppswarm2", "ppswarm4"])
@@ -225,30 +259,31 @@ def test_departure_delay_retries_until_a_later_take_off_is_clear(monkeypatch, fl
     calls: list[float] = []
 
     def blocked_until_10s(self, scenario, task, *args):  # type: ignore[no-untyped-def]
-        res, pop = real(self, scenario, task, *args)
+        res, pop, cands = real(self, scenario, task, *args)
         calls.append(task.start_time)
         if task.id == "uav1" and task.start_time < 10.0:
             res = dataclasses.replace(res, feasible=False, violations=("separation",))
-        return res, pop
+            cands = [res]
+        return res, pop, cands
 
     monkeypatch.setattr(PrioritizedPlanner, "_low_level", blocked_until_10s)
-    opts = {**SMALL, "n_restart": 1, "smooth": False, "delay_step": 5.0}
+    opts = {**SMALL, "n_restart": 1, "flight": "none", "delay_step": 5.0}
     plain = get_planner("ppswarm", **opts).plan_fleet(fleet3, seed=0)
-    assert not plain.feasible and plain.info["delayed"] == {}
+    assert not plain.planned_feasible and plain.info["delayed"] == {}
     calls.clear()
     waited = get_planner("ppswarm", **opts, max_delays=3).plan_fleet(fleet3, seed=0)
-    assert waited.feasible and waited.info["delayed"] == {"uav1": 10.0}
+    assert waited.planned_feasible and waited.info["delayed"] == {"uav1": 10.0}
     assert sorted(calls) == [0.0, 0.0, 0.0, 5.0, 10.0]  # two refusals, then take-off at 10 s
     b = next(r for r in waited.results if r.uav_id == "uav1")
     assert b.times[0] == pytest.approx(10.0)
     d = plan_document(FleetPlan(fleet3, "ppswarm", {}, 0, waited.results, waited))
-    assert verify_plan(d, fleet3).ok
+    assert verify_plan(d, fleet3, trajectory="planned").ok
 
 
 def test_graded_cost_keeps_f_for_feasible_and_orders_infeasible(fleet3: Scenario) -> None:
     task = fleet3.tasks[0]
     table = ReservationTable(fleet3.bounds.lo, fleet3.bounds.hi, fleet3.uav.s2)
-    problem = fleet_problem(fleet3, task, table)
+    problem = separated_problem(fleet3, task, table)
     enc = CartesianEncoding(problem, 6)
     inf_p, graded = Constrained(enc, "inf"), Constrained(enc, "feasibility-first")
     rng = np.random.default_rng(0)
@@ -267,7 +302,7 @@ def test_graded_cost_keeps_f_for_feasible_and_orders_infeasible(fleet3: Scenario
 
 
 def test_graded_baseline_finds_feasible_paths_where_inf_does_not(fleet3: Scenario) -> None:
-    opts = {"pop_size": 60, "n_iter": 25, "smooth": False}
+    opts = {"pop_size": 60, "n_iter": 25, "flight": "none"}
     a = get_planner("prioritized", **opts).plan_fleet(fleet3, seed=1)
     graded = get_planner("prioritized", **opts, constraints="feasibility-first")
     b = graded.plan_fleet(fleet3, seed=1)
@@ -295,8 +330,8 @@ def test_swarm_seeding_follows_eqs_15_and_16(fleet3: Scenario) -> None:
     P = np.linspace(task.start, task.goal, 12)
     P[1:-1, 2] = fleet3.ground(P[1:-1, 0], P[1:-1, 1]) + 150.0
     rng = np.random.default_rng(0)
-    _, last = planner._low_level(fleet3, task, table, P, None, 0, 2, 10, rng)
-    enc = CartesianEncoding(fleet_problem(fleet3, task, table), 10)
+    _, last, _ = planner._low_level(fleet3, task, table, P, None, 0, 2, 10, rng)
+    enc = CartesianEncoding(separated_problem(fleet3, task, table), 10)
     P_gene = enc.encode(P[None])[0]
     init = seen[0]
     np.testing.assert_allclose(init[0], P_gene)

@@ -289,5 +289,3 @@ def _iter_dask_client(chunks: list[list[RunSpec]], client: Any) -> Iterator[list
             yield fut.result()
     finally:
         client.cancel(futures)
-
-

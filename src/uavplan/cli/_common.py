@@ -36,5 +36,3 @@ def parse_params(params: list[str]) -> dict[str, Any]:
             value = v.lower() == "true"
         parsed[k.strip()] = value
     return parsed
-
-

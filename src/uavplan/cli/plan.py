@@ -31,6 +31,7 @@ def write_plan(plan: FleetPlan, out: str | Path, figure: bool = True) -> list[Pa
         written.append(save_plan_figure(plan.scenario, plan.results, d / "plan.png", title))
     return written
 
+
 def _run_plan(
     scenario_ref: str,
     algorithm: str,
@@ -175,5 +176,3 @@ def demo(
     """Plan the built-in SPSO benchmark with PSO at SPSO's budget (500 x 200) and show it."""
     result, elapsed = _run_plan("spso", "pso", seed, out_dir, 200, 500, None, None, [])
     _summary(result, elapsed, out_dir)
-
-

@@ -266,8 +266,10 @@ class PlanFile:
         for k, u in enumerate(self.uavs):
             if kind == "smoothed" and u.smoothed is None:
                 raise PlanFormatError(
-                    [f"{self.source}: uavs[{k}] ({u.id}): no smoothed path (verify without "
-                     "--smoothed)"]
+                    [
+                        f"{self.source}: uavs[{k}] ({u.id}): no smoothed path (verify without "
+                        "--smoothed)"
+                    ]
                 )
             out.append(u.trajectory(kind))
         return out
@@ -370,9 +372,7 @@ def parse_plan(data: Any, dim: int | None = None, source: str = "plan") -> PlanF
         raise PlanFormatError([f"{source}: expected a JSON object, got {_short(data)}"])
     fmt = data.get("format")
     if fmt is not None and fmt not in READABLE_FORMATS:
-        raise PlanFormatError(
-            [f"{source}: format: {fmt!r} is not one of {list(READABLE_FORMATS)}"]
-        )
+        raise PlanFormatError([f"{source}: format: {fmt!r} is not one of {list(READABLE_FORMATS)}"])
     name = data.get("scenario")
     if name is not None and not isinstance(name, str):
         raise PlanFormatError([f"{source}: scenario: {_short(name)} is not a name"])

@@ -37,6 +37,7 @@ Modules: :mod:`~uavplan.planners.options` (``option``, config bases, errors),
 
 Planners never print, plot or read files.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -52,6 +53,7 @@ from numpy.typing import NDArray
 
 from uavplan import optimizers
 from uavplan.optimizers.base import Budget, OptimizerConfig, OptimizerError
+from uavplan.planners.flight import declare, fly
 from uavplan.planners.options import (
     FleetPlannerConfig,
     OptionError,
@@ -63,7 +65,8 @@ from uavplan.planners.options import (
 )
 from uavplan.planners.results import FleetResult, PlanResult, make_result
 from uavplan.planners.run import Outcome, ProgressCallback, Run, Termination, Tracker
-from uavplan.problems.path_problem import PathProblem
+from uavplan.problems.path_problem import PRESETS, SEPARATION_TERM, PathProblem
+from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 
 FloatArray = NDArray[np.float64]
@@ -77,6 +80,7 @@ class Planner(ABC):
         Config: the frozen config dataclass.
         dims: the scenario dimensions handled.
         default_iterations: the iteration budget when none is given.
+        supports_reservations: whether its search keeps clear of other UAVs' flights.
         inner_optimizer: the population optimizer this planner is built on, if fixed
             (otherwise the config's ``optimizer`` field names it, if it has one).
     """
@@ -86,6 +90,9 @@ class Planner(ABC):
     dims: ClassVar[tuple[int, ...]] = (2, 3)
     default_iterations: ClassVar[int] = 200
     inner_optimizer: ClassVar[str | None] = None
+    #: whether the search keeps clear of reserved UAVs (it evaluates whole timed paths on the
+    #: run's problem); planners that check edges without time cannot
+    supports_reservations: ClassVar[bool] = False
 
     def __init__(
         self,
@@ -130,9 +137,7 @@ class Planner(ABC):
         if unknown:
             valid = sorted(own - {"optimizer_options"})
             extra = f" and {opt_name}'s {sorted(opt_fields)}" if opt_fields else ""
-            raise PlannerError(
-                f"{self.name}: unknown option(s) {unknown}; it takes {valid}{extra}"
-            )
+            raise PlannerError(f"{self.name}: unknown option(s) {unknown}; it takes {valid}{extra}")
         if "optimizer_options" in own:
             kept: dict[str, Any] = dict(getattr(base, "optimizer_options") or {})  # noqa: B009
             if "optimizer" in direct and direct["optimizer"] != getattr(base, "optimizer", None):
@@ -182,15 +187,18 @@ class Planner(ABC):
         return out
 
     # ------------------------------------------------------------------ planning
-    def problem(self, scenario: Scenario, task: Task) -> PathProblem:
-        """The task's problem under the configured cost model (the result is judged on it)."""
+    def problem(
+        self, scenario: Scenario, task: Task, reservations: ReservationTable | None = None
+    ) -> PathProblem:
+        """The task's problem under the configured cost model (the result is judged on it).
+        With ``reservations`` (other UAVs' flights), the cost gains PPSwarm's F5 (infinite on a
+        conflict) and the band is checked along whole segments, as in the fleet engine."""
+        cost = getattr(self.config, "cost", None)
+        weights = getattr(self.config, "weights", None)
         try:
-            return PathProblem(
-                scenario,
-                task,
-                cost=getattr(self.config, "cost", None),
-                weights=getattr(self.config, "weights", None),
-            )
+            if reservations is None:
+                return PathProblem(scenario, task, cost=cost, weights=weights)
+            return separated_problem(scenario, task, reservations, cost, weights)
         except ValueError as exc:
             raise PlannerError(f"{self.name}: {exc}") from None
 
@@ -232,20 +240,30 @@ class Planner(ABC):
         budget: Budget | int | None = None,
         seed: int | None = None,
         callback: ProgressCallback | None = None,
+        reservations: ReservationTable | None = None,
     ) -> PlanResult:
         """Plan ``task`` (default: the first) of ``scenario`` within ``budget`` (an int:
         iterations; default :attr:`default_iterations`) from ``seed``; ``callback(iteration,
-        best)`` after every iteration may return True to stop."""
+        best)`` after every iteration may return True to stop. ``reservations``: other UAVs'
+        flights to keep S2 from (planners with :attr:`supports_reservations` only).
+
+        The result declares its flight (:mod:`uavplan.planners.flight`): the polyline itself,
+        or with a turn radius its Dubins-smoothed version, checked as it will be flown."""
         t = task if isinstance(task, Task) else _task(scenario, task)
         self.check_input(scenario, t)
+        if reservations is not None and not self.supports_reservations:
+            raise PlannerError(
+                f"{self.name} cannot keep clear of other UAVs while it searches (its search does "
+                "not see time): plan fleets with a fleet planner (uavplan planners lists them)"
+            )
         b = self.budget(budget)
         t0 = time.perf_counter()
-        problem = self.problem(scenario, t)
+        problem = self.problem(scenario, t, reservations)
         termination = Termination(
             self.iteration_limit(b), b.max_evaluations, b.max_time, callback, t0
         )
         tracker = Tracker(termination, bool(getattr(self.config, "track_feasibility", True)))
-        run = Run(scenario, t, problem, seed, b, termination.max_iterations, tracker)
+        run = Run(scenario, t, problem, seed, b, termination.max_iterations, tracker, reservations)
         out = self._plan(run)
         outcome = out if isinstance(out, Outcome) else Outcome(path=out)
         path = outcome.path if outcome.path is not None else tracker.path
@@ -253,7 +271,7 @@ class Planner(ABC):
         if path is None:  # nothing found: the straight segment, infeasible
             path = np.stack([problem.start, problem.goal])
             reasons = reasons or ("no_path",)
-        return make_result(
+        result = make_result(
             problem,
             path,
             algorithm=self.name,
@@ -267,10 +285,39 @@ class Planner(ABC):
             reasons=reasons,
             info=outcome.info,
         )
+        flight = fly(scenario, t, result.waypoints, result.times, reservations)
+        if reasons:  # a planner's reason (no path found) fails the flight too
+            flight = dataclasses.replace(flight, violations=flight.violations + reasons)
+        return dataclasses.replace(declare(result, flight), wall_time=time.perf_counter() - t0)
 
     @abstractmethod
     def _plan(self, run: Run) -> FloatArray | Outcome | None:
         """Search; record into ``run.tracker``; return the path (or an :class:`Outcome`)."""
+
+
+def separated_problem(
+    scenario: Scenario,
+    task: Task,
+    table: ReservationTable | None,
+    cost: str | None = None,
+    weights: dict[str, float] | None = None,
+) -> PathProblem:
+    """A UAV's problem among other UAVs: the cost preset (default: the scenario's) plus F5
+    (PPSwarm Eqs. 11-12, the ``separation`` term) against the reservation table of the UAVs
+    planned before it, with the band checked along whole segments (``strict_altitude``)."""
+    preset = cost if cost is not None else scenario.cost
+    if preset not in PRESETS:
+        raise PlannerError(f"unknown cost preset {preset!r}; choose from {sorted(PRESETS)}")
+    return PathProblem(
+        scenario,
+        task,
+        cost=(*PRESETS[preset], SEPARATION_TERM),
+        weights=weights,
+        strict_altitude=True,
+        reservations=table,
+        lookup="bilinear",
+        name=f"{preset}+separation",
+    )
 
 
 def _task(scenario: Scenario, task: str | int | None) -> Task:
@@ -302,6 +349,9 @@ class FleetOutcome:
     history: FloatArray
     restart_costs: FloatArray
     info: dict[str, Any] = field(default_factory=dict)
+    #: the fleet's cost as the planner judges it (inf when what it guarantees fails somewhere);
+    #: None: the sum of the UAVs' costs if every planned polyline is feasible, else inf
+    cost: float | None = None
 
 
 class FleetPlanner(Planner):
@@ -332,13 +382,14 @@ class FleetPlanner(Planner):
         b = self.budget(budget) if budget is not None else None
         t0 = time.perf_counter()
         out = self._plan_fleet(sc, b, seed, callback)
-        n_bad = sum(not r.feasible for r in out.results)
+        planned = all(r.feasible for r in out.results)
         total = float(sum(r.cost for r in out.results))
         return FleetResult(
             results=out.results,
             priority=out.priority,
-            cost=total if n_bad == 0 else math.inf,
-            feasible=n_bad == 0,
+            cost=out.cost if out.cost is not None else (total if planned else math.inf),
+            feasible=all(r.flown_feasible for r in out.results),
+            planned_feasible=planned,
             history=np.asarray(out.history),
             restart_costs=np.asarray(out.restart_costs),
             wall_time=time.perf_counter() - t0,
@@ -364,8 +415,12 @@ class FleetPlanner(Planner):
         budget: Budget | int | None = None,
         seed: int | None = None,
         callback: ProgressCallback | None = None,
+        reservations: ReservationTable | None = None,
     ) -> PlanResult:
-        """A fleet of one: ``task`` alone."""
+        """A fleet of one: ``task`` alone (fleet planners keep clear of each other's UAVs
+        themselves, not of flights reserved outside)."""
+        if reservations is not None:
+            raise ValueError(f"planner {self.name!r} does not keep clear of reserved flights")
         t = task if isinstance(task, Task) else _task(scenario, task)
         self.check_input(scenario, t)
         one = dataclasses.replace(scenario, tasks=(t,))

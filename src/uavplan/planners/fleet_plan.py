@@ -3,24 +3,26 @@ planner (:func:`plan_all`); the plans of all tasks as one :class:`FleetPlan`."""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 from uavplan.optimizers.base import Budget
 from uavplan.planners.base import FleetPlanner, Planner
+from uavplan.planners.options import PlannerError
 from uavplan.planners.results import FleetResult, PlanResult
 from uavplan.planners.run import ProgressCallback
+from uavplan.planners.sequential import plan_sequentially, task_seeds
 from uavplan.world.scenario import Scenario
 
 
 @dataclass(frozen=True)
 class FleetPlan:
-    """Plans for every task of a scenario: planned one by one by a single-UAV planner, or
-    together by a :class:`FleetPlanner` (then ``fleet`` holds its fleet-level result, and
-    feasibility includes the separation between UAVs)."""
+    """Plans for every task of a scenario. With several UAVs they are planned together, by a
+    :class:`FleetPlanner` or by a single-UAV planner in the prioritized frame
+    (:func:`~uavplan.planners.sequential.plan_sequentially`): ``fleet`` then holds the
+    fleet-level result and feasibility includes the separation between UAVs."""
 
     scenario: Scenario
     algorithm: str
@@ -31,16 +33,17 @@ class FleetPlan:
 
     @property
     def feasible(self) -> bool:
+        """The plan's guarantee: every UAV's flown trajectory passes every check."""
         if self.fleet is not None:
             return bool(self.fleet.feasible)
+        return all(r.flown_feasible for r in self.results)
+
+    @property
+    def planned_feasible(self) -> bool:
+        """Every planned polyline is feasible (separation from the others included)."""
+        if self.fleet is not None:
+            return bool(self.fleet.planned_feasible)
         return all(r.feasible for r in self.results)
-
-
-def task_seeds(seed: int | None, n: int) -> list[int | None]:
-    """One seed per task derived from the root ``seed`` (SeedSequence), or None."""
-    if seed is None:
-        return [None] * n
-    return [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(n)]
 
 
 def plan_all(
@@ -51,15 +54,21 @@ def plan_all(
     progress: Callable[[str], ProgressCallback | None] | None = None,
     tasks: Sequence[str] | None = None,
 ) -> FleetPlan:
-    """Plan each task (or those named in ``tasks``) independently, or the whole fleet at once
-    with a :class:`FleetPlanner` (``progress`` then gets the key ``"fleet"``)."""
+    """Plan every task (or those named in ``tasks``): one with any planner; several together,
+    with a :class:`FleetPlanner` (``progress`` then gets the key ``"fleet"``) or with a
+    single-UAV planner in the prioritized frame (refused, naming the planners that can, for a
+    planner whose search cannot keep clear of other UAVs). Never several UAVs planned alone."""
     if isinstance(planner, FleetPlanner):
         cb = progress("fleet") if progress else None
         fr = planner.plan_fleet(scenario, budget, seed, cb, tuple(tasks) if tasks else None)
         return FleetPlan(scenario, planner.name, planner.describe(), seed, fr.results, fr)
-    chosen = [t for t in scenario.tasks if tasks is None or t.id in tasks]
-    results = []
-    for task, s in zip(chosen, task_seeds(seed, len(chosen)), strict=True):
-        cb = progress(task.id) if progress else None
-        results.append(planner.plan(scenario, task, budget, s, cb))
-    return FleetPlan(scenario, planner.name, planner.describe(), seed, tuple(results))
+    chosen = tuple(t for t in scenario.tasks if tasks is None or t.id in tasks)
+    if not chosen:
+        raise PlannerError(f"none of the tasks {list(tasks or [])} is in {scenario.name!r}")
+    if len(chosen) == 1:
+        cb = progress(chosen[0].id) if progress else None
+        r = planner.plan(scenario, chosen[0], budget, task_seeds(seed, 1)[0], cb)
+        return FleetPlan(scenario, planner.name, planner.describe(), seed, (r,))
+    sc = dataclasses.replace(scenario, tasks=chosen)
+    fr = plan_sequentially(planner, sc, budget, seed, progress)
+    return FleetPlan(sc, planner.name, planner.describe(), seed, fr.results, fr)

@@ -53,6 +53,7 @@ class OptimizerPlanner(Planner):
     """Plan with a population optimizer over encoded waypoints (see the module docstring)."""
 
     name = "optimizer"
+    supports_reservations = True
     Config = OptimizerPlannerConfig
     config: OptimizerPlannerConfig
 

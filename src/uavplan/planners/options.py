@@ -16,7 +16,6 @@ from numpy.typing import NDArray
 FloatArray = NDArray[np.float64]
 
 
-
 class PlannerError(ValueError):
     """Unknown planner, bad configuration, or a task it cannot handle."""
 

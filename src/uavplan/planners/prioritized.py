@@ -59,7 +59,6 @@ Choices where the paper is silent or vague (all parameters of :class:`Prioritize
 
 from __future__ import annotations
 
-import itertools
 import time
 from dataclasses import dataclass, replace
 from typing import Any
@@ -70,47 +69,22 @@ from numpy.typing import NDArray
 from uavplan import optimizers
 from uavplan.optimizers.base import Budget, OptimizerConfig
 from uavplan.optimizers.constraints import RULES, Constrained
-from uavplan.planners.base import FleetOutcome, FleetPlanner
+from uavplan.planners.base import FleetOutcome, FleetPlanner, separated_problem
+from uavplan.planners.flight import TIMINGS, Flight, declare, fly
 from uavplan.planners.options import FleetPlannerConfig, PlannerError, option
 from uavplan.planners.results import PlanResult, make_result
 from uavplan.planners.run import ProgressCallback
 from uavplan.problems.encoding import ENCODINGS, CartesianEncoding
-from uavplan.problems.path_problem import PRESETS, SEPARATION_TERM, PathProblem
-from uavplan.problems.validity import greedy_shortcut
-from uavplan.smoothing.dubins import drop_consecutive_duplicates
+from uavplan.problems.path_problem import PRESETS
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
-from uavplan.world.tolerances import DUPLICATE_TOL
 
 FloatArray = NDArray[np.float64]
 
 ORDERS = ("lh", "sh", "rnd")
-SMOOTH_TIMINGS = ("planned", "constant")
+SMOOTH_TIMINGS = TIMINGS
+FLIGHTS = ("in-loop", "after", "none")
 SEEDINGS = ("rrt-star", "uniform")
-
-
-def fleet_problem(
-    scenario: Scenario,
-    task: Task,
-    table: ReservationTable | None,
-    cost: str = "ppswarm",
-    weights: dict[str, float] | None = None,
-) -> PathProblem:
-    """A UAV's problem in the fleet: the cost preset plus F5 (Eqs. 11-12, the ``separation``
-    term) against the reservation table of the UAVs planned before it, with the continuous
-    checks of the band along whole segments (``strict_altitude``)."""
-    if cost not in PRESETS:
-        raise PlannerError(f"unknown cost preset {cost!r}")
-    return PathProblem(
-        scenario,
-        task,
-        cost=(*PRESETS[cost], SEPARATION_TERM),
-        weights=weights,
-        strict_altitude=True,
-        reservations=table,
-        lookup="bilinear",
-        name=f"{cost}+separation",
-    )
 
 
 @dataclass(frozen=True)
@@ -136,7 +110,10 @@ class PrioritizedConfig(FleetPlannerConfig):
                                         low=1)  # fmt: skip
     rrt_params: dict[str, Any] = option(default_factory=dict, doc="RRT* options (step, ...)")
     n_waypoints: int | None = option(None, "free waypoints (default: the scenario's)", low=1)
-    cost: str = option("ppswarm", "cost preset (F1-F4; F5 is added)", choices=tuple(PRESETS))
+    cost: str | None = option(
+        None, "cost preset (default: the scenario's; PPSwarm's scenarios: ppswarm, F1-F4); F5, "
+        "the separation term, is added", choices=tuple(PRESETS)
+    )  # fmt: skip
     weights: dict[str, float] | None = option(None, "cost term weight overrides")
     dt: float = option(1.0, "reservation table's time bucket, s", low=0, low_open=True)
     constraints: str = option(
@@ -144,7 +121,17 @@ class PrioritizedConfig(FleetPlannerConfig):
     )
     max_delays: int = option(0, "take-off delays a blocked UAV may try (ours; 0: none)", low=0)
     delay_step: float = option(5.0, "one take-off delay, s", low=0, low_open=True)
-    smooth: bool = option(True, "Dubins-smooth every path (Sect. 4.4) and check it")
+    flight: str = option(
+        "in-loop",
+        "each UAV's flight (Dubins-smoothed, timed) is checked while planning and is what is "
+        "reserved and guaranteed (in-loop); or the paper's mode: polylines reserved and "
+        "guaranteed, smoothed after as information (after) or not at all (none)",
+        choices=FLIGHTS,
+    )
+    flight_candidates: int = option(
+        8, "in-loop: the best distinct polylines of a UAV's last population whose flights are "
+        "tried, best first", low=1
+    )  # fmt: skip
     smooth_step: float = option(5.0, "sample spacing of smoothed paths, m", low=0, low_open=True)
     smooth_timing: str = option("planned", "smoothed flights keep the planned times or fly at "
                                 "constant speed (the paper's)", choices=SMOOTH_TIMINGS)  # fmt: skip
@@ -236,6 +223,11 @@ class PrioritizedPlanner(FleetPlanner):
         s_rrt, s_opt, s_order = root.spawn(3)
         order_rng = np.random.default_rng(s_order)
         n_free = int(cfg.n_waypoints if cfg.n_waypoints is not None else scenario.n_waypoints)
+        in_loop = cfg.flight == "in-loop"
+
+        def ok(res: PlanResult) -> bool:
+            """What the mode guarantees: the flight (in-loop) or the polyline (paper)."""
+            return bool(res.flown_ok) if in_loop else res.feasible
 
         # Alg. 3 lines 1-3: initial paths
         t0 = time.perf_counter()
@@ -271,34 +263,39 @@ class PrioritizedPlanner(FleetPlanner):
             for idx, m in enumerate(priority):
                 task = tasks[m]
                 rng = np.random.default_rng(opt_seeds[r * M + idx])
-                res, pop = self._low_level(
+                res, pop, cands = self._low_level(
                     scenario, task, table, current[m], last_pop[m], r, n_iter, n_free, rng
                 )
                 evaluations += res.evaluations
+                if in_loop:
+                    res = self._in_loop_flight(scenario, table, cands)
                 # not in the paper: a UAV that finds no conflict-free path may wait on the
                 # ground at its start and take off later (the same swarm seeding again)
                 for k in range(1, cfg.max_delays + 1):
-                    if res.feasible:
+                    if ok(res):
                         break
                     later = replace(task, start_time=task.start_time + k * cfg.delay_step)
-                    res2, pop2 = self._low_level(
+                    res2, pop2, cands2 = self._low_level(
                         scenario, later, table, current[m], last_pop[m], r, n_iter, n_free, rng
                     )
                     evaluations += res2.evaluations
-                    if res2.feasible:
+                    if in_loop:
+                        res2 = self._in_loop_flight(scenario, table, cands2)
+                    if ok(res2):
                         res, pop = res2, pop2
                         delayed[task.id] = later.start_time - task.start_time
                 results[m] = res
                 last_pop[m] = pop
                 current[m] = res.waypoints
-                table.add(task.id, res.waypoints, res.times)
+                pts, ts = res.flown_trajectory() if in_loop else (res.waypoints, res.times)
+                table.add(task.id, as3(pts), ts)
                 histories.append(res.history)
-                per_uav_cost[m] = res.cost if res.feasible else np.inf
+                per_uav_cost[m] = res.cost if ok(res) else np.inf
                 if callback is not None:  # progress per UAV; a stop request ends the restart
                     stop = bool(callback(r * M + idx + 1, float(np.sum(per_uav_cost)))) or stop
             fleet_history.extend(self._fleet_curve(histories))
             finished = tuple(res for res in results if res is not None)
-            n_bad = sum(not res.feasible for res in finished)
+            n_bad = sum(not ok(res) for res in finished)
             total = float(sum(res.cost for res in finished))
             restart_costs.append(np.inf if n_bad else total)
             key = (n_bad, total)
@@ -319,17 +316,22 @@ class PrioritizedPlanner(FleetPlanner):
             "n_iter": n_iter,
             "delayed": delays,
         }
-        if cfg.smooth:
-            t0 = time.perf_counter()
+        t0 = time.perf_counter()
+        if cfg.flight == "after":
             results_t, report = smooth_fleet(scenario, results_t, prio, cfg)
-            info["smoothing_time"] = time.perf_counter() - t0
             info["smoothing"] = report
+        elif cfg.flight == "in-loop":
+            info["flights"] = flight_report(results_t)
+        if cfg.flight != "in-loop":  # the paper's mode guarantees the polylines
+            results_t = declare_polylines(scenario, results_t, prio, cfg)
+        info["smoothing_time"] = time.perf_counter() - t0
         return FleetOutcome(
             results=results_t,
             priority=tuple(prio),
             history=np.asarray(fleet_history),
             restart_costs=np.asarray(restart_costs),
             info=info,
+            cost=float(total) if n_bad == 0 else float("inf"),
         )
 
     @staticmethod
@@ -395,9 +397,12 @@ class PrioritizedPlanner(FleetPlanner):
         n_iter: int,
         n_free: int,
         rng: np.random.Generator,
-    ) -> tuple[PlanResult, FloatArray]:
+    ) -> tuple[PlanResult, FloatArray, list[PlanResult]]:
+        """One UAV's low-level run: its best result, the last positions (Eq. 16's
+        ``x_last``) and, for in-loop flights, the best distinct feasible polylines of the last
+        population (the best result first)."""
         cfg = self.config
-        problem = fleet_problem(scenario, task, table, cfg.cost, cfg.weights)
+        problem = separated_problem(scenario, task, table, cfg.cost, cfg.weights)
         enc_name = str(getattr(self.optimizer_cls, "encoding", "cartesian"))
         enc: Any = ENCODINGS[enc_name](problem, n_free)
         objective = Constrained(enc, cfg.constraints)
@@ -425,27 +430,106 @@ class PrioritizedPlanner(FleetPlanner):
             opt.tell(X, f)
             X_last = X
         assert opt.best_x is not None
-        res = make_result(
-            problem,
-            enc.decode(opt.best_x[None])[0],
-            algorithm=self.name,
-            history=opt.history,
-            evaluations=opt.evaluations,
-            evaluations_history=opt.evaluations_history,
-            wall_time=time.perf_counter() - t0,
-        )
-        return res, np.asarray(X_last)
+
+        def result(path: FloatArray) -> PlanResult:
+            return make_result(
+                problem,
+                path,
+                algorithm=self.name,
+                history=opt.history,
+                evaluations=opt.evaluations,
+                evaluations_history=opt.evaluations_history,
+                wall_time=time.perf_counter() - t0,
+            )
+
+        best = result(enc.decode(opt.best_x[None])[0])
+        others: list[PlanResult] = []
+        if cfg.flight == "in-loop" and cfg.flight_candidates > 1:
+            paths = enc.decode(np.asarray(X_last))
+            ev = problem.evaluate(paths)
+            order = np.argsort(np.where(ev.feasible, ev.cost, np.inf), kind="stable")
+            seen = {best.waypoints.round(6).tobytes()}
+            for i in order[: 4 * cfg.flight_candidates]:
+                key = paths[i].round(6).tobytes()
+                if not ev.feasible[i] or key in seen:
+                    continue
+                seen.add(key)
+                others.append(result(paths[i]))
+                if len(others) >= cfg.flight_candidates - 1:
+                    break
+        return best, np.asarray(X_last), [best, *others]
+
+    def _in_loop_flight(
+        self, scenario: Scenario, table: ReservationTable, candidates: list[PlanResult]
+    ) -> PlanResult:
+        """The first candidate (best first) whose flight passes every check, with that flight
+        declared; if none does, the best candidate with its best (failing) flight."""
+        cfg = self.config
+        task_of = {t.id: t for t in scenario.tasks}
+        first: tuple[PlanResult, Flight] | None = None
+        for r in candidates:
+            if not r.feasible:
+                continue
+            f = fly(scenario, task_of[r.uav_id], r.waypoints, r.times, table,
+                    cfg.smooth_timing, cfg.smooth_step)  # fmt: skip
+            if f.ok:
+                return declare(r, f)
+            if first is None:
+                first = (r, f)
+        if first is None:
+            r = candidates[0]
+            first = (r, fly(scenario, task_of[r.uav_id], r.waypoints, r.times, table,
+                            cfg.smooth_timing, cfg.smooth_step))  # fmt: skip
+        return declare(*first)
 
 
-def _pose_times(waypoints: FloatArray, times: FloatArray, variant: str) -> FloatArray:
-    """Planned times of the poses that :func:`smooth_fleet`'s ``variant`` smooths through: the
-    kept waypoints' own times ("through") or the start, the segment midpoints (the mean of
-    their ends' times) and the goal ("corners"), with the same duplicate dropping."""
-    keep = drop_consecutive_duplicates(waypoints, DUPLICATE_TOL)
-    t = np.asarray(times, dtype=np.float64)[keep]
-    if variant == "through" or t.shape[0] < 2:
-        return t
-    return np.concatenate([t[:1], 0.5 * (t[:-1] + t[1:]), t[-1:]])
+def as3(points: FloatArray) -> FloatArray:
+    """Points with z = 0 added in 2-D (the reservation table is 3-D)."""
+    p = np.asarray(points, dtype=np.float64)
+    return p if p.shape[1] == 3 else np.column_stack([p, np.zeros(len(p))])
+
+
+def flight_report(results: tuple[PlanResult, ...]) -> dict[str, Any]:
+    """How the in-loop flights came out: the UAVs whose flight fails a check, the variants
+    flown, the flown length against the planned polylines'."""
+    flown = sum(
+        float(np.sum(np.linalg.norm(np.diff(r.flown_trajectory()[0], axis=0), axis=1)))
+        for r in results
+    )
+    planned = sum(r.length for r in results)
+    return {
+        "not_clear": [r.uav_id for r in results if not r.flown_ok],
+        "kinds": {k: sum(r.flown_kind == k for r in results) for k in ("smoothed", "polyline")},
+        "flown_length": flown,
+        "planned_length": planned,
+        "checked": len(results),
+    }
+
+
+def declare_polylines(
+    scenario: Scenario,
+    results: tuple[PlanResult, ...],
+    priority: list[str],
+    cfg: PrioritizedConfig,
+) -> tuple[PlanResult, ...]:
+    """The paper's mode: every UAV is declared to fly its planned polyline, checked as flown
+    (the world, the polylines of the UAVs before it and the kinematic limits: a UAV with a
+    turn radius cannot fly a polyline's corners, and this says so)."""
+    from uavplan.planners.flight import check_flights, flight_validator
+
+    by_id = {r.uav_id: r for r in results}
+    tasks = {t.id: t for t in scenario.tasks}
+    table = ReservationTable(scenario.bounds.lo, scenario.bounds.hi,
+                             scenario.uav.s2 + cfg.separation_margin, dt=cfg.dt)  # fmt: skip
+    out: dict[str, PlanResult] = {}
+    for uid in priority:
+        r = by_id[uid]
+        task = replace(tasks[uid], start_time=float(r.times[0]))
+        polyline = Flight(r.waypoints, r.times, "polyline", "polyline", ())
+        f = check_flights(flight_validator(scenario, task, table), [polyline])[0]
+        table.add(uid, as3(r.waypoints), r.times)
+        out[uid] = declare(r, f)
+    return tuple(out[r.uav_id] for r in results)
 
 
 def smooth_fleet(
@@ -454,9 +538,11 @@ def smooth_fleet(
     priority: list[str],
     cfg: PrioritizedConfig,
 ) -> tuple[tuple[PlanResult, ...], dict[str, Any]]:
-    """Dubins-smooth every UAV's path (Sect. 4.4) and check the smoothed paths: against the world
-    (the same continuous checks as planning) and against the UAVs smoothed before it in priority
-    order (separation S2, continuous time).
+    """The paper's mode (``flight="after"``): Dubins-smooth every UAV's path (Sect. 4.4) after
+    planning, as information, and check the smoothed paths: against the world (the same
+    continuous checks as planning), the UAVs smoothed before it in priority order (separation
+    S2, continuous time) and the kinematic limits (:func:`uavplan.planners.flight.fly`'s
+    variants and checks).
 
     Two variants are smoothed for each UAV: the paper's curves through every waypoint
     (headings bisecting the turns) and the corner-cutting curves between segment midpoints
@@ -475,14 +561,17 @@ def smooth_fleet(
     with moving obstacles is smoothed with "constant" timing, the timing its world check uses.
 
     A path no variant keeps clear is reported (``smoothed_ok = False`` and its violations)
-    and its planned polyline stays the plan: the UAVs after it are checked against that."""
-    from uavplan.smoothing.dubins import midpoint_poses, schedule, smooth_path
+    and its planned polyline stays in the table that the UAVs after it are checked against.
+    The plan still declares the polylines (:func:`declare_polylines`)."""
+    from uavplan.planners.flight import (
+        best_flight,
+        candidate_flights,
+        check_flights,
+        flight_validator,
+    )
 
     by_id = {r.uav_id: r for r in results}
-    lower = np.asarray(scenario.bounds.lo, dtype=np.float64)
-    upper = np.asarray(scenario.bounds.hi, dtype=np.float64)
-    table = ReservationTable(lower, upper, scenario.uav.s2, dt=cfg.dt)
-    speed = float(scenario.uav.speed)
+    table = ReservationTable(scenario.bounds.lo, scenario.bounds.hi, scenario.uav.s2, dt=cfg.dt)
     out: dict[str, PlanResult] = {}
     not_clear: list[str] = []
     failed: list[str] = []
@@ -493,59 +582,28 @@ def smooth_fleet(
         r = by_id[uid]
         task = next(t for t in scenario.tasks if t.id == uid)
         task = replace(task, start_time=float(r.times[0]))  # a delayed take-off keeps its delay
-        problem = PathProblem(scenario, task, strict_altitude=True, reservations=table)
-        tried: list[tuple[int, float, list[str], FloatArray, FloatArray, str, float]] = []
-        bases = [(np.asarray(r.waypoints, dtype=np.float64), np.asarray(r.times), "")]
-        if timing == "planned":
-            short, short_t, _ = greedy_shortcut(problem.validator, bases[0][0], bases[0][1])
-            if short.shape[0] < bases[0][0].shape[0]:
-                assert short_t is not None
-                bases.append((short, short_t, "shortcut-"))
-        for (wps, wts, tag), kind in itertools.product(bases, ("through", "corners")):
-            variant = tag + kind
-            try:
-                if kind == "through":  # Sect. 4.4: through every waypoint
-                    sm = smooth_path(wps, scenario.uav.turn_radius, cfg.smooth_step)
-                else:  # turn at the corners (see midpoint_poses)
-                    poses, heads = midpoint_poses(wps)
-                    sm = smooth_path(poses, scenario.uav.turn_radius, cfg.smooth_step, heads)
-            except ValueError:
-                continue
-            pts = np.asarray(sm.points, dtype=np.float64)
-            late = 0.0
-            if timing == "planned":
-                tp = _pose_times(wps, wts, kind)
-                if tp.shape != sm.waypoint_index.shape:  # not for distinct waypoints; be safe
-                    tp = problem.times(sm.waypoints[None])[0]
-                # reach each pose at its planned time, never above the speed: the recurrence
-                # tk[k] = max(tp[k], tk[k-1] + L_k / v) as a running maximum
-                c = np.concatenate([[0.0], np.cumsum(sm.piece_lengths / speed)])
-                tk = c + np.maximum.accumulate(tp - c)
-                late = float(np.max(tk - tp))
-                times = schedule(sm, tk)
-            else:
-                times = problem.times(pts[None])[0]
-            ev = problem.evaluate(pts[None], times[None])
-            viol = [k for k, v in ev.violations.items() if v[0]]
-            tried.append((len(viol), sm.length, viol, pts, times, variant, late))
-        if not tried:
+        short = flight_validator(scenario, task, table, kinematics=False)
+        flights = candidate_flights(scenario, r.waypoints, r.times, timing, cfg.smooth_step, short)
+        flights = [f for f in flights if f.kind == "smoothed"]
+        if not flights:
             failed.append(uid)
             out[uid] = r
             continue
-        _, _, viol, pts, times, variant, late = min(tried, key=lambda x: (x[0], x[1]))
-        max_late = max(max_late, late)
-        variants[variant] = variants.get(variant, 0) + 1
-        if viol:  # the planned polyline stays this UAV's plan: later UAVs are checked against it
+        f = best_flight(check_flights(flight_validator(scenario, task, table), flights))
+        assert f is not None
+        max_late = max(max_late, f.late)
+        variants[f.variant] = variants.get(f.variant, 0) + 1
+        if f.ok:
+            table.add(uid, as3(f.points), f.times)
+        else:  # the planned polyline stays in the table: later UAVs are checked against it
             not_clear.append(uid)
-            table.add(uid, np.asarray(r.waypoints, dtype=np.float64), np.asarray(r.times))
-        else:
-            table.add(uid, pts, times)
+            table.add(uid, as3(r.waypoints), r.times)
         out[uid] = replace(
             r,
-            smoothed=pts,
-            smoothed_times=times,
-            smoothed_ok=not viol,
-            smoothed_violations=tuple(viol),
+            smoothed=f.points,
+            smoothed_times=f.times,
+            smoothed_ok=f.ok,
+            smoothed_violations=f.violations,
         )
     report = {
         "not_clear": not_clear,

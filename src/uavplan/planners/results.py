@@ -15,7 +15,6 @@ from uavplan.problems.path_problem import PathProblem
 FloatArray = NDArray[np.float64]
 
 
-
 @dataclass(frozen=True)
 class PlanResult:
     """One UAV's planned path and how it was found.
@@ -102,8 +101,12 @@ class FleetResult:
     Attributes:
         results: one :class:`PlanResult` per task, in the scenario's task order.
         priority: task ids in the order they were planned in the kept solution.
-        cost: total cost (sum of the UAVs' costs; inf if any is infeasible).
-        feasible: every UAV feasible, including separation from the others.
+        cost: total cost (sum of the UAVs' costs; inf where what the planner guarantees fails).
+        feasible: every UAV's flown trajectory passes every check: the world, the separation
+            from every other UAV's flown trajectory, the kinematic limits (the plan's
+            guarantee).
+        planned_feasible: every UAV's planned polyline is feasible, separation from the other
+            polylines included (PPSwarm's criterion).
         history: the fleet's cost per low-level iteration (see the planner's docs).
         restart_costs: the fleet cost after each restart.
         wall_time: seconds; info: planner-specific figures (timings, smoothing report).
@@ -113,6 +116,7 @@ class FleetResult:
     priority: tuple[str, ...]
     cost: float
     feasible: bool
+    planned_feasible: bool
     history: FloatArray
     restart_costs: FloatArray
     wall_time: float

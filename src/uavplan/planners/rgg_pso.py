@@ -185,6 +185,7 @@ class RGGPSOPlanner(Planner):
     """RGG-PSO: PSO over variable-length particles seeded by RGG paths (see the module)."""
 
     name = "rgg-pso"
+    supports_reservations = True
     Config = RGGPSOConfig
     config: RGGPSOConfig
     inner_optimizer = "pso"

@@ -50,6 +50,7 @@ from uavplan.planners.registry import register_planner
 from uavplan.planners.rgg_pso import RGGPSOConfig, RGGPSOPlanner, Stats, conquer
 from uavplan.planners.run import Outcome, Run
 from uavplan.problems.variable_length import evaluate_paths, particle_to_path
+from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 
 FloatArray = NDArray[np.float64]
@@ -68,10 +69,12 @@ class _Solver:
         ss: np.random.SeedSequence,
         stats: Stats,
         seed_path: FloatArray | None = None,
+        reservations: ReservationTable | None = None,
     ) -> None:
         self.planner = planner
         self.scenario = scenario
-        self.problem = planner.problem(scenario, task)
+        self.reservations = reservations
+        self.problem = planner.problem(scenario, task, reservations)
         swarm_ss, self._kids_ss = ss.spawn(2)
         self.enc, self.opt = planner.swarm(self.problem, swarm_ss, stats, seed_path)
         self.stats = stats
@@ -122,8 +125,12 @@ class _Solver:
         rest = self.T - self.t
         d = self.depth - 1
         self.children = [
-            _Solver(self.planner, self.scenario, t1, rest, d, s1, self.stats, p1),
-            _Solver(self.planner, self.scenario, t2, rest, d, s2, self.stats, p2),
+            _Solver(
+                self.planner, self.scenario, t1, rest, d, s1, self.stats, p1, self.reservations
+            ),
+            _Solver(
+                self.planner, self.scenario, t2, rest, d, s2, self.stats, p2, self.reservations
+            ),
         ]
         self.pre = (path, cost, feasible)
         self.split = idx
@@ -211,7 +218,7 @@ class RGGPSOPlusPlanner(RGGPSOPlanner):
         stats = Stats()
         root = _Solver(
             self, run.scenario, run.task, T, self.config.depth,
-            np.random.SeedSequence(run.seed), stats,
+            np.random.SeedSequence(run.seed), stats, reservations=run.reservations,
         )  # fmt: skip
         tr = run.tracker
         seen: tuple[FloatArray, float, bool] | None = None

@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 
 from uavplan.optimizers.base import Budget
 from uavplan.problems.path_problem import PathProblem
+from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 
 FloatArray = NDArray[np.float64]
@@ -103,6 +104,8 @@ class Run:
     budget: Budget
     max_iterations: int | None
     tracker: Tracker
+    #: other UAVs' flights the run keeps clear of (planners with ``supports_reservations``)
+    reservations: ReservationTable | None = None
 
     @property
     def termination(self) -> Termination:

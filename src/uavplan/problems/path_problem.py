@@ -220,9 +220,7 @@ class PathProblem:
             unknown = set(weights) - {t.name for t in terms}
             if unknown:
                 raise ValueError(f"unknown cost term(s) {sorted(unknown)} for {self.cost_name}")
-            terms = tuple(
-                Term(t.name, weights.get(t.name, t.weight), t.fn, t.check) for t in terms
-            )
+            terms = tuple(Term(t.name, weights.get(t.name, t.weight), t.fn, t.check) for t in terms)
         self.terms = terms
         self.lookup = lookup if lookup is not None else LOOKUP.get(self.cost_name, "bilinear")
         if name is not None:

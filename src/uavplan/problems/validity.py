@@ -24,6 +24,15 @@ optional times ``(pop, n)``.
   its times (by default at the UAV's speed from the task's start time).
 * ``separation``: with a :class:`~uavplan.world.reservations.ReservationTable` of other UAVs'
   timed trajectories, no reserved UAV closer than the table's separation at any instant.
+* with ``kinematics=True``, the UAV's limits along the timed path, flown straight between
+  its points at a constant speed per segment (the verifier's semantics, implemented apart
+  there): ``speed`` (every segment within ``[min_speed, v_max]``), ``climb`` (every segment's
+  climb or descent angle within the declared limits), ``turn`` (with a turn radius: at every
+  interior point the heading change is at most ``MAX_SAMPLE_TURN_DEG`` and the curvature
+  estimate, the heading change over the mean length of the two segments, at most
+  ``(1 + TURN_RTOL) / turn_radius``; consecutive points with the same x, y are merged).
+  A planned polyline is a geometric path and is not checked for them; the trajectory a UAV
+  flies (:mod:`uavplan.planners.flight`) is.
 
 A point is valid when the zero-length segment at it is; a segment without times is flown from
 the task's start time at the UAV's speed.
@@ -46,7 +55,14 @@ from uavplan.problems import costs as C
 from uavplan.world import geometry as G
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
-from uavplan.world.tolerances import BAND_TOL
+from uavplan.world.tolerances import (
+    ANGLE_TOL_DEG,
+    BAND_TOL,
+    MAX_SAMPLE_TURN_DEG,
+    SPEED_RTOL,
+    SPEED_SLACK,
+    TURN_RTOL,
+)
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -61,6 +77,9 @@ CHECKS = (
     "altitude",
     "moving",
     "separation",
+    "speed",
+    "climb",
+    "turn",
 )
 #: Segments checked per kernel call by :meth:`MotionValidator.segments_valid` (bounds memory).
 SEGMENT_CHUNK = 65536
@@ -238,6 +257,7 @@ class MotionValidator:
         lookup: how terrain heights under waypoints are read for the band check
             (``"bilinear"``, or ``"nearest"`` as SPSO's cost reads them).
         reservations: other UAVs' timed trajectories to keep clear of (``separation``).
+        kinematics: also check the UAV's kinematic limits (``speed``, ``climb``, ``turn``).
     """
 
     def __init__(
@@ -248,8 +268,10 @@ class MotionValidator:
         strict_altitude: bool = False,
         lookup: str = "bilinear",
         reservations: ReservationTable | None = None,
+        kinematics: bool = False,
     ) -> None:
         self.scenario = scenario
+        self.kinematics = bool(kinematics)
         self.task = task if isinstance(task, Task) else scenario.task(task)
         self.dim = scenario.dim
         self.strict_altitude = bool(strict_altitude)
@@ -292,6 +314,14 @@ class MotionValidator:
             out.append("moving")
         if self.reservations is not None:
             out.append("separation")
+        if self.kinematics:
+            uav = sc.uav
+            out.append("speed")
+            limits = (uav.max_climb_angle, uav.max_descent_angle)
+            if sc.dim == 3 and any(a is not None for a in limits):
+                out.append("climb")
+            if uav.turn_radius > 0:
+                out.append("turn")
         return tuple(out)
 
     # ------------------------------------------------------------------ the checks
@@ -331,6 +361,12 @@ class MotionValidator:
             return np.asarray(np.any(b.moving_dist < radii, axis=(1, 2)))
         if name == "separation":
             return b.conflicts
+        if name == "speed":
+            return speed_violations(b.paths, b.times, sc.uav.min_speed, sc.uav.v_max)
+        if name == "climb":
+            return climb_violations(b.paths, sc.uav.max_climb_angle, sc.uav.max_descent_angle)
+        if name == "turn":
+            return turn_violations(b.paths, sc.uav.turn_radius)
         raise ValueError(f"unknown check {name!r}; checks: {CHECKS}")
 
     def graded_violation(self, b: Batch, violations: dict[str, BoolArray]) -> FloatArray:
@@ -452,6 +488,69 @@ class MotionValidator:
                 else:
                     out[c] = table.min_distance(b.paths3, b.times) - table.separation
         return out
+
+
+# ---------------------------------------------------------------------------- kinematics
+def speed_violations(paths: FloatArray, times: FloatArray, v_min: float, v_max: float) -> BoolArray:
+    """(pop,) whether some segment of the timed paths (pop, n, dim) is flown faster than
+    ``v_max`` or slower than ``v_min`` (m/s; an instantaneous jump is infinitely fast). Relative
+    slack ``SPEED_RTOL`` and ``SPEED_SLACK`` m per segment for round-off."""
+    d = np.sqrt(np.sum(np.diff(paths, axis=1) ** 2, axis=-1))
+    dt = np.diff(times, axis=1)
+    fast = d > v_max * (1 + SPEED_RTOL) * np.maximum(dt, 0.0) + SPEED_SLACK
+    bad = fast | (dt < 0)
+    if v_min > 0:
+        bad |= (dt > 0) & (d + SPEED_SLACK < v_min * (1 - SPEED_RTOL) * dt)
+    return np.asarray(np.any(bad, axis=1))
+
+
+def climb_violations(
+    paths: FloatArray, max_climb: float | None, max_descent: float | None
+) -> BoolArray:
+    """(pop,) whether some segment of the paths (pop, n, 3) climbs more steeply than
+    ``max_climb`` or descends more steeply than ``max_descent`` (degrees; None: no limit)."""
+    d = np.diff(paths, axis=1)
+    h = np.hypot(d[..., 0], d[..., 1])
+    ang = np.degrees(np.arctan2(d[..., 2], h))
+    moving = (h > 0) | (d[..., 2] != 0)
+    bad = np.zeros(h.shape, dtype=bool)
+    if max_climb is not None:
+        bad |= moving & (ang > max_climb + ANGLE_TOL_DEG)
+    if max_descent is not None:
+        bad |= moving & (-ang > max_descent + ANGLE_TOL_DEG)
+    return np.asarray(np.any(bad, axis=1))
+
+
+def turn_estimates(xy: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Heading change (rad) and curvature estimate (1/m) at every interior point of one
+    planar polyline (m, 2), after merging consecutive points with the same x, y: the heading
+    change over the mean length of the two segments."""
+    seg = np.diff(xy, axis=0)
+    L = np.hypot(seg[:, 0], seg[:, 1])
+    keep = L > 1e-9
+    seg, L = seg[keep], L[keep]
+    if len(L) < 2:
+        return np.zeros(0), np.zeros(0)
+    a, b = seg[:-1], seg[1:]
+    cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    dot = a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1]
+    theta = np.abs(np.arctan2(cross, dot))
+    return theta, theta / (0.5 * (L[:-1] + L[1:]))
+
+
+def turn_violations(paths: FloatArray, turn_radius: float) -> BoolArray:
+    """(pop,) whether some interior point of the paths (pop, n, dim) turns by more than
+    ``MAX_SAMPLE_TURN_DEG`` or with a curvature estimate above ``(1 + TURN_RTOL) /
+    turn_radius`` (horizontal; see :func:`turn_estimates`)."""
+    out = np.zeros(paths.shape[0], dtype=bool)
+    if turn_radius <= 0:
+        return out
+    k_max = (1 + TURN_RTOL) / turn_radius
+    sharp = np.radians(MAX_SAMPLE_TURN_DEG)
+    for i in range(paths.shape[0]):  # the flown check: a few candidates, not a population
+        theta, kappa = turn_estimates(paths[i, :, :2])
+        out[i] = bool(np.any(theta > sharp) or np.any(kappa > k_max))
+    return out
 
 
 def greedy_shortcut(

@@ -11,13 +11,12 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
 
-from uavplan.io.plan_file import PlanFile
+from uavplan.io.plan_file import PlanFile, TrajectoryKind
 
 #: ``exporter(plan, out, kind) -> paths written``; ``out`` is a file for a fleet-wide format and
 #: a folder for a per-UAV one; ``kind`` is which trajectory of each UAV is exported.
-ExportFn = Callable[[PlanFile, Path, Literal["planned", "smoothed"]], list[Path]]
+ExportFn = Callable[[PlanFile, Path, TrajectoryKind], list[Path]]
 
 
 class ExportError(ValueError):

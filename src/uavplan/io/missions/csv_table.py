@@ -7,15 +7,14 @@ from __future__ import annotations
 import csv
 import io
 from pathlib import Path
-from typing import Literal
 
 from uavplan.io.atomic import write_text_atomic
 from uavplan.io.missions import register_exporter
-from uavplan.io.plan_file import PlanFile
+from uavplan.io.plan_file import PlanFile, TrajectoryKind
 
 
 @register_exporter("csv", ".csv", "one table of every UAV's timed points (local ENU metres)")
-def write_csv(plan: PlanFile, out: Path, kind: Literal["planned", "smoothed"]) -> list[Path]:
+def write_csv(plan: PlanFile, out: Path, kind: TrajectoryKind) -> list[Path]:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     axes = ["x_m", "y_m", "z_m"][: plan.dim]

@@ -1,0 +1,263 @@
+"""From a planned polyline to the trajectory a UAV flies, checked as it will be flown.
+
+A planner's polyline is a geometric path; a UAV with a minimum turn radius cannot fly its
+corners. :func:`fly` turns it into a flight, the timed trajectory the plan declares and
+guarantees (``PlanResult.flown``):
+
+* **Without a turn radius** (``uav.turn_radius == 0``) the polyline is flown as planned.
+* **With one**, Dubins CSC curves (PPSwarm Sect. 4.4, :mod:`uavplan.smoothing.dubins`), in up to
+  four variants: through every waypoint with headings bisecting the turns (the paper's),
+  corner-cutting between segment midpoints (:func:`~uavplan.smoothing.dubins.midpoint_poses`),
+  and each of those on the polyline shortcut by line of sight (a waypoint dropped where the
+  straight segment replacing it is clear of the world and of the reserved UAVs, flown between
+  the planned times). Each is sampled at most ``min(step, turn_radius / 4)`` apart, so that its
+  samples' curvature estimate stays within 1 % of the curves'.
+* **Timing**: ``"planned"`` reaches each pose at its planned time where the UAV's speed range
+  allows (never faster than ``v_max``, never slower than ``min_speed``: late where a curve is
+  longer than its segment, early where it is so much shorter that the UAV cannot slow down
+  enough); ``"constant"`` flies at the cruise speed from the take-off (the paper's model).
+  A world with moving obstacles uses ``"constant"``.
+
+Every variant is checked by the motion validator exactly as the verifier will check it: the
+world (terrain and altitude band along whole segments), the reserved UAVs' flights (separation,
+continuous time) and the kinematic limits (speed range, climb and descent angles, turn radius).
+The variant with the fewest kinds of violation, then the shortest, is the flight; it is
+``ok`` only if it has none.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from uavplan.planners.results import PlanResult
+from uavplan.problems.path_problem import LOOKUP
+from uavplan.problems.validity import MotionValidator, greedy_shortcut
+from uavplan.smoothing.dubins import (
+    SmoothedPath,
+    drop_consecutive_duplicates,
+    midpoint_poses,
+    schedule,
+    smooth_path,
+)
+from uavplan.world.reservations import ReservationTable
+from uavplan.world.scenario import Scenario, Task
+from uavplan.world.tolerances import DUPLICATE_TOL
+
+FloatArray = NDArray[np.float64]
+
+TIMINGS = ("planned", "constant")
+#: Default spacing of a smoothed trajectory's samples, metres (at most a quarter turn radius).
+DEFAULT_STEP = 5.0
+
+
+@dataclass(frozen=True, eq=False)
+class Flight:
+    """A UAV's flight: ``points`` (m, dim) and ``times`` (m,), flown straight between samples.
+
+    Attributes:
+        kind: ``"smoothed"`` (Dubins curves) or ``"polyline"`` (the planned polyline).
+        variant: which construction (``polyline``, ``through``, ``corners``,
+            ``shortcut-through``, ``shortcut-corners``).
+        violations: the checks it fails (empty: ``ok``).
+        late: the most it arrives after a planned pose time, seconds (0 for on time or early).
+    """
+
+    points: FloatArray
+    times: FloatArray
+    kind: str
+    variant: str
+    violations: tuple[str, ...]
+    late: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        return not self.violations
+
+    @property
+    def length(self) -> float:
+        return float(np.sum(np.linalg.norm(np.diff(self.points, axis=0), axis=1)))
+
+
+def flight_validator(
+    scenario: Scenario,
+    task: Task,
+    reservations: ReservationTable | None = None,
+    kinematics: bool = True,
+) -> MotionValidator:
+    """The validator a flight must pass: the world with the band along whole segments, the
+    reserved UAVs and the UAV's kinematic limits (what ``uavplan verify`` checks). Without
+    ``kinematics``: the validator of a shortcut's straight segments (the smoothing and the
+    schedule after it make the flight)."""
+    return MotionValidator(
+        scenario,
+        task,
+        strict_altitude=True,
+        lookup=LOOKUP.get(scenario.cost, "bilinear"),
+        reservations=reservations,
+        kinematics=kinematics,
+    )
+
+
+def pose_times(
+    curve_lengths: FloatArray,
+    sample_lengths: FloatArray,
+    planned: FloatArray,
+    v_min: float,
+    v_max: float,
+    cruise: float,
+    timing: str,
+) -> FloatArray:
+    """When a UAV reaches each pose, (k,) s, flying each piece at a constant speed and leaving
+    the first pose at ``planned[0]``. ``"planned"``: each pose at its planned time where the
+    speed range allows, else as close to it as it can: never sooner than the piece's curve
+    length (``curve_lengths``, m, at least its samples') at ``v_max`` and never later than its
+    samples' length (``sample_lengths``) at ``v_min``; ``"constant"``: every piece's samples
+    at ``cruise``."""
+    Lc = np.asarray(curve_lengths, dtype=np.float64)
+    Ls = np.asarray(sample_lengths, dtype=np.float64)
+    tp = np.asarray(planned, dtype=np.float64)
+    out = np.empty_like(tp)
+    out[0] = tp[0]
+    if timing == "constant":
+        out[1:] = tp[0] + np.cumsum(Ls / cruise)
+        return out
+    if v_min <= 0:  # only a floor: a running maximum (no Python loop)
+        c = np.concatenate([[0.0], np.cumsum(Lc / v_max)])
+        return np.asarray(c + np.maximum.accumulate(tp - c))
+    for k in range(1, len(tp)):
+        earliest = out[k - 1] + Lc[k - 1] / v_max
+        latest = out[k - 1] + Ls[k - 1] / v_min
+        out[k] = min(max(tp[k], earliest), max(latest, earliest))
+    return out
+
+
+def _planned_pose_times(waypoints: FloatArray, times: FloatArray, variant: str) -> FloatArray:
+    """Planned times of the poses that a ``variant`` smooths through: the kept waypoints' own
+    times (``through``) or the start, the segment midpoints (the mean of their ends' times)
+    and the goal (``corners``), with the same duplicate dropping as the smoothing."""
+    keep = drop_consecutive_duplicates(waypoints, DUPLICATE_TOL)
+    t = np.asarray(times, dtype=np.float64)[keep]
+    if variant == "through" or t.shape[0] < 2:
+        return t
+    return np.concatenate([t[:1], 0.5 * (t[:-1] + t[1:]), t[-1:]])
+
+
+def _as3(points: FloatArray) -> FloatArray:
+    p = np.asarray(points, dtype=np.float64)
+    return p if p.shape[1] == 3 else np.column_stack([p, np.zeros(len(p))])
+
+
+def candidate_flights(
+    scenario: Scenario,
+    waypoints: FloatArray,
+    times: FloatArray,
+    timing: str = "planned",
+    step: float = DEFAULT_STEP,
+    shortcut: MotionValidator | None = None,
+) -> list[Flight]:
+    """The flights worth checking for a planned polyline (see the module docstring), not yet
+    checked (``violations`` empty). ``shortcut``: the validator that allows shortcuts by line
+    of sight (None: no shortcut variants)."""
+    uav = scenario.uav
+    wp = np.asarray(waypoints, dtype=np.float64)
+    wt = np.asarray(times, dtype=np.float64)
+    if uav.turn_radius <= 0:
+        return [Flight(wp, wt, "polyline", "polyline", ())]
+    if timing not in TIMINGS:
+        raise ValueError(f"timing must be one of {TIMINGS}, got {timing!r}")
+    h = min(float(step), uav.turn_radius / 4.0)
+    bases: list[tuple[FloatArray, FloatArray, str]] = [(wp, wt, "")]
+    if shortcut is not None and timing == "planned":
+        short, short_t, _ = greedy_shortcut(shortcut, wp, wt)
+        if short.shape[0] < wp.shape[0] and short_t is not None:
+            bases.append((short, short_t, "shortcut-"))
+    out: list[Flight] = []
+    dim = wp.shape[1]
+    for (w, t, tag), kind in itertools.product(bases, ("through", "corners")):
+        w3 = _as3(w)
+        try:
+            if kind == "through":
+                sm = smooth_path(w3, uav.turn_radius, h)
+            else:
+                poses, heads = midpoint_poses(w3)
+                sm = smooth_path(poses, uav.turn_radius, h, heads)
+        except ValueError:
+            continue
+        tp = _planned_pose_times(w3, t, kind)
+        if tp.shape != sm.waypoint_index.shape:  # not for distinct waypoints; be safe
+            tp = np.concatenate([[t[0]], t[0] + np.cumsum(sm.piece_lengths) / uav.speed])
+        tk = pose_times(
+            sm.piece_lengths, _sample_lengths(sm), tp, uav.min_speed, uav.v_max, uav.speed, timing
+        )
+        late = float(max(0.0, np.max(tk - tp)))
+        pts = sm.points if dim == 3 else sm.points[:, :2]
+        out.append(Flight(np.asarray(pts), schedule(sm, tk), "smoothed", tag + kind, (), late))
+    return out
+
+
+def _sample_lengths(sm: SmoothedPath) -> FloatArray:
+    """The length of each piece of a smoothed path along its samples (what is flown), (k-1,)."""
+    seg = np.linalg.norm(np.diff(sm.points, axis=0), axis=1)
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    return np.asarray(np.diff(s[sm.waypoint_index]))
+
+
+def check_flights(validator: MotionValidator, flights: Sequence[Flight]) -> list[Flight]:
+    """Each flight with the checks it fails."""
+    out = []
+    for f in flights:
+        b = validator.batch(f.points[None], f.times[None])
+        viol = tuple(k for k, v in validator.violations(b).items() if v[0])
+        out.append(dataclasses.replace(f, violations=viol))
+    return out
+
+
+def best_flight(flights: Sequence[Flight]) -> Flight | None:
+    """The flight with the fewest kinds of violation, then the shortest (None if none)."""
+    if not flights:
+        return None
+    return min(flights, key=lambda f: (len(f.violations), f.length))
+
+
+def fly(
+    scenario: Scenario,
+    task: Task,
+    waypoints: FloatArray,
+    times: FloatArray,
+    reservations: ReservationTable | None = None,
+    timing: str = "planned",
+    step: float = DEFAULT_STEP,
+) -> Flight:
+    """The flight of a planned polyline (see the module docstring), checked against the world,
+    the ``reservations`` and the UAV's kinematic limits. The task's start time is the
+    polyline's first time (a delayed take-off keeps its delay)."""
+    t = dataclasses.replace(task, start_time=float(np.asarray(times)[0]))
+    validator = flight_validator(scenario, t, reservations)
+    timing = "constant" if scenario.moving_obstacles else timing
+    short = flight_validator(scenario, t, reservations, kinematics=False)
+    flights = check_flights(
+        validator, candidate_flights(scenario, waypoints, times, timing, step, shortcut=short)
+    )
+    best = best_flight(flights)
+    if best is None:  # no variant could be built: the polyline, checked as it is
+        best = check_flights(validator, [Flight(np.asarray(waypoints), np.asarray(times),
+                                               "polyline", "polyline", ())])[0]  # fmt: skip
+    return best
+
+
+def declare(result: PlanResult, flight: Flight) -> PlanResult:
+    """``result`` with ``flight`` as the trajectory it is to fly."""
+    return dataclasses.replace(
+        result,
+        flown=flight.points,
+        flown_times=flight.times,
+        flown_kind=flight.kind,
+        flown_ok=flight.ok,
+        flown_violations=flight.violations,
+    )
