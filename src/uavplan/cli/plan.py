@@ -99,55 +99,101 @@ def _run_plan(
     return plan, elapsed
 
 
+def _flown_cell(r: Any) -> str:
+    """A UAV's flight verdict: yes, or the failed checks."""
+    if r.flown_feasible:
+        return "yes"
+    why = sorted({v.split(":")[0] for v in (r.flown_violations or r.violations)})
+    return f"NO: {','.join(why) or 'infeasible'}"
+
+
+#: How the summary table names the kinds of flight.
+_AS = {"smoothed": "dubins", "polyline": "line"}
+
+
 def _summary(plan: Any, elapsed: float, out_dir: Path) -> None:
-    table = Table(title=f"{plan.scenario.name} / {plan.algorithm} / seed {plan.seed}")
-    for col in (
-        "UAV",
-        "feasible",
-        "cost",
-        "length (m)",
-        "flight time (s)",
-        "evaluations",
-        "time (s)",
-    ):
-        table.add_column(col, justify="right")
+    import numpy as np
+    from rich import box
+
+    table = Table(
+        title=f"{plan.scenario.name} / {plan.algorithm} / seed {plan.seed}",
+        box=box.SIMPLE_HEAD,
+    )
+    for col in ("UAV", "planned", "flown", "as", "cost", "m", "flight s", "cpu s"):
+        table.add_column(col, justify="right", no_wrap=True)
     shown = plan.results if len(plan.results) <= 25 else plan.results[:20]
     for r in shown:
+        _, ft = r.flown_trajectory()
         table.add_row(
             r.uav_id,
             "yes" if r.feasible else "NO: " + ",".join(r.violations),
+            _flown_cell(r),
+            _AS.get(r.flown_kind, r.flown_kind),
             f"{r.cost:.6g}",
             f"{r.length:.1f}",
-            f"{r.times[-1] - r.times[0]:.1f}",
-            str(r.evaluations),
+            f"{ft[-1] - ft[0]:.1f}",
             f"{r.wall_time:.2f}",
         )
     out.print(table)
     if len(shown) < len(plan.results):
         out.print(f"... and {len(plan.results) - len(shown)} more UAVs in plan.json")
+    n = len(plan.results)
     fleet = getattr(plan, "fleet", None)
     if fleet is not None:
         n_bad = sum(not r.feasible for r in plan.results)
-        sm = fleet.info.get("smoothing", {})
         verdict = (
-            "feasible (separation S2 included)" if fleet.feasible else f"{n_bad} UAV(s) infeasible"
+            "polylines feasible (separation S2 included)"
+            if fleet.planned_feasible
+            else f"{n_bad} UAV polyline(s) infeasible"
         )
         restarts = [round(float(c), 1) for c in fleet.restart_costs]
         out.print(
-            f"fleet of {len(plan.results)}: cost {fleet.cost:.6g}, {verdict}, "
+            f"fleet of {n}: cost {fleet.cost:.6g}, {verdict}, "
             f"restarts {restarts}, best restart {fleet.info.get('best_restart')}"
         )
+        sm = fleet.info.get("smoothing", {})
         if sm:
             out.print(
-                f"Dubins-smoothed paths: {len(sm.get('not_clear', []))} of {sm.get('checked')} "
-                f"not clear {sm.get('not_clear', [])[:10]}"
+                f"Dubins-smoothed paths (information only): {len(sm.get('not_clear', []))} of "
+                f"{sm.get('checked')} not clear {sm.get('not_clear', [])[:10]}"
             )
-    out.print(f"wrote {out_dir / 'plan.json'} and {out_dir / 'plan.png'} ({elapsed:.1f} s)")
+    n_ok = sum(bool(r.flown_feasible) for r in plan.results)
+    kinds = {k: sum(r.flown_kind == k for r in plan.results) for k in ("smoothed", "polyline")}
+    flown = sum(float(np.linalg.norm(np.diff(r.flown_trajectory()[0], axis=0), axis=1).sum())
+                for r in plan.results)  # fmt: skip
+    planned = sum(r.length for r in plan.results)
+    out.print(
+        f"flights: {n_ok} of {n} pass every check as flown (Dubins-smoothed {kinds['smoothed']}, "
+        f"polylines {kinds['polyline']}); flown length {flown:.1f} m, "
+        f"{flown / planned if planned > 0 else 1.0:.3f} x planned"
+    )
+    evals = sum(int(r.evaluations) for r in plan.results)
+    out.print(
+        f"wrote {out_dir / 'plan.json'} and {out_dir / 'plan.png'} ({evals} cost evaluations, "
+        f"{elapsed:.1f} s)"
+    )
+    if not plan.feasible:
+        bad = [r.uav_id for r in plan.results if not r.flown_feasible]
+        err.print(
+            f"[bold red]NOT FLYABLE[/]: {len(bad)} of {n} UAVs' flown trajectories fail a check "
+            f"({', '.join(bad[:10])}{' ...' if len(bad) > 10 else ''}); plan.json says "
+            "feasible: false; do not fly this plan"
+        )
+        if plan.planned_feasible and kinds["polyline"] and plan.scenario.uav.turn_radius > 0:
+            err.print(
+                "the plan declares its planned polylines as the flights (flight=after or none), "
+                f"and a UAV with a {plan.scenario.uav.turn_radius:g} m turn radius cannot fly "
+                "their corners; the default flight=in-loop plans flights that it can"
+            )
 
 
 def plan(
     scenario: Annotated[
-        str, typer.Argument(help="A scenario file (.yaml/.json) or built-in name.")
+        str,
+        typer.Argument(
+            help="A scenario file (.yaml/.json) or built-in name; NAME@N: the same world with "
+            "a generated fleet of N UAVs."
+        ),
     ],
     algorithm: Annotated[str, typer.Option("--algorithm", "-a", help="Planner name.")] = "pso",
     seed: Annotated[int, typer.Option(help="Root random seed.")] = 0,

@@ -184,7 +184,7 @@ class PrioritizedPlanner(FleetPlanner):
     name = "prioritized-engine"
     Config = PrioritizedConfig
     config: PrioritizedConfig
-    dims = (3,)
+    dims = (2, 3)
 
     def __init__(self, config: PrioritizedConfig | None = None, **options: Any) -> None:
         super().__init__(config, **options)
@@ -315,6 +315,8 @@ class PrioritizedPlanner(FleetPlanner):
             "n_infeasible": int(n_bad),
             "n_iter": n_iter,
             "delayed": delays,
+            # what each UAV was kept S2 from: the flights (in-loop) or the polylines (paper)
+            "separated": "flights" if in_loop else "polylines",
         }
         t0 = time.perf_counter()
         if cfg.flight == "after":

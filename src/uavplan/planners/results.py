@@ -105,8 +105,10 @@ class FleetResult:
         feasible: every UAV's flown trajectory passes every check: the world, the separation
             from every other UAV's flown trajectory, the kinematic limits (the plan's
             guarantee).
-        planned_feasible: every UAV's planned polyline is feasible, separation from the other
-            polylines included (PPSwarm's criterion).
+        planned_feasible: every UAV's planned polyline is feasible, separation included from
+            what the UAVs planned before it reserved (``info["separated"]``: their polylines in
+            PPSwarm's mode, its criterion; their flights where flights are planned in the loop,
+            and then two polylines may come closer than S2: only the flights are kept apart).
         history: the fleet's cost per low-level iteration (see the planner's docs).
         restart_costs: the fleet cost after each restart.
         wall_time: seconds; info: planner-specific figures (timings, smoothing report).

@@ -86,5 +86,5 @@ def plan_sequentially(
         algorithm=planner.name,
         config=planner.describe(),
         seed=seed,
-        info={"frame": "sequential", "order": "lh"},
+        info={"frame": "sequential", "order": "lh", "separated": "flights"},
     )

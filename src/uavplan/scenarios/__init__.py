@@ -64,14 +64,33 @@ def load_builtin(name: str) -> Scenario:
 
 def resolve(name_or_path: str | Path) -> Scenario:
     """A built-in scenario by name, a scene of the RGG-PSO+ family by its name
-    (``rgg-n07-i042``, optionally ``-s<root seed>``), or else a scenario file by path.
+    (``rgg-n07-i042``, optionally ``-s<root seed>``), or else a scenario file by path; any of
+    them followed by ``@N`` (``ppswarm1@200``, ``city.yaml@40``): the same world with a
+    generated fleet of N UAVs (:func:`uavplan.world.fleet_tasks.with_fleet`, with the pattern
+    and seed of the world's own ``fleet`` block if it has one), named ``NAME@N``.
 
     Raises:
-        ScenarioFileError: neither a built-in name nor an existing file, or an invalid file.
+        ScenarioFileError: neither a built-in name nor an existing file, or an invalid file,
+            or a fleet of N UAVs that does not fit.
     """
     text = str(name_or_path)
     if text in builtin_names():
         return load_builtin(text)
+    at = re.fullmatch(r"(.+)@(\d+)", text)
+    if at and not Path(text).exists():
+        import dataclasses
+
+        from uavplan.world.fleet_tasks import with_fleet
+
+        base = resolve(at.group(1))
+        fleet = dict(base.metadata.get("fleet") or {})
+        try:
+            sc = with_fleet(base, int(at.group(2)), seed=int(fleet.get("seed", 0)),
+                            pattern=str(fleet.get("pattern", "crossing")),
+                            min_spacing=fleet.get("min_spacing"))  # fmt: skip
+        except ValueError as exc:
+            raise ScenarioFileError([f"{text}: {exc}"]) from None
+        return dataclasses.replace(sc, name=text)
     m = re.fullmatch(r"rgg-n(\d+)-i(\d+)(?:-s(\d+))?", text)
     if m:  # a scene of the RGG-PSO+ family, generated deterministically
         from uavplan.scenarios.generators import rgg_scenario

@@ -178,8 +178,8 @@ def verification_table(df: pd.DataFrame) -> pd.DataFrame:
     """The independent verifier's verdicts per scenario and configuration."""
     ok = df[df["status"] == "ok"].copy()
     ok["feasible_b"] = ok["feasible"].astype(bool)
-    ok["verified_b"] = ok["verified"].astype(bool)
-    ok["feasible_not_verified"] = ok["feasible_b"] & ~ok["verified_b"]
+    ok["verified_b"] = ok["verified"].astype("boolean")  # None: polylines not planned apart
+    ok["feasible_not_verified"] = (ok["feasible_b"] & ~ok["verified_b"]).fillna(False)
     agg: dict[str, Any] = {
         "runs": ("run_id", "size"),
         "feasible": ("feasible_b", "mean"),
