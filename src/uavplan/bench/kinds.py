@@ -119,8 +119,9 @@ def fleet_scenario(ref: str) -> Any:
 def run_fleet(spec: RunSpec) -> dict[str, Any]:
     """A fleet planner run, its plan checked by the independent verifier
     (:mod:`uavplan.verify`): the planned polylines as geometric paths where they were planned
-    apart (PPSwarm's criterion and mode: ``feasible``, ``verified``; None in-loop), the flown trajectories with the kinematic limits (the plan's
-    guarantee: ``flown_feasible``, ``flown_verified``) and informative smoothed paths if any."""
+    apart (PPSwarm's criterion and mode: ``feasible``, ``verified``; None in-loop), the flown
+    trajectories with the kinematic limits (the plan's guarantee: ``flown_feasible``,
+    ``flown_verified``) and informative smoothed paths if any."""
     from uavplan.io.plan_file import plan_document
     from uavplan.planners import get_planner
     from uavplan.planners.fleet_plan import FleetPlan
