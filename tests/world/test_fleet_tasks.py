@@ -12,9 +12,10 @@ import pytest
 
 from uavplan.io.scenario_file import load_scenario, save_scenario
 from uavplan.scenarios import list_builtin, resolve
-from uavplan.world import Scenario, Task
+from uavplan.world import AltitudeBand, Bounds, Cylinder, Scenario, Task
 from uavplan.world.fleet_tasks import (
     MIN_LENGTH_FRACTION,
+    fleet_layout,
     fleet_tasks,
     placement_box,
     with_fleet,
@@ -145,9 +146,13 @@ def test_crossing_on_a_tiny_example() -> None:
 # ---------------------------------------------------------------------------- failures
 def test_impossible_fleets_say_how_many_fit(scenes: dict[str, Scenario]) -> None:
     s = scenes["ppswarm4"]
-    with pytest.raises(ValueError, match=r"cannot place 3000 UAV starts .*placed \d+"):
-        fleet_tasks(s, 3000)
-    with pytest.raises(ValueError, match=r"at least 400 m apart.*placed \d+"):
+    with pytest.raises(
+        ValueError,
+        match=r"cannot place 3000 UAV starts .*placed \d+ in one altitude layer, and at most "
+        r"\d+ in 4 layers \(the altitude band holds up to 4 layers 30 m apart\)",
+    ):
+        fleet_tasks(s, 3000)  # about 740 a layer, 4 layers in the 100 m band
+    with pytest.raises(ValueError, match=r"at least 400 m apart.*placed \d+ .*has no room"):
         fleet_tasks(s, 40, min_spacing=400)
     with pytest.raises(ValueError, match=r"at most \d+ of them get a goal far enough"):
         fleet_tasks(s, 40, min_length_fraction=0.95)
@@ -243,3 +248,119 @@ def test_with_fleet_metadata_matches_a_loaded_fleet(scenes: dict[str, Scenario])
     assert again.tasks == s.tasks
     assert again.metadata["fleet"] == s.metadata["fleet"]
     assert again.metadata["spec"] == s.metadata["spec"]
+
+
+# ---------------------------------------------------------------------------- altitude layers
+def pair_distances(p: np.ndarray) -> np.ndarray:
+    """3-D distances between every two points (the diagonal inf)."""
+    d = np.sqrt(np.sum((p[:, None, :] - p[None, :, :]) ** 2, axis=2))
+    d[np.diag_indices(len(p))] = np.inf
+    return d
+
+
+def height_offsets(s: Scenario, p: np.ndarray) -> np.ndarray:
+    """z less the one-layer height (the band's middle above the ground), rounded to the mm."""
+    assert s.altitude is not None
+    return np.round(p[:, 2] - (np.asarray(s.ground(p[:, 0], p[:, 1])) + s.altitude.mid), 3)
+
+
+@pytest.fixture(scope="module")
+def thousand(scenes: dict[str, Scenario]) -> Scenario:
+    return with_fleet(scenes["ppswarm1"], 1000)  # one layer holds 916
+
+
+def test_thousand_uavs_in_altitude_layers(scenes: dict[str, Scenario], thousand: Scenario) -> None:
+    s, tasks = scenes["ppswarm1"], thousand.tasks
+    assert [t.id for t in tasks] == [f"uav{i}" for i in range(1000)]
+    assert fleet_layout(s, 1000) == (tasks, 2)  # the same seed gives the same tasks
+    assert fleet_tasks(s, 1000, seed=1) != tasks
+    assert thousand.metadata["fleet"]["layers"] == 2
+    starts, goals = ends(tasks)
+    for p in (starts, goals):
+        assert pair_distances(p).min() >= 30.0  # in 3-D
+        # two layers 30 m apart, centred on the one-layer height (150 m above ground)
+        assert set(height_offsets(s, p)) == {-15.0, 15.0}
+    diag = math.hypot(*(s.bounds.hi[:2] - s.bounds.lo[:2]))
+    assert np.hypot(*(goals[:, :2] - starts[:, :2]).T).min() >= MIN_LENGTH_FRACTION * diag
+    for t in tasks:
+        assert t.start_time == 0.0
+        for p in (t.start, t.goal):
+            assert s.point_problems(np.asarray(p)) == [], (t.id, p)
+
+
+def test_random_pattern_in_altitude_layers(scenes: dict[str, Scenario]) -> None:
+    s = scenes["ppswarm2"]
+    tasks, layers = fleet_layout(s, 1000, seed=3, pattern="random")  # one layer holds 860
+    assert layers == 2 and len(tasks) == 1000
+    starts, goals = ends(tasks)
+    for p in (starts, goals):
+        assert pair_distances(p).min() >= 30.0
+        assert set(height_offsets(s, p)) == {-15.0, 15.0}
+        assert all(s.point_problems(q) == [] for q in p)
+    diag = math.hypot(*(s.bounds.hi[:2] - s.bounds.lo[:2]))
+    assert np.hypot(*(goals[:, :2] - starts[:, :2]).T).min() >= MIN_LENGTH_FRACTION * diag
+
+
+def test_fleets_that_fit_in_one_layer_are_unchanged(scenes: dict[str, Scenario]) -> None:
+    """Coordinates recorded with the generator before altitude layers existed."""
+    s = scenes["ppswarm1"]
+    small = fleet_tasks(s, 40, seed=0)
+    assert small[0].start == (42.86381978058217, 143.85176412542938, 376.8607211659799)
+    assert small[20] == Task(
+        "uav20",
+        (902.6864252180575, 87.51194021438177, 430.6252165120451),
+        (770.2347134957964, 796.4288227426694, 322.6230596147225),
+    )
+    assert small[39].goal == (999.189433802865, 844.2746467866219, 364.9866443520017)
+    fleet = with_fleet(s, 500, seed=0)
+    assert "layers" not in fleet.metadata["fleet"]
+    large = fleet.tasks
+    assert large[0].start == (49.207605461769845, 134.41693566085695, 372.8794996499883)
+    assert large[250] == Task(
+        "uav250",
+        (143.4589944756945, 572.3857428648928, 316.388747294259),
+        (889.4488552760215, 545.1097063577341, 355.5433261352494),
+    )
+    assert large[499].goal == (589.0293622668883, 373.50513629179625, 361.5093011370084)
+
+
+def test_layers_keep_clear_of_finite_cylinders() -> None:
+    """A finite cylinder below the one-layer height blocks the lower layer (with S1) only."""
+    tower = Cylinder((200.0, 200.0), 60.0, z_min=0.0, z_max=125.0)
+    s = Scenario(
+        name="tower",
+        bounds=Bounds((0.0, 0.0, 0.0), (400.0, 400.0, 300.0)),
+        tasks=(Task("t", (10.0, 10.0, 150.0), (390.0, 390.0, 150.0)),),
+        cylinders=(tower,),
+        altitude=AltitudeBand(100.0, 200.0, "absolute"),
+    )
+    one = fleet_layout(s, 60, seed=0, pattern="random")
+    assert one.layers == 1
+    reach = tower.effective_radius + s.uav.s1
+    for n, heights in ((250, {135.0, 165.0}), (400, {120.0, 150.0, 180.0})):
+        tasks, layers = fleet_layout(s, n, seed=0, pattern="random")
+        assert layers == len(heights) and len(tasks) == n
+        starts, goals = ends(tasks)
+        for p in (starts, goals):
+            assert set(np.round(p[:, 2], 6)) == heights
+            assert pair_distances(p).min() >= 30.0
+            near = np.hypot(p[:, 0] - 200.0, p[:, 1] - 200.0) < reach
+            assert not np.any(near), "a node counts only if it is valid in every layer"
+            assert all(s.point_problems(q) == [] for q in p)
+    # in one layer (150 m, above the tower and its S1) the fleet may pass over it
+    s1, g1 = ends(one.tasks)
+    assert np.any(np.hypot(*(np.vstack([s1, g1])[:, :2] - 200.0).T) < reach)
+
+
+def test_a_2d_fleet_that_does_not_fit_still_raises() -> None:
+    s = resolve("simple2d")
+    with pytest.raises(ValueError, match=r"cannot place 60 UAV starts .*placed \d+ \(valid"):
+        fleet_tasks(s, 60, min_spacing=10.0)
+
+
+def test_layered_fleet_saves_and_loads_the_same(thousand: Scenario, tmp_path: Path) -> None:
+    assert thousand.metadata["spec"]["fleet"] == {"count": 1000, "pattern": "crossing", "seed": 0}
+    again = load_scenario(save_scenario(thousand, tmp_path / "big.yaml"))
+    assert again.tasks == thousand.tasks
+    assert again.metadata["fleet"] == thousand.metadata["fleet"]  # layers: 2 as well
+    assert resolve("ppswarm1@1000").tasks == thousand.tasks

@@ -1,4 +1,4 @@
-"""Tasks for a fleet of UAVs: reproducible starts and goals for 10 to 500 (and more) UAVs.
+"""Tasks for a fleet of UAVs: reproducible starts and goals for 10 to 1000 (and more) UAVs.
 
 PPSwarm (Meng et al. 2024, Drones 8:192, Sect. 5.1-5.2) plans 10-40 UAVs in each of four
 scenarios and up to 500 in scenario 1, but gives neither the start and goal positions nor how they
@@ -13,13 +13,31 @@ were chosen (its Fig. 4 only shows the obstacles). The choices below are ours.
 * **Height.** z is absolute: the middle of the altitude band (above the ground for a ``ground``
   band: ``ground(x, y) + (min + max) / 2``, 150 m above ground in the PPSwarm scenarios); without a
   band, halfway between the ground (or the bounds' lower z) and the bounds' upper z; no z in 2-D.
-* **Spacing.** Starts are pairwise at least ``min_spacing`` apart (default ``3 * uav.s2``, 30 m),
-  and so are goals (a start may be near another UAV's goal: every UAV leaves its start at t = 0,
-  before any other can reach its goal). Candidates are the nodes of a hexagonal lattice of constant
-  ``min_spacing`` (random rotation and offset), the densest packing, which is what lets 500 UAVs
-  fit on the 1045 m x 879 m map even around 20 cylinders; the chosen nodes are then jittered
-  (up to half the lattice constant, each move kept only if spacing and validity still hold), so
-  small fleets do not sit on a visible grid.
+  That is the height of a fleet in one layer; stacked layers lie above and below it (**Layers**).
+* **Spacing.** Starts are pairwise at least ``min_spacing`` apart in 3-D (default
+  ``3 * uav.s2``, 30 m), and so are goals (a start may be near another UAV's goal: every UAV
+  leaves its start at t = 0, before any other can reach its goal). Candidates are the nodes of a
+  hexagonal lattice of constant ``min_spacing`` (random rotation and offset) in x/y, the densest
+  packing, which is what lets 500 UAVs fit on the 1045 m x 879 m map even around 20 cylinders
+  (740-916 in one layer on the PPSwarm maps); in one layer the chosen nodes are then jittered (up
+  to half the lattice constant, each move kept only if the x/y spacing and validity still hold),
+  so small fleets do not sit on a visible grid.
+* **Layers.** In 3-D, when the starts (or the goals) do not fit in one layer, they are stacked
+  in the fewest altitude layers L >= 2 that hold them: the layers share the nodes of one lattice
+  placement and lie at the one-layer height (above) moved by ``(i - (L - 1) / 2) * step``,
+  i = 0 ... L-1, ``step = min_spacing * (1 + 1e-9) + 1e-9`` (a hair over the spacing, so
+  rounding never brings two points under it). Two positions at one node are then at least
+  ``step`` apart vertically, at two nodes at least the lattice constant apart in x/y. A node
+  counts only if it is valid at the height of every layer (bounds, terrain, altitude band, finite
+  cylinders with S1 checked at that height), and it gives all its layers: the positions in
+  selection order are the nodes in selection order, each with its layers lowest first (node
+  major), so a fleet of n takes the first ceil(n / L) nodes, the last one perhaps not full. L goes
+  up to as many layers ``step`` apart as the band's height (and the bounds' z range) holds (4 in
+  the 100-200 m band of the PPSwarm scenarios: 135/165 m, 120/150/180 m, 105/135/165/195 m above
+  ground); each count is tried on ``LATTICE_TRIES`` placements (drawn once), the first that holds
+  the fleet is taken. Layered positions are not jittered. Starts and goals get their layers
+  independently (in practice the same number); a side that fits in one layer stays as it was.
+  ``ppswarm1`` holds 1000 UAVs in 2 layers, 2000 in 3 and 3000 in 4; 2-D scenarios have one layer.
 * **Patterns.**
 
   - ``"crossing"``: starts along the west and south edges, goals along the east and north edges.
@@ -39,11 +57,13 @@ were chosen (its Fig. 4 only shows the obstacles). The choices below are ours.
   exists, the goal candidates grow (by half, in selection order) until one does. The jitter keeps
   the length rule too.
 * **Determinism.** Everything is drawn from ``np.random.default_rng(seed)``; the same scenario,
-  ``n_uavs``, seed, pattern and spacing always give the same tasks. Fleets of different sizes are
-  independent draws (not nested).
-* **Failure.** If fewer than ``n_uavs`` valid spaced positions exist (after 8 lattice placements),
-  or no pairing meets the length rule, a ``ValueError`` says how many could be placed (or
-  paired).
+  ``n_uavs``, seed, pattern and spacing always give the same tasks (the number of layers too, so a
+  saved ``fleet`` block regenerates a layered fleet). Fleets of different sizes are independent
+  draws (not nested). A fleet that fits in one layer is drawn exactly as before layers existed.
+* **Failure.** If fewer than ``n_uavs`` valid spaced positions exist (after 8 lattice placements;
+  in 3-D in one layer, and then in any number of layers the band holds, each on 8 more), or no
+  pairing meets the length rule, a ``ValueError`` says how many could be placed (in 3-D: in one
+  layer, and the most in how many layers, of how many the band holds) or paired.
 
 Task ids are ``uav0`` ... ``uav{n-1}``; every task leaves at t = 0.
 """
@@ -53,7 +73,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -69,7 +89,10 @@ __all__ = [
     "MIN_LENGTH_FRACTION",
     "PATTERNS",
     "SPACING_FACTOR",
+    "FleetLayout",
+    "fleet_layout",
     "fleet_tasks",
+    "layer_record",
     "placement_box",
     "with_fleet",
 ]
@@ -112,8 +135,11 @@ def placement_box(scenario: Scenario) -> tuple[FloatArray, FloatArray, float]:
 
 
 # ---------------------------------------------------------------------------- validity
-def _heights(scenario: Scenario, xy: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """(z, ground) of fleet positions at ``xy`` (n, 2), each (n,); zeros in 2-D."""
+def _heights(
+    scenario: Scenario, xy: FloatArray, dz: float | FloatArray = 0.0
+) -> tuple[FloatArray, FloatArray]:
+    """(z, ground) of fleet positions at ``xy`` (n, 2), each (n,); zeros in 2-D. ``dz`` (a number
+    or (n,)) moves z up from the one-layer height (an altitude layer's offset)."""
     n = xy.shape[0]
     if scenario.dim == 2:
         return np.zeros(n), np.zeros(n)
@@ -127,6 +153,8 @@ def _heights(scenario: Scenario, xy: FloatArray) -> tuple[FloatArray, FloatArray
         floor = ground if scenario.terrain is not None else np.full(n, scenario.bounds.lower[2])
         floor = np.maximum(floor, scenario.bounds.lower[2])
         z = 0.5 * (floor + scenario.bounds.upper[2])
+    if np.any(dz != 0):  # (only then: a fleet in one layer keeps its heights bit for bit)
+        z = z + dz
     return z, ground
 
 
@@ -142,11 +170,14 @@ def _segment_distance(xy: FloatArray, vertices: FloatArray) -> FloatArray:
     return np.asarray(np.min(np.hypot(d[..., 0], d[..., 1]), axis=1))
 
 
-def _valid(scenario: Scenario, xy: FloatArray, lo: FloatArray, hi: FloatArray) -> BoolArray:
-    """Which positions (n, 2) are valid fleet starts/goals (vectorized, conservative)."""
+def _valid(
+    scenario: Scenario, xy: FloatArray, lo: FloatArray, hi: FloatArray, dz: float = 0.0
+) -> BoolArray:
+    """Which positions (n, 2) are valid fleet starts/goals (vectorized, conservative), at the
+    one-layer height moved up by ``dz``."""
     s1 = scenario.uav.s1
     ok = np.all((xy >= lo) & (xy <= hi), axis=1)
-    z, ground = _heights(scenario, xy)
+    z, ground = _heights(scenario, xy, dz)
     for c in scenario.cylinders:
         d = np.hypot(xy[:, 0] - c.center[0], xy[:, 1] - c.center[1])
         reach = c.effective_radius + s1
@@ -250,11 +281,99 @@ def _candidates(
     return None, best
 
 
+def _layer_step(spacing: float) -> float:
+    """Height between two altitude layers: a hair over the spacing (as the lattice constant), so
+    that rounding never brings two points under it."""
+    return spacing * (1 + 1e-9) + 1e-9
+
+
+def _layer_offsets(layers: int, step: float) -> FloatArray:
+    """Height offsets of ``layers`` altitude layers ``step`` apart, centred on 0 (lowest first)."""
+    return (np.arange(layers, dtype=np.float64) - (layers - 1) / 2) * step
+
+
+def _max_layers(scenario: Scenario, step: float) -> int:
+    """Most altitude layers ``step`` apart that the band (and the bounds' z range) can hold."""
+    extent = scenario.bounds.upper[2] - scenario.bounds.lower[2]
+    if scenario.altitude is not None:
+        extent = min(extent, scenario.altitude.max - scenario.altitude.min)
+    return math.floor(extent / step) + 1
+
+
+@dataclasses.dataclass(frozen=True)
+class _Layered:
+    """Positions in stacked altitude layers, or (``xy`` None) the most that could be placed."""
+
+    xy: FloatArray | None  # (m, 2), node-major: every layer of a node, lowest first
+    dz: FloatArray | None  # (m,) height offset of each position
+    layers: int  # layers used; when xy is None, those of the most positions found
+    most: int  # positions placed (best lattice); m when xy is given
+    max_layers: int  # as many as the band holds
+
+
+def _layered_candidates(
+    scenario: Scenario,
+    n: int,
+    a: float,
+    step: float,
+    pattern: str,
+    goal: bool,
+    rng: np.random.Generator,
+) -> _Layered:
+    """Valid positions in the fewest altitude layers (>= 2) that hold ``n`` (3-D only).
+
+    The layers share the nodes of one lattice placement; a node counts if it is valid at the
+    height of every layer. Layer counts are tried from 2 up, each on the ``LATTICE_TRIES``
+    placements (drawn once) in turn; the nodes of the first that holds ``n`` come in selection
+    order, each with all its layers (lowest first).
+    """
+    lo, hi, band = placement_box(scenario)
+    l_max = _max_layers(scenario, step)
+    tries = [_lattice(lo, hi, a, rng) for _ in range(LATTICE_TRIES)] if l_max >= 2 else []
+    cache: dict[tuple[int, int], BoolArray] = {}
+
+    def valid_at(t: int, k: int) -> BoolArray:
+        """Nodes of placement ``t`` valid at the height offset ``k * step / 2``."""
+        if (t, k) not in cache:
+            cache[t, k] = _valid(scenario, tries[t], lo, hi, 0.5 * k * step)
+        return cache[t, k]
+
+    # every_layer[t][p]: nodes of placement t valid in every layer of the last count of parity p
+    # (L layers are at k = 1 - L, 3 - L, ..., L - 1; L + 2 layers add k = +-(L + 1))
+    every_layer = [[np.ones(nodes.shape[0], dtype=np.bool_), valid_at(t, 0)]
+                   for t, nodes in enumerate(tries)]  # fmt: skip
+    most, most_layers = 0, 2
+    for layers in range(2, l_max + 1):
+        p = layers % 2
+        for t in range(len(tries)):
+            ok = every_layer[t][p] & valid_at(t, layers - 1) & valid_at(t, 1 - layers)
+            every_layer[t][p] = ok
+            count = layers * int(np.count_nonzero(ok))
+            if count > most:
+                most, most_layers = count, layers
+            if count >= n:
+                nodes = tries[t][ok]
+                keys = _keys(pattern, nodes, lo, hi, band, goal, rng)
+                nodes = nodes[np.argsort(keys, kind="stable")]
+                offsets = _layer_offsets(layers, step)
+                return _Layered(
+                    np.repeat(nodes, layers, axis=0),
+                    np.tile(offsets, nodes.shape[0]),
+                    layers,
+                    count,
+                    l_max,
+                )
+        if not any(np.any(m) for masks in every_layer for m in masks):
+            break  # no node is valid in this many layers: more layers cannot help
+    return _Layered(None, None, most_layers, most, l_max)
+
+
 def _pair(
     starts: FloatArray, pool: FloatArray, n: int, min_len: float, rng: np.random.Generator
-) -> tuple[FloatArray | None, int]:
-    """Goals for ``starts`` from the first nodes of ``pool`` (in order), paired at random so that
-    every start-goal distance is >= ``min_len``; or ``(None, most pairs that are long enough)``.
+) -> tuple[NDArray[np.intp] | None, int]:
+    """Goals for ``starts`` from the first nodes of ``pool`` (in order; their indices in
+    ``pool``), paired at random so that every start-goal distance (x/y) is >= ``min_len``; or
+    ``(None, most pairs that are long enough)``.
 
     The pool grows (by half) until the pairing works: a uniformly random-cost assignment between
     the starts and the pool, with long-enough pairs always preferred.
@@ -270,7 +389,7 @@ def _pair(
         rows, cols = linear_sum_assignment(cost)
         bad = int(np.count_nonzero(short[rows, cols]))
         if not bad:
-            return np.asarray(cand[cols[np.argsort(rows)]]), n
+            return np.asarray(cols[np.argsort(rows)]), n
         if m == pool.shape[0]:
             return None, n - bad
         m = min(pool.shape[0], m + max(1, m // 2))
@@ -307,6 +426,15 @@ def _jitter(
             pts[i] = cand[int(np.argmax(ok))]
 
 
+class FleetLayout(NamedTuple):
+    """What :func:`fleet_layout` makes: the tasks and the altitude layers they use."""
+
+    tasks: tuple[Task, ...]
+    #: Altitude layers of the starts or of the goals, whichever has more (1: the fleet fits in
+    #: one layer; always 1 in 2-D).
+    layers: int
+
+
 def fleet_tasks(
     scenario: Scenario,
     n_uavs: int,
@@ -326,15 +454,37 @@ def fleet_tasks(
             edges, paired at random so the lines cross) or ``"random"`` (anywhere).
         min_spacing: least distance between two starts, and between two goals, metres; default
             ``3 * uav.s2``.
-        min_length_fraction: least straight start-goal length, as a fraction of the bounds' x/y
-            diagonal.
+        min_length_fraction: least straight start-goal length (x/y), as a fraction of the
+            bounds' x/y diagonal.
 
     Returns:
-        The tasks, absolute z (see the module docstring), all leaving at t = 0.
+        The tasks, absolute z (see the module docstring: in 3-D a fleet too large for one layer
+        of positions is stacked in altitude layers), all leaving at t = 0.
 
     Raises:
-        ValueError: bad arguments, or the fleet does not fit (the message says how many fit).
+        ValueError: bad arguments, or the fleet does not fit (the message says how many fit, and
+            in 3-D with how many layers).
     """
+    return fleet_layout(
+        scenario,
+        n_uavs,
+        seed,
+        pattern,
+        min_spacing,
+        min_length_fraction=min_length_fraction,
+    ).tasks
+
+
+def fleet_layout(
+    scenario: Scenario,
+    n_uavs: int,
+    seed: int = 0,
+    pattern: str = "crossing",
+    min_spacing: float | None = None,
+    *,
+    min_length_fraction: float = MIN_LENGTH_FRACTION,
+) -> FleetLayout:
+    """:func:`fleet_tasks` (the same arguments) with the number of altitude layers it used."""
     if isinstance(n_uavs, bool) or not isinstance(n_uavs, int | np.integer) or n_uavs < 1:
         raise ValueError(f"n_uavs must be a positive integer, got {n_uavs!r}")
     n = int(n_uavs)
@@ -352,37 +502,61 @@ def fleet_tasks(
     rng = np.random.default_rng(int(seed))
     where = f"scenario {scenario.name!r}"
     a = _lattice_constant(scenario, spacing)
-    pools: list[FloatArray] = []
+    step = _layer_step(spacing)
+    # per side (starts, goals): positions in selection order, their layer offsets, layer count
+    sides: list[tuple[FloatArray, FloatArray | None, int]] = []
     for goal in (False, True):
         pool, count = _candidates(scenario, n, a, pattern, goal, rng)
-        if pool is None:
-            what = "goals" if goal else "starts"
-            raise ValueError(
-                f"cannot place {n} UAV {what} at least {spacing:g} m apart in {where}: placed "
-                f"{count} (valid positions are at least S1 = {scenario.uav.s1:g} m from every "
-                "obstacle and inside the bounds less the edge margin); use fewer UAVs or a "
-                "smaller min_spacing"
-            )
-        pools.append(pool)
-    starts = pools[0][:n].copy()
+        if pool is not None:  # one layer: as it always was
+            sides.append((pool, None, 1))
+            continue
+        placed = f"{count}"
+        if scenario.dim == 3:
+            stacked = _layered_candidates(scenario, n, a, step, pattern, goal, rng)
+            if stacked.xy is not None and stacked.dz is not None:
+                sides.append((stacked.xy, stacked.dz, stacked.layers))
+                continue
+            if stacked.max_layers < 2:
+                placed += (
+                    " in one altitude layer, and the altitude band (and the bounds' z range) "
+                    f"has no room for layers {spacing:g} m apart"
+                )
+            else:
+                placed += (
+                    f" in one altitude layer, and at most {stacked.most} in {stacked.layers} "
+                    f"layers (the altitude band holds up to {stacked.max_layers} layers "
+                    f"{spacing:g} m apart)"
+                )
+        what = "goals" if goal else "starts"
+        raise ValueError(
+            f"cannot place {n} UAV {what} at least {spacing:g} m apart in {where}: placed "
+            f"{placed} (valid positions are at least S1 = {scenario.uav.s1:g} m from every "
+            "obstacle and inside the bounds less the edge margin); use fewer UAVs or a "
+            "smaller min_spacing"
+        )
+    (start_pool, start_dz, start_layers), (goal_pool, goal_dz, goal_layers) = sides
+    starts = start_pool[:n].copy()
 
     # Goals paired at random with the starts, among the pairs that are long enough.
     diag = float(np.hypot(*(scenario.bounds.hi[:2] - scenario.bounds.lo[:2])))
     min_len = min_length_fraction * diag
-    goals, paired = _pair(starts, pools[1], n, min_len, rng)
-    if goals is None:
+    chosen, paired = _pair(starts, goal_pool, n, min_len, rng)
+    if chosen is None:
         raise ValueError(
             f"cannot pair {n} UAV starts and goals in {where} so that every straight start-goal "
             f"line is at least {min_len:.0f} m long ({min_length_fraction:g} of the x/y "
             f"diagonal): all {n} starts placed, but at most {paired} of them get a goal far "
             "enough; use fewer UAVs or a smaller min_spacing"
         )
-    goals = goals.copy()
-    _jitter(scenario, starts, goals, spacing, min_len, a, rng)
-    _jitter(scenario, goals, starts, spacing, min_len, a, rng)
+    goals = goal_pool[chosen].copy()
+    # Jitter in one layer only (its spacing check is in x/y); stacked layers stay on the lattice.
+    if start_layers == 1:
+        _jitter(scenario, starts, goals, spacing, min_len, a, rng)
+    if goal_layers == 1:
+        _jitter(scenario, goals, starts, spacing, min_len, a, rng)
 
-    z_s, _ = _heights(scenario, starts)
-    z_g, _ = _heights(scenario, goals)
+    z_s, _ = _heights(scenario, starts, 0.0 if start_dz is None else start_dz[:n])
+    z_g, _ = _heights(scenario, goals, 0.0 if goal_dz is None else goal_dz[chosen])
     tasks = tuple(
         Task(f"uav{i}", _point(scenario, starts[i], z_s[i]), _point(scenario, goals[i], z_g[i]))
         for i in range(n)
@@ -392,7 +566,7 @@ def fleet_tasks(
             problems = scenario.point_problems(np.asarray(p))
             if problems:  # pragma: no cover - _valid is stricter than point_problems
                 raise AssertionError(f"{t.id} {which} {p}: {'; '.join(problems)}")
-    return tasks
+    return FleetLayout(tasks, max(start_layers, goal_layers))
 
 
 def with_fleet(
@@ -405,19 +579,29 @@ def with_fleet(
     """The same scenario with a generated fleet of ``n_uavs`` tasks (see :func:`fleet_tasks`).
 
     ``metadata["fleet"]`` records the fleet parameters (as a loaded fleet file does: ``count``,
-    ``pattern``, ``seed``, ``min_spacing``, None for the default); a file-level spec kept in
+    ``pattern``, ``seed``, ``min_spacing``, None for the default; and ``layers``, the altitude
+    layers used, only when more than one: :func:`layer_record`); a file-level spec kept in
     ``metadata["spec"]`` (a scenario loaded from a file) gets the ``fleet`` block in place of its
-    ``tasks``, so saving the new scenario writes a file that loads to the same tasks.
+    ``tasks`` (never ``layers``: the parameters alone regenerate the same tasks), so saving the
+    new scenario writes a file that loads to the same tasks.
     """
-    tasks = fleet_tasks(scenario, n_uavs, seed=seed, pattern=pattern, min_spacing=min_spacing)
+    tasks, layers = fleet_layout(
+        scenario, n_uavs, seed=seed, pattern=pattern, min_spacing=min_spacing
+    )
     fleet: dict[str, Any] = {"count": int(n_uavs), "pattern": pattern, "seed": int(seed)}
     if min_spacing is not None:
         fleet["min_spacing"] = float(min_spacing)
     metadata = dict(scenario.metadata)
-    metadata["fleet"] = {**fleet, "min_spacing": fleet.get("min_spacing")}
+    metadata["fleet"] = {**fleet, "min_spacing": fleet.get("min_spacing"), **layer_record(layers)}
     spec = metadata.get("spec")
     if isinstance(spec, Mapping):
         new_spec = {k: v for k, v in spec.items() if k not in ("tasks", "fleet")}
         new_spec["fleet"] = dict(fleet)
         metadata["spec"] = new_spec
     return dataclasses.replace(scenario, tasks=tasks, metadata=metadata)
+
+
+def layer_record(layers: int) -> dict[str, int]:
+    """The ``metadata["fleet"]`` entry for a fleet in ``layers`` altitude layers: ``{"layers":
+    layers}`` when more than one, else nothing (so a one-layer fleet's record is unchanged)."""
+    return {"layers": int(layers)} if layers > 1 else {}

@@ -34,7 +34,7 @@ from uavplan.world import (
     Terrain,
     UncertainArea,
 )
-from uavplan.world.fleet_tasks import fleet_tasks
+from uavplan.world.fleet_tasks import fleet_layout, layer_record
 from uavplan.world.terrain import TerrainError
 
 #: Headroom above the highest terrain for the default z bound when there is no altitude band, m.
@@ -340,7 +340,7 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
 def _with_generated_fleet(scenario: Scenario, fleet: FleetSpec, problems: Problems) -> Scenario:
     """The scenario with the tasks its ``fleet`` block generates (every other check passed)."""
     try:
-        tasks = fleet_tasks(
+        tasks, layers = fleet_layout(
             scenario,
             fleet.count,
             seed=fleet.seed,
@@ -351,5 +351,5 @@ def _with_generated_fleet(scenario: Scenario, fleet: FleetSpec, problems: Proble
         problems.add(("fleet",), str(exc))
         problems.raise_if_any()
         raise  # pragma: no cover
-    scenario.metadata["fleet"] = fleet.model_dump()
+    scenario.metadata["fleet"] = {**fleet.model_dump(), **layer_record(layers)}
     return dataclasses.replace(scenario, tasks=tasks)
