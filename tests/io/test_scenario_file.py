@@ -38,7 +38,9 @@ from uavplan.world import (
 )
 
 BUILTINS = [
+    "dense",
     "jacksboro",
+    "open",
     "ppswarm1",
     "ppswarm2",
     "ppswarm3",

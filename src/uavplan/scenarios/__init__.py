@@ -4,6 +4,10 @@
 * ``simple2d``: a small 2-D scene with circles and a non-convex polygon.
 * ``jacksboro``: a 3-D scene on the Jacksboro fault DEM with finite cylinders and areas.
 * ``topobathy``: a long sea-to-mountains mission on the Pacific Northwest DEM.
+* ``ppswarm1`` ... ``ppswarm4``: the PPSwarm scenarios (SPSO terrain, 6-20 cylinders, 40 UAVs).
+* ``open``: the PPSwarm map with no terrain and no obstacles (large fleets, the crowd alone).
+* ``dense``: the PPSwarm setup with 40 generated cylinders and narrow passages
+  (:func:`uavplan.scenarios.generators.dense_cylinders` reproduces its cylinders).
 
 :func:`resolve` takes a built-in name or a scenario file path.
 """

@@ -44,6 +44,23 @@ file per scene (``<name>.yaml``) and a sidecar ``references.csv`` with columns `
 n_obstacles, index, root_seed, reference_length, reference_path`` (the path as JSON);
 :func:`read_references` reads it back and :func:`load_family` loads the files with the references
 put back into ``metadata``. The length also appears in each file's description, for people.
+
+The dense cylinder field. :func:`dense_cylinders` draws the cylinders of the ``dense`` built-in
+(``dense.yaml``, the SPSO map with a dense field of infinitely tall cylinders for large-fleet
+experiments); the built-in is the YAML file, which ``dense_cylinders()`` (its defaults, seed
+``DENSE_SEED``) reproduces exactly. Our choices:
+
+* **Field.** The cylinders (with S1 beyond their edge) keep inside the x/y bounds shrunk by the
+  fleet edge margin ``max(turn_radius, s1)`` and then by the ``"crossing"`` band depth
+  (``BAND_FRACTION`` of the shorter side, :func:`uavplan.world.fleet_tasks.placement_box`), so
+  the fleet start and goal bands along the edges stay free.
+* **Draw.** ``n`` radii ``U(20, 50)`` m, rounded to whole metres and placed largest first (a
+  denser packing than in drawing order); each centre is uniform in the field (rounded to 0.1 m
+  *before* any check, so the file holds exactly the checked values), the first of ``DENSE_TRIES``
+  candidates (drawn at once) whose edge gap to every placed cylinder is at least ``min_gap``
+  (default ``1.5 * S1`` = 22.5 m); a draw that cannot place all starts over (same random stream,
+  continued), up to ``DENSE_ATTEMPTS`` draws.
+* At this density many neighbours end up 22.5-45 m (1.5-3 S1) apart: narrow passages.
 """
 
 from __future__ import annotations
@@ -59,7 +76,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.problems.path_problem import PathProblem
-from uavplan.world.obstacles import Circle, Polygon
+from uavplan.world.fleet_tasks import BAND_FRACTION
+from uavplan.world.obstacles import Circle, Cylinder, Polygon
 from uavplan.world.scenario import Bounds, Scenario, Task
 from uavplan.world.visibility import DEFAULT_CIRCLE_SIDES, shortest_path
 
@@ -68,6 +86,10 @@ FloatArray = NDArray[np.float64]
 __all__ = [
     "CIRCLE_SIDES",
     "CLEARANCE",
+    "DENSE_BOUNDS",
+    "DENSE_COUNT",
+    "DENSE_RADII",
+    "DENSE_SEED",
     "GAP",
     "GOAL_BOX",
     "KIND_PROBS",
@@ -78,6 +100,8 @@ __all__ = [
     "SETTINGS",
     "SIZE",
     "START_BOX",
+    "dense_cylinders",
+    "dense_field_box",
     "export_family",
     "family_names",
     "load_family",
@@ -392,3 +416,77 @@ def load_family(folder: str | Path) -> Iterator[Scenario]:
         sc = load_scenario(Path(folder) / f"{name}.yaml")
         sc.metadata.update(ref)
         yield sc
+
+
+# ---------------------------------------------------------------------------- dense field
+#: Seed, cylinder count, radius range (m) and x/y bounds (m, the SPSO map) of ``dense``.
+DENSE_SEED = 0
+DENSE_COUNT = 40
+DENSE_RADII = (20.0, 50.0)
+DENSE_BOUNDS = ((1.0, 1.0), (1045.0, 879.0))
+#: Centre candidates per cylinder, and draws, before :func:`dense_cylinders` gives up.
+DENSE_TRIES = 5000
+DENSE_ATTEMPTS = 100
+
+
+def dense_field_box(
+    bounds: tuple[tuple[float, float], tuple[float, float]] = DENSE_BOUNDS,
+    s1: float = 15.0,
+    turn_radius: float = 20.0,
+) -> tuple[FloatArray, FloatArray]:
+    """``(lower [x, y], upper [x, y])`` that cylinder edges, grown by S1, must keep inside so that
+    the fleet start and goal bands stay free (the placement box of
+    :func:`uavplan.world.fleet_tasks.placement_box` shrunk by its band depth)."""
+    edge = max(turn_radius, s1)
+    lo = np.asarray(bounds[0], dtype=np.float64) + edge
+    hi = np.asarray(bounds[1], dtype=np.float64) - edge
+    band = BAND_FRACTION * float(np.min(hi - lo))
+    return lo + band, hi - band
+
+
+def dense_cylinders(
+    seed: int = DENSE_SEED,
+    n: int = DENSE_COUNT,
+    *,
+    bounds: tuple[tuple[float, float], tuple[float, float]] = DENSE_BOUNDS,
+    s1: float = 15.0,
+    turn_radius: float = 20.0,
+    radius_range: tuple[float, float] = DENSE_RADII,
+    min_gap: float | None = None,
+) -> tuple[Cylinder, ...]:
+    """``n`` infinitely tall cylinders of a dense field (see the module notes), largest first.
+
+    Deterministic in its arguments; the defaults give the ``dense`` built-in's cylinders.
+    ``min_gap`` is the least distance between two cylinder edges (default ``1.5 * s1``).
+
+    Raises:
+        ValueError: bad arguments, or no draw in ``DENSE_ATTEMPTS`` places all ``n``.
+    """
+    if n < 1:
+        raise ValueError(f"n must be >= 1, got {n}")
+    r_lo, r_hi = radius_range
+    if not 0 < r_lo <= r_hi:
+        raise ValueError(f"radius_range must have 0 < low <= high, got {radius_range}")
+    gap = 1.5 * s1 if min_gap is None else float(min_gap)
+    lo, hi = dense_field_box(bounds, s1, turn_radius)
+    if np.any(hi - lo < 2 * (s1 + r_hi)):
+        raise ValueError(f"the field {lo.tolist()}..{hi.tolist()} is too small for the radii")
+    rng = np.random.default_rng(seed)
+    for _ in range(DENSE_ATTEMPTS):
+        radii = np.sort(np.round(rng.uniform(r_lo, r_hi, n)))[::-1]
+        centers = np.zeros((0, 2))
+        for r in radii:
+            # all tries at once; the first that keeps the gap (and, rounded, the field) wins
+            c = np.round(rng.uniform(lo + s1 + r, hi - s1 - r, (DENSE_TRIES, 2)), 1)
+            ok = np.all((c - r - s1 >= lo) & (c + r + s1 <= hi), axis=1)
+            d = np.hypot(c[:, None, 0] - centers[None, :, 0], c[:, None, 1] - centers[None, :, 1])
+            ok &= np.all(d - radii[None, : centers.shape[0]] - r >= gap, axis=1)
+            if not np.any(ok):
+                break
+            centers = np.vstack([centers, c[int(np.argmax(ok))]])
+        if centers.shape[0] == n:
+            return tuple(
+                Cylinder((float(c[0]), float(c[1])), float(r))
+                for c, r in zip(centers, radii, strict=True)
+            )
+    raise ValueError(f"cannot place {n} cylinders {gap:g} m apart in {DENSE_ATTEMPTS} draws")
