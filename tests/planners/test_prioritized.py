@@ -268,7 +268,7 @@ def test_departure_delay_retries_until_a_later_take_off_is_clear(monkeypatch, fl
 
     monkeypatch.setattr(PrioritizedPlanner, "_low_level", blocked_until_10s)
     opts = {**SMALL, "n_restart": 1, "flight": "none", "delay_step": 5.0}
-    plain = get_planner("ppswarm", **opts).plan_fleet(fleet3, seed=0)
+    plain = get_planner("ppswarm", **opts, max_delays=0).plan_fleet(fleet3, seed=0)
     assert not plain.planned_feasible and plain.info["delayed"] == {}
     calls.clear()
     waited = get_planner("ppswarm", **opts, max_delays=3).plan_fleet(fleet3, seed=0)
@@ -396,3 +396,38 @@ def test_2d_fleets_fly_what_they_plan(planner: str, turn_radius: float) -> None:
     assert sum(r.flown_feasible for r in fp.results) >= 3
     for r in fp.results:
         assert np.asarray(r.flown_trajectory()[0]).shape[1] == 2
+
+
+def test_blocked_flight_waits_on_the_ground_before_replanning(monkeypatch, fleet3) -> None:
+    """In-loop, a UAV whose flights are all blocked tries, for each later take-off, first its
+    best candidates re-timed (no new low-level run), then a re-plan from there; the wait is
+    what the plan declares and the verifier checks."""
+    import uavplan.planners.prioritized as pr
+
+    real_fly, real_low = pr.fly, pr.PrioritizedPlanner._low_level
+    lows: list[float] = []
+
+    def blocked_fly(scenario, task, waypoints, times, *a, **k):  # type: ignore[no-untyped-def]
+        f = real_fly(scenario, task, waypoints, times, *a, **k)
+        if task.id == "uav1" and float(np.asarray(times)[0]) < 10.0:
+            f = dataclasses.replace(f, violations=("separation: blocked by the test",))
+        return f
+
+    def counting_low(self, scenario, task, *args):  # type: ignore[no-untyped-def]
+        lows.append(task.start_time)
+        return real_low(self, scenario, task, *args)
+
+    monkeypatch.setattr(pr, "fly", blocked_fly)
+    monkeypatch.setattr(pr.PrioritizedPlanner, "_low_level", counting_low)
+    r = get_planner("ppswarm", **{**SMALL, "n_restart": 1}, delay_step=5.0).plan_fleet(
+        fleet3, seed=0
+    )
+    u1 = next(x for x in r.results if x.uav_id == "uav1")
+    assert r.info["delayed"] == {"uav1": 10.0} and u1.info["rescue"] == "wait"
+    # 5 s: the candidates re-timed are still blocked, and so is a re-plan from 5 s; 10 s:
+    # the candidates re-timed pass, with no new low-level run
+    assert sorted(lows) == [0.0, 0.0, 0.0, 5.0]
+    assert u1.times[0] == pytest.approx(10.0) and u1.flown_trajectory()[1][0] == pytest.approx(10.0)
+    assert r.info["flights"]["rescue"]["wait"] == 1
+    d = plan_document(FleetPlan(fleet3, "ppswarm", {}, 0, r.results, r))
+    assert r.feasible and verify_plan(d, fleet3).ok

@@ -76,8 +76,35 @@ def git_commit() -> str | None:
         return None
 
 
+def _status_mb(field: str) -> float | None:
+    """A ``/proc/self/status`` memory field (``VmRSS``, ``VmHWM``) in MiB; None off Linux."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith(field + ":"):
+                    return int(line.split()[1]) / 1024.0
+    except (OSError, ValueError):
+        pass
+    return None
+
+
+def _reset_peak_rss() -> bool:
+    """Reset this process's peak resident set size (Linux >= 4.0: ``clear_refs`` 5)."""
+    try:
+        with open("/proc/self/clear_refs", "w") as f:
+            f.write("5")
+        return True
+    except OSError:
+        return False
+
+
 def execute_run(spec: RunSpec) -> dict[str, Any]:
-    """Run ``spec`` and return its row (never raises for errors inside the run)."""
+    """Run ``spec`` and return its row (never raises for errors inside the run). The row's
+    ``peak_rss_mb`` is the worker process's peak resident memory during the run (the
+    interpreter and libraries included; ``rss_before_mb`` is what it held at the start), None
+    where the operating system cannot say."""
+    peak_ok = _reset_peak_rss()
+    rss0 = _status_mb("VmRSS")
     start = time.time()
     t0 = time.perf_counter()
     row: dict[str, Any] = {
@@ -108,6 +135,8 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
             history=None,
         )
     row["wall_time"] = time.perf_counter() - t0
+    row["peak_rss_mb"] = _status_mb("VmHWM") if peak_ok else None
+    row["rss_before_mb"] = rss0
     row["start_time"] = start
     row["end_time"] = time.time()
     row.update(version=__version__, git_commit=git_commit(), **host_info())

@@ -166,6 +166,8 @@ def run_fleet(spec: RunSpec) -> dict[str, Any]:
         "flown_smoothed": int(sum(r.flown_kind == "smoothed" for r in fr.results)),
         "flown_length": flown_length,
         "flown_min_separation": float(rep_f.min_separation),
+        "n_delayed": len(fr.info.get("delayed") or {}),
+        **{f"rescue_{k}": int(v) for k, v in fr.info.get("flights", {}).get("rescue", {}).items()},
         "smoothed_verified": None if rep_s is None else bool(rep_s.ok),
         "smoothed_violations": None if rep_s is None else len(rep_s.violations),
         "smoothed_not_clear": int(sum(r.smoothed_ok is False for r in fr.results)),

@@ -160,17 +160,23 @@ def candidate_flights(
     timing: str = "planned",
     step: float = DEFAULT_STEP,
     shortcut: MotionValidator | None = None,
+    cruise: float | None = None,
 ) -> list[Flight]:
     """The flights worth checking for a planned polyline (see the module docstring), not yet
     checked (``violations`` empty). ``shortcut``: the validator that allows shortcuts by line
-    of sight (None: no shortcut variants)."""
+    of sight (None: no shortcut variants). ``cruise``: the speed of ``"constant"`` timing
+    (default: the UAV's cruise speed; a slower one flies the same curves later)."""
     uav = scenario.uav
     wp = np.asarray(waypoints, dtype=np.float64)
     wt = np.asarray(times, dtype=np.float64)
-    if uav.turn_radius <= 0:
-        return [Flight(wp, wt, "polyline", "polyline", ())]
     if timing not in TIMINGS:
         raise ValueError(f"timing must be one of {TIMINGS}, got {timing!r}")
+    v = uav.speed if cruise is None else float(cruise)
+    if uav.turn_radius <= 0:
+        if timing == "constant" and cruise is not None:  # the polyline, re-timed
+            seg = np.linalg.norm(np.diff(wp, axis=0), axis=1)
+            wt = wt[0] + np.concatenate([[0.0], np.cumsum(seg)]) / v
+        return [Flight(wp, wt, "polyline", "polyline", ())]
     h = min(float(step), uav.turn_radius / 4.0)
     bases: list[tuple[FloatArray, FloatArray, str]] = [(wp, wt, "")]
     if shortcut is not None and timing == "planned":
@@ -193,7 +199,7 @@ def candidate_flights(
         if tp.shape != sm.waypoint_index.shape:  # not for distinct waypoints; be safe
             tp = np.concatenate([[t[0]], t[0] + np.cumsum(sm.piece_lengths) / uav.speed])
         tk = pose_times(
-            sm.piece_lengths, _sample_lengths(sm), tp, uav.min_speed, uav.v_max, uav.speed, timing
+            sm.piece_lengths, _sample_lengths(sm), tp, uav.min_speed, uav.v_max, v, timing
         )
         late = float(max(0.0, np.max(tk - tp)))
         pts = sm.points if dim == 3 else sm.points[:, :2]
@@ -233,16 +239,19 @@ def fly(
     reservations: ReservationTable | None = None,
     timing: str = "planned",
     step: float = DEFAULT_STEP,
+    cruise: float | None = None,
 ) -> Flight:
     """The flight of a planned polyline (see the module docstring), checked against the world,
     the ``reservations`` and the UAV's kinematic limits. The task's start time is the
-    polyline's first time (a delayed take-off keeps its delay)."""
+    polyline's first time (a delayed take-off keeps its delay). ``cruise``: fly at this
+    constant speed instead (``timing`` is then ``"constant"``)."""
     t = dataclasses.replace(task, start_time=float(np.asarray(times)[0]))
     validator = flight_validator(scenario, t, reservations)
-    timing = "constant" if scenario.moving_obstacles else timing
+    timing = "constant" if scenario.moving_obstacles or cruise is not None else timing
     short = flight_validator(scenario, t, reservations, kinematics=False)
     flights = check_flights(
-        validator, candidate_flights(scenario, waypoints, times, timing, step, shortcut=short)
+        validator,
+        candidate_flights(scenario, waypoints, times, timing, step, shortcut=short, cruise=cruise),
     )
     best = best_flight(flights)
     if best is None:  # no variant could be built: the polyline, checked as it is

@@ -59,6 +59,7 @@ Choices where the paper is silent or vague (all parameters of :class:`Prioritize
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, replace
 from typing import Any
@@ -75,7 +76,7 @@ from uavplan.planners.options import FleetPlannerConfig, PlannerError, option
 from uavplan.planners.results import PlanResult, make_result
 from uavplan.planners.run import ProgressCallback
 from uavplan.problems.encoding import ENCODINGS, CartesianEncoding
-from uavplan.problems.path_problem import PRESETS
+from uavplan.problems.path_problem import PRESETS, PathProblem
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 
@@ -85,6 +86,10 @@ ORDERS = ("lh", "sh", "rnd")
 SMOOTH_TIMINGS = TIMINGS
 FLIGHTS = ("in-loop", "after", "none")
 SEEDINGS = ("rrt-star", "uniform")
+
+
+#: How priorities change after a restart (``restart_order``).
+RESTART_ORDERS = ("shuffle", "failed-first")
 
 
 @dataclass(frozen=True)
@@ -119,7 +124,11 @@ class PrioritizedConfig(FleetPlannerConfig):
     constraints: str = option(
         "inf", "how violations reach the optimizer (Sect. 2: infinity)", choices=RULES
     )
-    max_delays: int = option(0, "take-off delays a blocked UAV may try (ours; 0: none)", low=0)
+    max_delays: int = option(
+        12, "take-off delays a UAV whose flight (in-loop; else polyline) is blocked may try: "
+        "first its candidates re-timed, then re-planned from the later start (ours; the "
+        "paper's: 0)", low=0
+    )  # fmt: skip
     delay_step: float = option(5.0, "one take-off delay, s", low=0, low_open=True)
     flight: str = option(
         "in-loop",
@@ -136,6 +145,14 @@ class PrioritizedConfig(FleetPlannerConfig):
     smooth_timing: str = option("planned", "smoothed flights keep the planned times or fly at "
                                 "constant speed (the paper's)", choices=SMOOTH_TIMINGS)  # fmt: skip
     separation_margin: float = option(0.0, "plan this much wider than S2, m (ours)", low=0)
+    speed_steps: int = option(
+        2, "in-loop: slower constant speeds tried, evenly from cruise down to max(min_speed, "
+        "cruise / 2), for a UAV whose flights all fail (ours; 0: none)", low=0
+    )  # fmt: skip
+    restart_order: str = option(
+        "shuffle", "priorities after a restart: shuffled (Alg. 3 line 13) or the UAVs that "
+        "failed in it first, the rest shuffled (ours)", choices=RESTART_ORDERS
+    )  # fmt: skip
 
 
 def polyline_with_n_vertices(path: FloatArray, n: int) -> FloatArray:
@@ -275,6 +292,14 @@ class PrioritizedPlanner(FleetPlanner):
                     if ok(res):
                         break
                     later = replace(task, start_time=task.start_time + k * cfg.delay_step)
+                    if in_loop:  # first the same candidates, taking off later (cheap)
+                        res2 = self._in_loop_flight(
+                            scenario, table, self._waited(scenario, later, table, cands[:3])
+                        )
+                        if ok(res2):
+                            res = replace(res2, info={**res2.info, "rescue": "wait"})
+                            delayed[task.id] = later.start_time - task.start_time
+                            break
                     res2, pop2, cands2 = self._low_level(
                         scenario, later, table, current[m], last_pop[m], r, n_iter, n_free, rng
                     )
@@ -283,6 +308,7 @@ class PrioritizedPlanner(FleetPlanner):
                         res2 = self._in_loop_flight(scenario, table, cands2)
                     if ok(res2):
                         res, pop = res2, pop2
+                        res = replace(res, info={**res.info, "rescue": "delay"})
                         delayed[task.id] = later.start_time - task.start_time
                 results[m] = res
                 last_pop[m] = pop
@@ -304,6 +330,11 @@ class PrioritizedPlanner(FleetPlanner):
             if stop:
                 break
             priority = list(order_rng.permutation(M))  # line 13: shuffle
+            if cfg.restart_order == "failed-first":  # ours: the blocked UAVs plan first
+                failed = {m for m, x in enumerate(results) if x is not None and not ok(x)}
+                priority = [m for m in priority if m in failed] + [
+                    m for m in priority if m not in failed
+                ]
         assert best is not None
         (n_bad, total), chosen, prio, best_restart, delays = best
         results_t = tuple(chosen)
@@ -434,9 +465,10 @@ class PrioritizedPlanner(FleetPlanner):
         assert opt.best_x is not None
 
         def result(path: FloatArray) -> PlanResult:
-            return make_result(
+            return _candidate(
                 problem,
                 path,
+                cfg.flight == "in-loop",
                 algorithm=self.name,
                 history=opt.history,
                 evaluations=opt.evaluations,
@@ -461,28 +493,75 @@ class PrioritizedPlanner(FleetPlanner):
                     break
         return best, np.asarray(X_last), [best, *others]
 
+    def _waited(
+        self, scenario: Scenario, later: Task, table: ReservationTable, cands: list[PlanResult]
+    ) -> list[PlanResult]:
+        """The candidates' polylines re-timed to take off at ``later.start_time``, evaluated
+        there (the same path, waiting on the ground at its start)."""
+        cfg = self.config
+        problem = separated_problem(scenario, later, table, cfg.cost, cfg.weights)
+        return [
+            _candidate(
+                problem,
+                c.waypoints,
+                True,
+                algorithm=self.name,
+                history=c.history,
+                evaluations=c.evaluations,
+                evaluations_history=c.evaluations_history,
+                wall_time=0.0,
+            )
+            for c in cands
+        ]
+
     def _in_loop_flight(
         self, scenario: Scenario, table: ReservationTable, candidates: list[PlanResult]
     ) -> PlanResult:
-        """The first candidate (best first) whose flight passes every check, with that flight
-        declared; if none does, the best candidate with its best (failing) flight."""
+        """The first candidate whose flight passes every check, with that flight declared:
+        the feasible polylines best first, then the best one if its polyline is not feasible
+        (its flight, not the polyline, is what must keep S2: a curve can pass where a corner
+        could not); then, if none passes, the same candidates flown at slower constant speeds
+        (``speed_steps``). If none passes, the best feasible candidate (else the best) with its
+        best, failing, flight. A declared flight that passes where its polyline conflicts costs
+        F without F5 (``cost_without_separation``). ``info["rescue"]`` says what found the
+        flight: ``first`` (the best candidate's), ``candidate`` (a later one's), ``slower``."""
         cfg = self.config
         task_of = {t.id: t for t in scenario.tasks}
         first: tuple[PlanResult, Flight] | None = None
-        for r in candidates:
-            if not r.feasible:
-                continue
-            f = fly(scenario, task_of[r.uav_id], r.waypoints, r.times, table,
-                    cfg.smooth_timing, cfg.smooth_step)  # fmt: skip
-            if f.ok:
-                return declare(r, f)
-            if first is None:
-                first = (r, f)
-        if first is None:
-            r = candidates[0]
-            first = (r, fly(scenario, task_of[r.uav_id], r.waypoints, r.times, table,
-                            cfg.smooth_timing, cfg.smooth_step))  # fmt: skip
+        order = [r for r in candidates if r.feasible]
+        if not candidates[0].feasible:
+            order.append(candidates[0])
+        uav = scenario.uav
+        floor = max(uav.min_speed, 0.5 * uav.speed)
+        speeds: list[float | None] = [None]
+        speeds += [uav.speed - k * (uav.speed - floor) / cfg.speed_steps
+                   for k in range(1, cfg.speed_steps + 1)]  # fmt: skip
+        for v in speeds:
+            for r in order:
+                f = fly(scenario, task_of[r.uav_id], r.waypoints, r.times, table,
+                        cfg.smooth_timing, cfg.smooth_step, cruise=v)  # fmt: skip
+                if f.ok:
+                    how = "slower" if v is not None else (
+                        "first" if r is candidates[0] else "candidate")  # fmt: skip
+                    d = declare(r, f)
+                    cost = d.cost
+                    if not math.isfinite(cost) and "cost_without_separation" in r.info:
+                        cost = float(r.info["cost_without_separation"])
+                    return replace(d, cost=cost, info={**d.info, "rescue": how})
+                if first is None:
+                    first = (r, f)
+        assert first is not None
         return declare(*first)
+
+
+def _candidate(problem: PathProblem, path: FloatArray, in_loop: bool, **kw: Any) -> PlanResult:
+    """A low-level candidate's result; in-loop, a polyline that fails only separation also
+    carries F without F5 (``cost_without_separation``: its cost if its flight keeps S2)."""
+    r = make_result(problem, path, **kw)
+    if in_loop and not r.feasible and set(r.violations) == {"separation"}:
+        f = float(problem.evaluate_cv(r.waypoints[None])[0][0])
+        r = replace(r, info={**r.info, "cost_without_separation": f})
+    return r
 
 
 def as3(points: FloatArray) -> FloatArray:
@@ -499,8 +578,10 @@ def flight_report(results: tuple[PlanResult, ...]) -> dict[str, Any]:
         for r in results
     )
     planned = sum(r.length for r in results)
+    rescues = ("first", "candidate", "slower", "wait", "delay")
     return {
         "not_clear": [r.uav_id for r in results if not r.flown_ok],
+        "rescue": {k: sum(r.info.get("rescue") == k for r in results) for k in rescues},
         "kinds": {k: sum(r.flown_kind == k for r in results) for k in ("smoothed", "polyline")},
         "flown_length": flown,
         "planned_length": planned,
