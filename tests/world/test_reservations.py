@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -120,3 +122,59 @@ def test_empty_table_and_bad_shapes():
         table.conflicts(p, np.zeros((3, 5)))
     with pytest.raises(ValueError):
         ReservationTable(LO, HI, separation=0.0)
+
+
+def _dense_curve(rng: np.random.Generator, n_turns: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """A smoothed-flight-like trajectory: straight legs and arcs of radius 20 m, sampled 5 m
+    apart, flown at 20 m/s (the kind of trajectory reserved with a tolerance)."""
+    pts = [np.array([rng.uniform(50, 150), rng.uniform(50, 150), 50.0])]
+    head = rng.uniform(0, 2 * np.pi)
+    for _ in range(n_turns):
+        for _ in range(int(rng.integers(3, 12))):  # a straight leg
+            pts.append(pts[-1] + 5.0 * np.array([np.cos(head), np.sin(head), 0.02]))
+        turn = rng.uniform(-np.pi / 2, np.pi / 2)
+        k = max(2, int(abs(turn) * 20 / 5))
+        for _ in range(k):  # an arc of radius 20 m
+            head += turn / k
+            pts.append(pts[-1] + 20 * abs(turn) / k * np.array([np.cos(head), np.sin(head), 0]))
+    p = np.array(pts)
+    return p, _times(p)
+
+
+def test_simplified_reservation_is_conservative_within_its_pad():
+    """A trajectory reserved with a tolerance: fewer pieces, every conflict with the true
+    trajectory still found, and distances lower bounds within the tolerance of the truth."""
+    from uavplan.world.reservations import simplify_timed
+
+    rng = np.random.default_rng(7)
+    tol, sep = 0.1, 10.0
+    for _ in range(15):
+        p, t = _dense_curve(rng)
+        keep, pad = simplify_timed(p, t, tol)
+        assert keep[0] == 0 and keep[-1] == len(p) - 1 and np.all(np.diff(keep) > 0)
+        assert pad.shape == (len(keep) - 1,) and np.all(pad <= tol + 1e-12)
+        # the stated deviation is the largest one, at the original samples
+        for i, (a, b) in enumerate(itertools.pairwise(keep)):
+            f = (t[a:b + 1] - t[a]) / (t[b] - t[a])
+            chord = p[a] + f[:, None] * (p[b] - p[a])
+            assert np.max(np.linalg.norm(p[a:b + 1] - chord, axis=1)) == pytest.approx(
+                pad[i], abs=1e-9
+            )
+        exact = ReservationTable(LO, HI, sep)
+        padded = ReservationTable(LO, HI, sep)
+        exact.add("a", p, t)
+        padded.add("a", p, t, tolerance=tol)
+        assert padded.n_pieces < exact.n_pieces
+        # candidates: straight lines passing near the curve at random times
+        q0 = p[rng.integers(0, len(p), 200)] + rng.normal(0, 15, (200, 3))
+        q1 = q0 + rng.normal(0, 40, (200, 3))
+        qp = np.stack([q0, q1], axis=1)
+        t0 = rng.uniform(0, t[-1], 200)
+        qt = np.stack([t0, t0 + np.linalg.norm(q1 - q0, axis=1) / 20.0], axis=1)
+        ce, cp = exact.conflicts(qp, qt), padded.conflicts(qp, qt)
+        assert np.all(cp[ce])  # never misses a real conflict
+        de, dp = exact.min_distance(qp, qt), padded.min_distance(qp, qt)
+        near = np.isfinite(de) & (de < sep)
+        assert np.all(dp[near] <= de[near] + 1e-9)
+        assert np.all(dp[near] >= de[near] - 2 * tol - 1e-9)  # chord within tol, less tol
+        assert (cp & ~ce).sum() <= max(2, ce.sum() // 5)  # few false alarms

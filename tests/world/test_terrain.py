@@ -694,3 +694,32 @@ def test_stays_within_agrees_with_max_clearance(seed: int) -> None:
     for ceiling in (np.nanmedian(np.where(finite, top, np.nan)), float(np.max(top[finite])) + 1):
         got = T.stays_within(segs, ceiling)
         np.testing.assert_array_equal(got[finite], top[finite] <= ceiling)
+
+
+def test_height_kernel_equals_the_numpy_reference():
+    from uavplan.world.terrain import Terrain
+
+    t = Terrain.builtin("spso")
+    rng = np.random.default_rng(3)
+    lo_x, hi_x, lo_y, hi_y = t.extent
+    x = rng.uniform(lo_x - 50, hi_x + 50, size=(37, 11))  # some outside the grid
+    y = rng.uniform(lo_y - 50, hi_y + 50, size=(37, 11))
+    x[0, :3], y[0, :3] = lo_x, hi_y  # on the edges
+    np.testing.assert_array_equal(t.height(x, y), t.height_reference(x, y))
+    assert t.height(x[0, 0], y[0, 0]).shape == ()
+    np.testing.assert_array_equal(t.height(x[:, 0], 5.0), t.height_reference(x[:, 0], 5.0))
+
+
+def test_fast_cell_coordinates_equal_the_numpy_ones():
+    from uavplan.world.terrain import Terrain
+
+    t = Terrain.builtin("spso")
+    rng = np.random.default_rng(4)
+    lo_x, hi_x, lo_y, hi_y = t.extent
+    p = np.stack([rng.uniform(lo_x, hi_x, (20, 9)), rng.uniform(lo_y, hi_y, (20, 9))], axis=-1)
+    p[0, 0] = (lo_x + 1e-13, hi_y - 1e-12)  # within the snapping tolerance of the edges
+    p[0, 1] = (hi_x * (1 + 1e-16), lo_y)
+    u, v = t._uv_fast(p)
+    u2, v2 = t._uv_snapped(p[..., 0], p[..., 1])
+    np.testing.assert_array_equal(u, u2)
+    np.testing.assert_array_equal(v, v2)

@@ -79,6 +79,7 @@ from uavplan.problems.encoding import ENCODINGS, CartesianEncoding
 from uavplan.problems.path_problem import PRESETS, PathProblem
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
+from uavplan.world.tolerances import RESERVE_TOL
 
 FloatArray = NDArray[np.float64]
 
@@ -146,7 +147,7 @@ class PrioritizedConfig(FleetPlannerConfig):
                                 "constant speed (the paper's)", choices=SMOOTH_TIMINGS)  # fmt: skip
     separation_margin: float = option(0.0, "plan this much wider than S2, m (ours)", low=0)
     speed_steps: int = option(
-        2, "in-loop: slower constant speeds tried, evenly from cruise down to max(min_speed, "
+        0, "in-loop: slower constant speeds tried, evenly from cruise down to max(min_speed, "
         "cruise / 2), for a UAV whose flights all fail (ours; 0: none)", low=0
     )  # fmt: skip
     restart_order: str = option(
@@ -314,7 +315,7 @@ class PrioritizedPlanner(FleetPlanner):
                 last_pop[m] = pop
                 current[m] = res.waypoints
                 pts, ts = res.flown_trajectory() if in_loop else (res.waypoints, res.times)
-                table.add(task.id, as3(pts), ts)
+                table.add(task.id, as3(pts), ts, RESERVE_TOL if in_loop else 0.0)
                 histories.append(res.history)
                 per_uav_cost[m] = res.cost if ok(res) else np.inf
                 if callback is not None:  # progress per UAV; a stop request ends the restart

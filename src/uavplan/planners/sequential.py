@@ -26,6 +26,7 @@ from uavplan.planners.results import FleetResult, PlanResult
 from uavplan.planners.run import ProgressCallback
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario
+from uavplan.world.tolerances import RESERVE_TOL
 
 
 def separating_planners() -> list[str]:
@@ -69,15 +70,16 @@ def plan_sequentially(
         cb = progress(task.id) if progress else None
         r = planner.plan(scenario, task, budget, seeds[m], cb, reservations=table)
         pts, ts = r.flown_trajectory()
-        table.add(task.id, as3(pts), ts)
+        table.add(task.id, as3(pts), ts, RESERVE_TOL if r.flown_kind == "smoothed" else 0.0)
         results[m] = r
     out = tuple(results[m] for m in range(len(tasks)))
     planned = all(r.feasible for r in out)
+    flown = all(r.flown_feasible for r in out)
     total = float(sum(r.cost for r in out))
     return FleetResult(
         results=out,
         priority=tuple(tasks[m].id for m in order),
-        cost=total if planned else math.inf,
+        cost=total if flown else math.inf,
         feasible=all(r.flown_feasible for r in out),
         planned_feasible=planned,
         history=np.zeros(0),

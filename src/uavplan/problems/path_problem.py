@@ -285,30 +285,34 @@ class PathProblem:
         ``cv`` is the graded violation (:meth:`MotionValidator.graded_violation`) of every path
         that fails a check or has an infinite cost, 0 otherwise. Without, ``cv`` only tells
         apart (1 = fails a check; ``f`` is then set to inf, which is what the "inf" rule
-        needs), and the checks stop early: the world's checks only for paths whose cost is
-        finite, then separation only for those left.
+        needs), and the work stops early: the world's checks cascade, cheap ones first
+        (:meth:`MotionValidator.passing`), the cost only for the paths that pass them, then
+        separation only for those left with a finite cost.
         """
         b = self.validator.batch(paths)
-        total = self._total(b, checks_too=False)
         if exact:
+            total = self._total(b, checks_too=False)
             violations = self.validator.violations(b)
             feasible = np.ones(b.paths.shape[0], dtype=bool)
             for v in violations.values():
                 feasible &= ~v
             return total, self._cv(b, violations, feasible, total)
-        cv = np.zeros(b.paths.shape[0])
-        idx = np.flatnonzero(np.isfinite(total))
-        if idx.size:
-            sub = b.subset(idx)
-            bad = np.zeros(idx.size, dtype=bool)
-            for v in self.validator.violations(sub, skip=("separation",)).values():
-                bad |= v
-            cv[idx[bad]] = 1.0
-            idx = idx[~bad]
-        table = self.validator.reservations
-        if idx.size and table is not None and len(table):
-            cv[idx[b.subset(idx).conflicts]] = 1.0
-        total[cv > 0] = np.inf
+        n = b.paths.shape[0]
+        cv = np.ones(n)
+        total = np.full(n, np.inf)
+        ok = self.validator.passing(b, skip=("separation",))  # the world, cheap checks first
+        if ok.size:
+            sub = b if ok.size == n else b.subset(ok)
+            f = self._total(sub, checks_too=False)  # the cost only where it can count
+            total[ok] = f
+            cv[ok] = 0.0
+            fin = np.isfinite(f)
+            table = self.validator.reservations
+            if fin.any() and table is not None and len(table):
+                rows = ok[fin]
+                bad = (sub if fin.all() else sub.subset(np.flatnonzero(fin))).conflicts
+                cv[rows[bad]] = 1.0
+                total[rows[bad]] = np.inf
         return total, cv
 
     def feasible(self, paths: FloatArray) -> BoolArray:

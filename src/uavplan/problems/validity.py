@@ -81,6 +81,10 @@ CHECKS = (
     "climb",
     "turn",
 )
+#: The order :meth:`MotionValidator.passing` runs the checks in: the cheap ones (per waypoint,
+#: or per segment against a few shapes) before the terrain walk and the reservation table.
+CASCADE = ("bounds", "cylinders", "circles", "polygons", "altitude", "speed", "climb", "turn",
+           "terrain", "moving", "separation")  # fmt: skip
 #: Segments checked per kernel call by :meth:`MotionValidator.segments_valid` (bounds memory).
 SEGMENT_CHUNK = 65536
 #: :meth:`MotionValidator.graded_violation`: what one failed check adds to the violation.
@@ -329,6 +333,21 @@ class MotionValidator:
         """Each applicable check's failures, (pop,) bool per check name, in report order."""
         skipped = set(skip)
         return {c: self._check(c, b) for c in self.checks() if c not in skipped}
+
+    def passing(self, b: Batch, skip: Iterable[str] = ()) -> NDArray[np.intp]:
+        """The rows of ``b`` that pass every applicable check (but ``skip``), found by
+        cascading: the cheap checks first, each later one only on the paths still passing
+        (the same verdicts as :meth:`violations`, without telling the failures apart)."""
+        skipped = set(skip)
+        names = [c for c in CASCADE if c in self.checks() and c not in skipped]
+        names += [c for c in self.checks() if c not in names and c not in skipped]
+        idx = np.arange(b.paths.shape[0])
+        for c in names:
+            if not idx.size:
+                break
+            sub = b if idx.size == b.paths.shape[0] else b.subset(idx)
+            idx = idx[~self._check(c, sub)]
+        return idx
 
     def _check(self, name: str, b: Batch) -> BoolArray:
         sc = self.scenario

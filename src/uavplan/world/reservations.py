@@ -89,6 +89,65 @@ def _split(P, T, dt):  # pragma: no cover - numba
     return p0[:m], p1[:m], t0[:m], t1[:m], kk[:m]
 
 
+def simplify_timed(
+    points: FloatArray, times: FloatArray, tolerance: float, max_window: int = 64
+) -> tuple[NDArray[np.int64], FloatArray]:
+    """The vertices of a timed polyline to keep so that each kept segment, flown linearly in
+    time between its ends, stays within ``tolerance`` metres of the trajectory at every instant.
+
+    Returns ``(keep, pad)``: indices into the points (first and last included) and, per kept
+    segment, its largest deviation (<= ``tolerance``). The deviation is exact: both motions are
+    linear in time between the original samples, so their distance is largest at a sample.
+    At most ``max_window`` original segments merge into one; a segment of zero duration is
+    never merged across.
+    """
+    P = np.ascontiguousarray(points, dtype=np.float64)
+    T = np.ascontiguousarray(times, dtype=np.float64)
+    return _simplify(P, T, float(tolerance), int(max_window))
+
+
+@njit(cache=True)
+def _simplify(P, T, tol, max_window):  # pragma: no cover - numba
+    n = P.shape[0]
+    keep = np.empty(max(n, 1), dtype=np.int64)
+    pad = np.zeros(max(n, 1))
+    keep[0] = 0
+    m = 0
+    i = 0
+    while i < n - 1:
+        j = i + 1
+        dev_j = 0.0
+        while j + 1 < n and j + 1 - i <= max_window and T[j + 1] > T[i] and T[j] > T[i]:
+            jj = j + 1
+            dev = 0.0
+            for k in range(i + 1, jj):
+                f = (T[k] - T[i]) / (T[jj] - T[i])
+                d = 0.0
+                for c in range(P.shape[1]):
+                    e = P[k, c] - (P[i, c] + f * (P[jj, c] - P[i, c]))
+                    d += e * e
+                dev = max(dev, d)
+            dev = np.sqrt(dev)
+            if dev > tol:
+                break
+            j = jj
+            dev_j = dev
+        pad[m] = dev_j
+        m += 1
+        keep[m] = j
+        i = j
+    return keep[: m + 1], pad[:m]
+
+
+def _piece_pads(seg_times: FloatArray, seg_pad: FloatArray, piece_t0: FloatArray) -> FloatArray:
+    """Each piece's pad: that of the segment it was cut from (the segment whose time interval
+    holds the piece's start)."""
+    if not seg_pad.size or not np.any(seg_pad):
+        return np.zeros(piece_t0.shape[0])
+    s = np.searchsorted(seg_times, piece_t0, side="right") - 1
+    return np.asarray(seg_pad[np.clip(s, 0, seg_pad.size - 1)], dtype=np.float64)
+
+
 @njit(cache=True)
 def _hash(key, mask):  # pragma: no cover - numba
     h = (key * np.int64(-7046029254386353131)) ^ (key >> np.int64(29))
@@ -106,23 +165,24 @@ def _cell_range(a, b, grow, origin, cell, n):  # pragma: no cover - numba
 
 @njit(cache=True)
 def _cell_keys(p0, p1, k, grow, origin, cell, dims):  # pragma: no cover - numba
-    """(entry key, piece index) for every cell that each piece's box grown by ``grow`` touches."""
+    """(entry key, piece index) for every cell that each piece's box grown by ``grow[i]``
+    touches."""
     m = p0.shape[0]
     nx, ny, nz = dims[0], dims[1], dims[2]
     count = 0
     for i in range(m):
         c = 1
         for d in range(3):
-            a, b = _cell_range(p0[i, d], p1[i, d], grow, origin[d], cell, dims[d])
+            a, b = _cell_range(p0[i, d], p1[i, d], grow[i], origin[d], cell, dims[d])
             c *= b - a + 1
         count += c
     keys = np.empty(count, dtype=np.int64)
     idx = np.empty(count, dtype=np.int64)
     e = 0
     for i in range(m):
-        ix0, ix1 = _cell_range(p0[i, 0], p1[i, 0], grow, origin[0], cell, nx)
-        iy0, iy1 = _cell_range(p0[i, 1], p1[i, 1], grow, origin[1], cell, ny)
-        iz0, iz1 = _cell_range(p0[i, 2], p1[i, 2], grow, origin[2], cell, nz)
+        ix0, ix1 = _cell_range(p0[i, 0], p1[i, 0], grow[i], origin[0], cell, nx)
+        iy0, iy1 = _cell_range(p0[i, 1], p1[i, 1], grow[i], origin[1], cell, ny)
+        iz0, iz1 = _cell_range(p0[i, 2], p1[i, 2], grow[i], origin[2], cell, nz)
         for ix in range(ix0, ix1 + 1):
             for iy in range(iy0, iy1 + 1):
                 for iz in range(iz0, iz1 + 1):
@@ -177,7 +237,8 @@ def _lookup(key, tkey, mask):  # pragma: no cover - numba
 
 @njit(cache=True)
 def _piece_min_dist2(a0, a1, ta0, ta1, b0, b1, tb0, tb1):  # pragma: no cover - numba
-    """Squared minimum distance between two linear motions over their common time, or inf."""
+    """Squared minimum distance between two linear motions over their common time, or inf
+    (scalar arithmetic: no temporary arrays in the innermost loop)."""
     lo = max(ta0, tb0)
     hi = min(ta1, tb1)
     if lo > hi:
@@ -186,24 +247,27 @@ def _piece_min_dist2(a0, a1, ta0, ta1, b0, b1, tb0, tb1):  # pragma: no cover - 
     fa1 = (hi - ta0) / (ta1 - ta0)
     fb0 = (lo - tb0) / (tb1 - tb0)
     fb1 = (hi - tb0) / (tb1 - tb0)
-    # relative offset at lo (r0) and at hi (r1); it moves linearly in between
-    r0 = np.empty(3)
-    dr = np.empty(3)
-    for d in range(3):
-        pa_lo = a0[d] + fa0 * (a1[d] - a0[d])
-        pa_hi = a0[d] + fa1 * (a1[d] - a0[d])
-        pb_lo = b0[d] + fb0 * (b1[d] - b0[d])
-        pb_hi = b0[d] + fb1 * (b1[d] - b0[d])
-        r0[d] = pa_lo - pb_lo
-        dr[d] = (pa_hi - pb_hi) - r0[d]
-    dd = dr[0] * dr[0] + dr[1] * dr[1] + dr[2] * dr[2]
+    # relative offset at lo (r0) and at hi (r0 + dr); it moves linearly in between
+    ex = a1[0] - a0[0]
+    ey = a1[1] - a0[1]
+    ez = a1[2] - a0[2]
+    gx = b1[0] - b0[0]
+    gy = b1[1] - b0[1]
+    gz = b1[2] - b0[2]
+    r0x = (a0[0] + fa0 * ex) - (b0[0] + fb0 * gx)
+    r0y = (a0[1] + fa0 * ey) - (b0[1] + fb0 * gy)
+    r0z = (a0[2] + fa0 * ez) - (b0[2] + fb0 * gz)
+    drx = ((a0[0] + fa1 * ex) - (b0[0] + fb1 * gx)) - r0x
+    dry = ((a0[1] + fa1 * ey) - (b0[1] + fb1 * gy)) - r0y
+    drz = ((a0[2] + fa1 * ez) - (b0[2] + fb1 * gz)) - r0z
+    dd = drx * drx + dry * dry + drz * drz
     s = 0.0
     if dd > 0.0:
-        s = -(r0[0] * dr[0] + r0[1] * dr[1] + r0[2] * dr[2]) / dd
+        s = -(r0x * drx + r0y * dry + r0z * drz) / dd
         s = min(max(s, 0.0), 1.0)
-    x = r0[0] + s * dr[0]
-    y = r0[1] + s * dr[1]
-    z = r0[2] + s * dr[2]
+    x = r0x + s * drx
+    y = r0y + s * dry
+    z = r0z + s * drz
     return x * x + y * y + z * z
 
 
@@ -215,7 +279,7 @@ def _query(
     origin,
     cell,
     dims,
-    sep2,
+    sep,
     tkey,
     tstart,
     tcount,
@@ -224,10 +288,12 @@ def _query(
     rp1,
     rt0,
     rt1,
+    rpad,
     want_min,
 ):  # pragma: no cover - numba
-    """Per path: the smallest squared distance to a reserved piece found within the searched
-    cells (inf if none), stopping at the first one below ``sep2`` unless ``want_min``."""
+    """Per path: the smallest distance to a reserved piece found within the searched cells,
+    less the piece's pad (inf if none), stopping at the first one below ``sep`` unless
+    ``want_min``."""
     P, N, _ = paths.shape
     nx, ny, nz = dims[0], dims[1], dims[2]
     mask = np.int64(tkey.shape[0] - 1)
@@ -269,9 +335,12 @@ def _query(
                                     d2 = _piece_min_dist2(
                                         a0, a1, lo, hi, rp0[r], rp1[r], rt0[r], rt1[r]
                                     )
-                                    if d2 < best:
-                                        best = d2
-                                        if best < sep2 and not want_min:
+                                    if d2 == np.inf:
+                                        continue
+                                    dist = np.sqrt(d2) - rpad[r]
+                                    if dist < best:
+                                        best = dist
+                                        if best < sep and not want_min:
                                             done = True
                                             break
                                 if done:
@@ -320,6 +389,7 @@ class ReservationTable:
         self._p1 = np.zeros((0, 3))
         self._t0 = np.zeros(0)
         self._t1 = np.zeros(0)
+        self._pad = np.zeros(0)
         self._keys = np.zeros(0, dtype=np.int64)
         self._idx = np.zeros(0, dtype=np.int64)
         self._owner = np.zeros(0, dtype=np.int64)
@@ -332,13 +402,27 @@ class ReservationTable:
     def n_pieces(self) -> int:
         return int(self._p0.shape[0])
 
-    def add(self, uav_id: str, points: FloatArray, times: FloatArray) -> None:
-        """Reserve the timed polyline ``points`` (n, 3) at ``times`` (n,)."""
+    def add(
+        self, uav_id: str, points: FloatArray, times: FloatArray, tolerance: float = 0.0
+    ) -> None:
+        """Reserve the timed polyline ``points`` (n, 3) at ``times`` (n,).
+
+        ``tolerance`` > 0 (metres): a densely sampled trajectory (a smoothed flight) is
+        reserved as fewer segments (:func:`simplify_timed`), each padded by its largest
+        deviation from the trajectory: a query then finds every approach closer than the
+        separation to the true trajectory, and may also reject one up to the pad farther
+        (conservative); distances reported are lower bounds within the pad.
+        """
         pts = np.ascontiguousarray(points, dtype=np.float64)
         ts = np.ascontiguousarray(times, dtype=np.float64)
         if pts.ndim != 2 or pts.shape[1] != 3 or ts.shape != (pts.shape[0],):
             raise ValueError(f"need points (n, 3) and times (n,), got {pts.shape}, {ts.shape}")
+        seg_pad = np.zeros(max(pts.shape[0] - 1, 0))
+        if tolerance > 0 and pts.shape[0] > 2:
+            keep, seg_pad = _simplify(pts, ts, float(tolerance), 64)
+            pts, ts = np.ascontiguousarray(pts[keep]), np.ascontiguousarray(ts[keep])
         p0, p1, t0, t1, k = _split(pts, ts, self.dt)
+        pad = _piece_pads(ts, seg_pad, t0)
         # A trajectory that takes off (lands) exactly at a bucket boundary shares that instant
         # with the bucket before (after): enter its first (last) piece there too.
         sel = np.arange(len(t0))
@@ -351,7 +435,7 @@ class ReservationTable:
                 sel = np.append(sel, len(t0) - 1)
                 kk = np.append(kk, k[-1] + 1)
         keys, idx = _cell_keys(
-            p0[sel], p1[sel], kk, self.separation, self.origin, self.cell, self.dims
+            p0[sel], p1[sel], kk, self.separation + pad[sel], self.origin, self.cell, self.dims
         )
         idx = sel[idx]
         base = self.n_pieces
@@ -360,6 +444,7 @@ class ReservationTable:
         self._p1 = np.concatenate([self._p1, p1])
         self._t0 = np.concatenate([self._t0, t0])
         self._t1 = np.concatenate([self._t1, t1])
+        self._pad = np.concatenate([self._pad, pad])
         self._owner = np.concatenate([self._owner, np.full(len(t0), len(self.owners) - 1)])
         self._keys = np.concatenate([self._keys, keys])
         self._idx = np.concatenate([self._idx, idx + base])
@@ -380,23 +465,25 @@ class ReservationTable:
             raise ValueError(f"need paths (pop, n, 3) and times (pop, n), got {p.shape}, {t.shape}")
         if self.n_pieces == 0:
             return np.full(p.shape[0], np.inf)
-        d2 = _query(
-            p, t, self.dt, self.origin, self.cell, self.dims, self.separation**2,
+        d = _query(
+            p, t, self.dt, self.origin, self.cell, self.dims, self.separation,
             self._tkey, self._tstart, self._tcount, self._idx,
-            self._p0, self._p1, self._t0, self._t1, want_min,
+            self._p0, self._p1, self._t0, self._t1, self._pad, want_min,
         )  # fmt: skip
-        return np.asarray(d2)
+        return np.asarray(d)
 
     def conflicts(self, paths: FloatArray, times: FloatArray) -> NDArray[np.bool_]:
         """Whether each timed path (pop, n, 3) at ``times`` (pop, n) comes closer than the
-        separation to a reserved trajectory at some instant, (pop,) bool."""
-        return np.asarray(self._run(paths, times, False) < self.separation**2)
+        separation to a reserved trajectory at some instant (closer than the separation plus
+        the pad to a padded one), (pop,) bool."""
+        return np.asarray(self._run(paths, times, False) < self.separation)
 
     def min_distance(self, paths: FloatArray, times: FloatArray) -> FloatArray:
-        """Exact minimum distance from each timed path to the reserved trajectories, (pop,)
-        metres; ``inf`` when nothing reserved comes within ``separation`` of the path's cells
-        (distances above the separation are exact only up to that search radius)."""
-        return np.sqrt(self._run(paths, times, True))
+        """Exact minimum distance from each timed path to the reserved trajectories (less the
+        pads of padded ones, at least 0), (pop,) metres; ``inf`` when nothing reserved comes
+        within ``separation`` of the path's cells (distances above the separation are exact
+        only up to that search radius)."""
+        return np.maximum(self._run(paths, times, True), 0.0)
 
     def min_distance_reference(self, points: FloatArray, times: FloatArray) -> float:
         """Brute force over every reserved piece, in NumPy (tests compare :meth:`min_distance`
@@ -428,4 +515,5 @@ class ReservationTable:
             s = np.where(dd > 0, -np.sum(r0 * dr, axis=-1) / np.where(dd > 0, dd, 1.0), 0.0)
         s = np.clip(s, 0.0, 1.0)
         d2 = np.sum((r0 + s[..., None] * dr) ** 2, axis=-1)
-        return float(np.sqrt(np.min(np.where(overlap, d2, np.inf))))
+        d = np.sqrt(np.where(overlap, d2, np.inf)) - self._pad[None]
+        return float(max(np.min(d), 0.0))

@@ -94,8 +94,23 @@ class Terrain:
     def height(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
         """Bilinear terrain height at any array of points (broadcast ``x`` with ``y``).
 
-        Points outside the grid take the height of the nearest edge point.
+        Points outside the grid take the height of the nearest edge point. Numba
+        (:func:`~uavplan.world._terrain_kernels.bilinear_heights`); :meth:`height_reference` is
+        the same arithmetic in NumPy.
         """
+        xa, ya = np.broadcast_arrays(
+            np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+        )
+        if self.heights.shape[0] < 2 or self.heights.shape[1] < 2:
+            return self.height_reference(xa, ya)
+        out = tk.bilinear_heights(
+            self.heights, float(self.x0), float(self.y0), float(self.dx), float(self.dy),
+            np.ascontiguousarray(xa).reshape(-1), np.ascontiguousarray(ya).reshape(-1),
+        )  # fmt: skip
+        return np.asarray(out).reshape(xa.shape)
+
+    def height_reference(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
+        """:meth:`height` in NumPy (the reference the kernel is tested against)."""
         u, v = self._uv(x, y)
         u, v = np.broadcast_arrays(u, v)
         ny, nx = self.heights.shape
@@ -161,9 +176,21 @@ class Terrain:
         """
         return np.asarray(self._min_clearance(paths, clearance, True) >= clearance)
 
+    def _uv_fast(self, p: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """:meth:`_uv_snapped` of the points ``p[..., :2]`` (Numba, the same values)."""
+        ny, nx = self.heights.shape
+        eps = 64.0 * np.finfo(np.float64).eps
+        x = np.ascontiguousarray(p[..., 0]).reshape(-1)
+        y = np.ascontiguousarray(p[..., 1]).reshape(-1)
+        u, v = tk.snapped_cell_coords(
+            x, y, float(self.x0), float(self.y0), float(self.dx), float(self.dy),
+            nx - 1, ny - 1, eps * max(1.0, float(nx - 1)), eps * max(1.0, float(ny - 1)),
+        )  # fmt: skip
+        return u.reshape(p.shape[:-1]), v.reshape(p.shape[:-1])
+
     def _min_clearance(self, paths: ArrayLike, cap: float, stop_below: bool) -> FloatArray:
         p = np.asarray(paths, dtype=np.float64)
-        u, v = self._uv_snapped(p[..., 0], p[..., 1])
+        u, v = self._uv_fast(p)
         flat, off, shp = self._pyramid
         return np.asarray(
             tk.min_clearance_batch(
@@ -202,7 +229,7 @@ class Terrain:
         the yes/no form of :meth:`max_clearance` (the search prunes every block of cells that
         is clearly below the ceiling). Returns (pop, n_points - 1) bool."""
         p = np.asarray(paths, dtype=np.float64)
-        u, v = self._uv_snapped(p[..., 0], p[..., 1])
+        u, v = self._uv_fast(p)
         neg, (flat, off, shp) = self._neg
         cap = -float(clearance)
         out = tk.min_clearance_batch(

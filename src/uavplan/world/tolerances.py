@@ -22,6 +22,9 @@ REWIRE_TOL = 1e-9
 SPEED_RTOL = 1e-9
 #: Planning's length slack per segment on the speed limits, metres.
 SPEED_SLACK = 1e-9
+#: A reserved flight (densely sampled curves) is kept as fewer segments that stay within this
+#: many metres of it, padded by their deviation (planning checks stay conservative).
+RESERVE_TOL = 0.1
 #: Distances and clearances the verifier accepts below the required value.
 VERIFY_TOL = 1e-6
 #: The verifier's relative slack on the speed limit.
