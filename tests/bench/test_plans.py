@@ -25,6 +25,14 @@ def test_plan_runs_at_smoke_scale(name: str, tmp_path: Path) -> None:
     scale = plan.scales["smoke"]
     if scale.evaluations:  # an evaluation budget is respected up to one batch
         assert (df["evaluations"] >= scale.evaluations).all()
+    if plan.kind == "fleet":  # never unsafe called safe: every verdict the verifier's too
+        ok = df[df["status"] == "ok"]
+        flown = ok["flown_feasible"].astype(bool)
+        assert not (flown & ~ok["flown_verified"].astype(bool)).any()
+        # the paper's mode (polylines planned apart): its polylines are what is verified
+        apart = ok["verified"].notna()
+        assert not (ok["feasible"].astype(bool) & apart & ~ok["verified"].astype("boolean")).any()
+        assert (flown | (ok["flown_not_ok"] > 0)).all()  # a failed fleet names its UAVs
     html, md = write_report(tmp_path)
     text = html.read_text()
     assert "<table>" in text and "data:image/png;base64," in text

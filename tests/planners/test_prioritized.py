@@ -431,3 +431,29 @@ def test_blocked_flight_waits_on_the_ground_before_replanning(monkeypatch, fleet
     assert r.info["flights"]["rescue"]["wait"] == 1
     d = plan_document(FleetPlan(fleet3, "ppswarm", {}, 0, r.results, r))
     assert r.feasible and verify_plan(d, fleet3).ok
+
+
+def test_a_fleet_whose_smoothing_fails_is_declared_and_verified_as_it_would_fly() -> None:
+    """A turn radius of 150 m among ppswarm2's cylinders: some UAVs' flights cannot keep clear.
+    The plan says so (not feasible, those UAVs named), the verifier fails exactly those UAVs'
+    declared flights, and the UAVs the plan calls ok pass it together."""
+    from uavplan.io.plan_file import parse_plan
+    from uavplan.verify import verify_trajectories
+
+    base = resolve("ppswarm2")
+    uav = dataclasses.replace(base.uav, turn_radius=150.0)
+    sc = with_fleet(dataclasses.replace(base, uav=uav), 6, seed=1)
+    opts = {**SMALL, "n_restart": 1, "max_delays": 1}
+    fr = get_planner("ppswarm", **opts).plan_fleet(sc, seed=0)
+    bad = {r.uav_id for r in fr.results if not r.flown_feasible}
+    assert bad and not fr.feasible and len(bad) < len(fr.results)
+    d = plan_document(FleetPlan(sc, "ppswarm", {}, 0, fr.results, fr))
+    assert d["feasible"] is False
+    rep = verify_plan(d, sc)
+    assert not rep.ok
+    own = {u for v in rep.violations if v.kind != "separation" for u in v.uavs}
+    assert own <= bad  # no UAV the plan calls ok breaks a check of its own
+    assert all(set(v.uavs) & bad for v in rep.violations if v.kind == "separation")
+    good = [t for t in parse_plan(d).trajectories("flown") if t.id not in bad]
+    rep_ok = verify_trajectories(good, sc, sc.name, kinematics=True, trajectory="flown")
+    assert rep_ok.ok, [v.message for v in rep_ok.violations][:3]

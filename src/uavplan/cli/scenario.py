@@ -106,6 +106,18 @@ def summary_lines(s: Scenario) -> list[str]:
         f"uav: speed {_n(u.speed)} m/s, turn radius {_n(u.turn_radius)} m, s1 {_n(u.s1)} m, "
         f"s2 {_n(u.s2)} m, size {_n(u.size)} m"
     )
+    climb = (
+        "climb/descent unlimited"
+        if u.max_climb_angle is None and u.max_descent_angle is None
+        else "climb "
+        + ("unlimited" if u.max_climb_angle is None else f"<= {_n(u.max_climb_angle)} deg")
+        + ", descent "
+        + ("unlimited" if u.max_descent_angle is None else f"<= {_n(u.max_descent_angle)} deg")
+    )
+    lines.append(
+        f"kinematic limits: speed {_n(u.min_speed)}-{_n(u.v_max)} m/s, {climb}, "
+        + ("no turn limit" if u.turn_radius <= 0 else f"turn radius >= {_n(u.turn_radius)} m")
+    )
     lines.append(f"planning: cost {s.cost}, {s.n_waypoints} waypoints")
     lines.append(f"tasks ({len(s.tasks)}, absolute metres):")
     for t in s.tasks:
