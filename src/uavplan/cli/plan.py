@@ -99,12 +99,19 @@ def _run_plan(
     return plan, elapsed
 
 
-def _flown_cell(r: Any) -> str:
-    """A UAV's flight verdict: yes, or the failed checks."""
-    if r.flown_feasible:
+def _verdict(ok: bool, violations: Any) -> str:
+    """A table cell: yes, or NO and the first failed check (+ how many more)."""
+    if ok:
         return "yes"
-    why = sorted({v.split(":")[0] for v in (r.flown_violations or r.violations)})
-    return f"NO: {','.join(why) or 'infeasible'}"
+    why = list(dict.fromkeys(str(v).split(":")[0] for v in violations))
+    if not why:
+        return "NO"
+    return f"NO: {why[0]}" + (f" +{len(why) - 1}" if len(why) > 1 else "")
+
+
+def _flown_cell(r: Any) -> str:
+    """A UAV's flight verdict."""
+    return _verdict(bool(r.flown_feasible), r.flown_violations or r.violations)
 
 
 #: How the summary table names the kinds of flight.
@@ -126,7 +133,7 @@ def _summary(plan: Any, elapsed: float, out_dir: Path) -> None:
         _, ft = r.flown_trajectory()
         table.add_row(
             r.uav_id,
-            "yes" if r.feasible else "NO: " + ",".join(r.violations),
+            _verdict(bool(r.feasible), r.violations),
             _flown_cell(r),
             _AS.get(r.flown_kind, r.flown_kind),
             f"{r.cost:.6g}",
@@ -147,10 +154,15 @@ def _summary(plan: Any, elapsed: float, out_dir: Path) -> None:
             else f"{n_bad} UAV polyline(s) infeasible"
         )
         restarts = [round(float(c), 1) for c in fleet.restart_costs]
-        out.print(
-            f"fleet of {n}: cost {fleet.cost:.6g}, {verdict}, "
-            f"restarts {restarts}, best restart {fleet.info.get('best_restart')}"
+        extra = (
+            " (each UAV planned against the flights before it, longest first)"
+            if fleet.info.get("frame") == "sequential"
+            else f", restarts {restarts}, best restart {fleet.info.get('best_restart')}"
         )
+        delayed = fleet.info.get("delayed") or {}
+        if delayed:
+            extra += f"; {len(delayed)} UAV(s) take off later (up to {max(delayed.values()):g} s)"
+        out.print(f"fleet of {n}: cost {fleet.cost:.6g}, {verdict}{extra}")
         sm = fleet.info.get("smoothing", {})
         if sm:
             out.print(
