@@ -189,3 +189,46 @@ def test_bad_shapes_are_refused() -> None:
         v.paths_valid(np.zeros((3, 4, 3)))
     with pytest.raises(ValueError, match="differ in shape"):
         v.segments_valid(np.zeros((3, 2)), np.zeros((4, 2)))
+
+
+@pytest.mark.parametrize("name", ["ppswarm2", "spso", "jacksboro", "open", "topobathy", "w3s"])
+@pytest.mark.parametrize("strict", [False, True])
+def test_fused_static_checks_agree_with_the_checks_one_by_one(name: str, strict: bool) -> None:
+    """``passing`` (one fused kernel for bounds, cylinders, terrain and band in 3-D) gives
+    exactly the verdicts of the checks run one by one (:meth:`violations`)."""
+    import dataclasses
+
+    if name == "w3s":  # finite cylinders, no polygons, no moving obstacles
+        sc = dataclasses.replace(world3(), polygons=(), moving_obstacles=())
+    else:
+        sc = resolve(name)
+    if name == "jacksboro":  # finite cylinders on a real DEM; its revealed area is a polygon
+        sc = dataclasses.replace(sc, uncertain_areas=())
+    v = MotionValidator(sc, sc.tasks[0], strict_altitude=strict)
+    assert v._static_args is not None
+    rng = np.random.default_rng(11)
+    lo, hi = np.asarray(sc.bounds.lo), np.asarray(sc.bounds.hi)
+    span = hi - lo
+    paths = rng.uniform(lo - 0.02 * span, hi + 0.02 * span, (600, 6, 3))
+    # the first 200 short (within 15 m of a point), so that many pass every check
+    paths[:200, :, :2] = paths[:200, :1, :2] + rng.uniform(-15, 15, (200, 6, 2))
+    xy = paths[..., :2]
+    band = sc.altitude
+    g = sc.ground(xy[..., 0], xy[..., 1])
+    mid = g + (0.5 * (band.min + band.max) if band and band.reference == "ground" else 0)
+    if band is not None and band.reference != "ground":
+        mid = np.full_like(g, 0.5 * (band.min + band.max))
+    scale = (band.max - band.min) if band is not None else 0.3 * span[2]
+    paths[..., 2] = mid + rng.normal(0, 0.5 * scale, g.shape)
+    paths[:200, :, 2] = mid[:200] + rng.normal(0, 0.05 * scale, (200, 6))
+    b = v.batch(paths)
+    want = np.ones(len(paths), dtype=bool)
+    for bad in v.violations(b).values():
+        want &= ~bad
+    got = np.zeros(len(paths), dtype=bool)
+    got[v.passing(b)] = True
+    np.testing.assert_array_equal(got, want)
+    assert 0 < want.sum() < len(paths)
+    np.testing.assert_array_equal(v.paths_valid(paths), want)
+    if sc.terrain is not None:  # the nearest-node lookup has no fused form
+        assert MotionValidator(sc, sc.tasks[0], lookup="nearest")._static_args is None

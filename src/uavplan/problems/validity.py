@@ -51,13 +51,16 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import NDArray
 
+from uavplan.problems import _validity_kernels as VK
 from uavplan.problems import costs as C
+from uavplan.world import _terrain_kernels as tk
 from uavplan.world import geometry as G
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 from uavplan.world.tolerances import (
     ANGLE_TOL_DEG,
     BAND_TOL,
+    BOUNDS_TOL,
     MAX_SAMPLE_TURN_DEG,
     SPEED_RTOL,
     SPEED_SLACK,
@@ -85,6 +88,8 @@ CHECKS = (
 #: or per segment against a few shapes) before the terrain walk and the reservation table.
 CASCADE = ("bounds", "cylinders", "circles", "polygons", "altitude", "speed", "climb", "turn",
            "terrain", "moving", "separation")  # fmt: skip
+#: The checks the fused kernel answers together in a 3-D world.
+STATIC = frozenset(("bounds", "cylinders", "terrain", "altitude"))
 #: Segments checked per kernel call by :meth:`MotionValidator.segments_valid` (bounds memory).
 SEGMENT_CHUNK = 65536
 #: :meth:`MotionValidator.graded_violation`: what one failed check adds to the violation.
@@ -334,14 +339,62 @@ class MotionValidator:
         skipped = set(skip)
         return {c: self._check(c, b) for c in self.checks() if c not in skipped}
 
+    @cached_property
+    def _static_args(self) -> tuple[object, ...] | None:
+        """The arguments of the fused static-world kernel, or None where it does not apply
+        (2-D, circles or polygons, terrain read as ``nearest``)."""
+        sc = self.scenario
+        w = self.world
+        if self.dim != 3 or len(w.circ_radii) or w.n_polygons > 0:
+            return None
+        terrain = sc.terrain
+        if terrain is not None and self.lookup != "bilinear":
+            return None
+        band = sc.altitude
+        ground = band is not None and band.reference == "ground"
+        strict = self.strict_altitude and ground and terrain is not None
+        need = float(band.min) if (band is not None and self.strict_altitude and ground) else 0.0
+        need = max(0.0, need)
+        if terrain is not None:
+            H = terrain.heights
+            flat, off, shp = terrain._pyramid
+            nH, (nflat, noff, nshp) = terrain._neg
+            ny, nx = H.shape
+            eps = 64.0 * np.finfo(np.float64).eps
+            tol_u, tol_v = eps * max(1.0, float(nx - 1)), eps * max(1.0, float(ny - 1))
+            grid = np.array(
+                [terrain.x0, terrain.y0, terrain.dx, terrain.dy, nx - 1, ny - 1, tol_u, tol_v]
+            )
+        else:
+            H = nH = np.zeros((2, 2))
+            flat, off, shp = nflat, noff, nshp = tk.build_max_pyramid(H)
+            grid = np.array([0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0])
+        return (
+            np.ascontiguousarray(sc.bounds.lo, dtype=np.float64),
+            np.ascontiguousarray(sc.bounds.hi, dtype=np.float64),
+            BOUNDS_TOL,
+            w.cyl_centers, w.cyl_radii, w.cyl_lo, w.cyl_hi,
+            terrain is not None, H, flat, off, shp, nH, nflat, noff, nshp, grid, need,
+            band is not None, ground,
+            float(band.min) if band is not None else 0.0,
+            float(band.max) if band is not None else 0.0,
+            BAND_TOL, strict,
+        )  # fmt: skip
+
     def passing(self, b: Batch, skip: Iterable[str] = ()) -> NDArray[np.intp]:
         """The rows of ``b`` that pass every applicable check (but ``skip``), found by
         cascading: the cheap checks first, each later one only on the paths still passing
-        (the same verdicts as :meth:`violations`, without telling the failures apart)."""
+        (the same verdicts as :meth:`violations`, without telling the failures apart). In a
+        3-D world the bounds, cylinder, terrain and band checks run as one fused kernel
+        (:mod:`uavplan.problems._validity_kernels`)."""
         skipped = set(skip)
         names = [c for c in CASCADE if c in self.checks() and c not in skipped]
         names += [c for c in self.checks() if c not in names and c not in skipped]
         idx = np.arange(b.paths.shape[0])
+        args = self._static_args
+        if args is not None and not skipped & STATIC:
+            idx = idx[VK.static_world_ok(b.paths, *args)]
+            names = [c for c in names if c not in STATIC]
         for c in names:
             if not idx.size:
                 break
@@ -411,9 +464,8 @@ class MotionValidator:
     def paths_valid(self, paths: FloatArray, times: FloatArray | None = None) -> BoolArray:
         """Whether each path (pop, n, dim), flown at ``times`` (pop, n), passes every check."""
         b = self.batch(paths, times)
-        ok = np.ones(b.paths.shape[0], dtype=bool)
-        for v in self.violations(b).values():
-            ok &= ~v
+        ok = np.zeros(b.paths.shape[0], dtype=bool)
+        ok[self.passing(b)] = True
         return ok
 
     def segments_valid(

@@ -331,29 +331,46 @@ def mean_height_batch(H, u, v):  # pragma: no cover - numba
     return out
 
 
+@njit(cache=True, inline="always")
+def bilinear_one(H, x0, y0, dx, dy, x, y):  # pragma: no cover - numba
+    """Bilinear height at one point, clamped to the grid (the arithmetic of
+    :meth:`uavplan.world.terrain.Terrain.height_reference`)."""
+    ny, nx = H.shape
+    u = (x - x0) / dx
+    v = (y - y0) / dy
+    u = min(max(u, 0.0), nx - 1.0)
+    v = min(max(v, 0.0), ny - 1.0)
+    i = min(int(np.floor(u)), nx - 2)
+    j = min(int(np.floor(v)), ny - 2)
+    s = u - i
+    r = v - j
+    h00 = H[j, i]
+    h10 = H[j, i + 1]
+    h01 = H[j + 1, i]
+    h11 = H[j + 1, i + 1]
+    return h00 + (h10 - h00) * s + (h01 - h00) * r + (h00 - h10 - h01 + h11) * s * r
+
+
 @njit(cache=True)
 def bilinear_heights(H, x0, y0, dx, dy, x, y):  # pragma: no cover - numba
     """Bilinear height at the points ``(x[k], y[k])`` (flat float64 arrays), clamped to the grid:
     the same arithmetic, in the same order, as :meth:`uavplan.world.terrain.Terrain.height`'s
     NumPy form (which tests compare it with)."""
-    ny, nx = H.shape
     n = x.shape[0]
     out = np.empty(n)
     for k in range(n):
-        u = (x[k] - x0) / dx
-        v = (y[k] - y0) / dy
-        u = min(max(u, 0.0), nx - 1.0)
-        v = min(max(v, 0.0), ny - 1.0)
-        i = min(int(np.floor(u)), nx - 2)
-        j = min(int(np.floor(v)), ny - 2)
-        s = u - i
-        r = v - j
-        h00 = H[j, i]
-        h10 = H[j, i + 1]
-        h01 = H[j + 1, i]
-        h11 = H[j + 1, i + 1]
-        out[k] = h00 + (h10 - h00) * s + (h01 - h00) * r + (h00 - h10 - h01 + h11) * s * r
+        out[k] = bilinear_one(H, x0, y0, dx, dy, x[k], y[k])
     return out
+
+
+@njit(cache=True, inline="always")
+def snap_one(a, n1, tol):  # pragma: no cover - numba
+    """A cell coordinate within ``tol`` of 0 or of ``n1`` put exactly there."""
+    if abs(a) <= tol:
+        a = 0.0
+    if abs(a - n1) <= tol:
+        a = float(n1)
+    return a
 
 
 @njit(cache=True)
@@ -365,16 +382,6 @@ def snapped_cell_coords(x, y, x0, y0, dx, dy, nx1, ny1, tol_u, tol_v):  # pragma
     u = np.empty(n)
     v = np.empty(n)
     for k in range(n):
-        a = (x[k] - x0) / dx
-        b = (y[k] - y0) / dy
-        if abs(a) <= tol_u:
-            a = 0.0
-        if abs(a - nx1) <= tol_u:
-            a = float(nx1)
-        if abs(b) <= tol_v:
-            b = 0.0
-        if abs(b - ny1) <= tol_v:
-            b = float(ny1)
-        u[k] = a
-        v[k] = b
+        u[k] = snap_one((x[k] - x0) / dx, nx1, tol_u)
+        v[k] = snap_one((y[k] - y0) / dy, ny1, tol_v)
     return u, v

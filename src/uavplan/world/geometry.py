@@ -70,34 +70,40 @@ def segment_cylinder_distance(paths, centers, z_lo, z_hi):  # pragma: no cover -
     out = np.empty((P, N - 1, J))
     for p in prange(P):
         for s in range(N - 1):
-            ax = paths[p, s, 0]
-            ay = paths[p, s, 1]
-            az = paths[p, s, 2]
-            ex = paths[p, s + 1, 0] - ax
-            ey = paths[p, s + 1, 1] - ay
-            dz = paths[p, s + 1, 2] - az
-            ee = ex * ex + ey * ey
-            inv_ee = 1.0 / ee if ee > 0.0 else 0.0
-            flat = dz == 0.0
-            inv_dz = 1.0 / dz if not flat else 0.0
             for j in range(J):
-                if flat:
-                    t0 = 0.0
-                    t1 = 1.0 if z_lo[j] <= az <= z_hi[j] else -1.0
-                else:
-                    ta = (z_lo[j] - az) * inv_dz
-                    tb = (z_hi[j] - az) * inv_dz
-                    t0 = max(0.0, min(ta, tb))
-                    t1 = min(1.0, max(ta, tb))
-                qx = centers[j, 0] - ax
-                qy = centers[j, 1] - ay
-                t = (qx * ex + qy * ey) * inv_ee
-                t = min(max(t, t0), t1)
-                rx = qx - t * ex
-                ry = qy - t * ey
-                d = np.sqrt(rx * rx + ry * ry)
-                out[p, s, j] = d if t0 <= t1 else np.inf
+                out[p, s, j] = seg_cyl_dist(paths, p, s, centers, z_lo, z_hi, j)
     return out
+
+
+@njit(cache=True, inline="always")
+def seg_cyl_dist(paths, p, s, centers, z_lo, z_hi, j):  # pragma: no cover - numba
+    """:func:`segment_cylinder_distance` of segment ``s`` of path ``p`` to cylinder ``j``."""
+    ax = paths[p, s, 0]
+    ay = paths[p, s, 1]
+    az = paths[p, s, 2]
+    ex = paths[p, s + 1, 0] - ax
+    ey = paths[p, s + 1, 1] - ay
+    dz = paths[p, s + 1, 2] - az
+    ee = ex * ex + ey * ey
+    inv_ee = 1.0 / ee if ee > 0.0 else 0.0
+    flat = dz == 0.0
+    inv_dz = 1.0 / dz if not flat else 0.0
+    if flat:
+        t0 = 0.0
+        t1 = 1.0 if z_lo[j] <= az <= z_hi[j] else -1.0
+    else:
+        ta = (z_lo[j] - az) * inv_dz
+        tb = (z_hi[j] - az) * inv_dz
+        t0 = max(0.0, min(ta, tb))
+        t1 = min(1.0, max(ta, tb))
+    qx = centers[j, 0] - ax
+    qy = centers[j, 1] - ay
+    t = (qx * ex + qy * ey) * inv_ee
+    t = min(max(t, t0), t1)
+    rx = qx - t * ex
+    ry = qy - t * ey
+    d = np.sqrt(rx * rx + ry * ry)
+    return d if t0 <= t1 else np.inf
 
 
 def cylinder_distances(
