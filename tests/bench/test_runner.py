@@ -227,3 +227,27 @@ def test_report_uses_the_runs_the_last_sweep_asked_for(tmp_path) -> None:
     _, md = write_report(tmp_path)
     text = md.read_text()
     assert "| runs finished | 3 |" in text  # one run per cell of the three algorithms
+
+
+def test_only_runs_the_chosen_configurations_and_keeps_the_rest(tmp_path: Path) -> None:
+    first = run_sweep(PLAN, tmp_path, executor="serial", runs=2, only=["de"])
+    assert first.executed == 4 and first.skipped == 0
+    assert set(_results(tmp_path).algorithm) == {"de"}
+    second = run_sweep(PLAN, tmp_path, executor="serial", runs=2)
+    assert second.skipped == 4 and second.executed == 4
+    assert len(_results(tmp_path)) == 8
+    with pytest.raises(ValueError, match="no configuration 'ga'; choose from pso, de"):
+        run_sweep(PLAN, tmp_path, executor="serial", only=["ga"])
+
+
+def test_cli_only_refuses_an_unknown_configuration(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from uavplan.cli import app
+
+    res = CliRunner().invoke(
+        app, ["bench", "run", "ppswarm-table4", "--only", "ppswarm-r9", "--out", str(tmp_path)]
+    )
+    assert res.exit_code == 2
+    assert "--only: plan 'ppswarm-table4' has no configuration 'ppswarm-r9'" in res.output
+    assert "ppswarm-r5-flown" in res.output and not (tmp_path / "runs").exists()

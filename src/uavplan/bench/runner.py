@@ -169,6 +169,7 @@ def run_sweep(
     retry_failed: bool = False,
     max_pool_restarts: int = 3,
     dask_client: Any = None,
+    only: Sequence[str] | None = None,
 ) -> SweepSummary:
     """Run every not-yet-finished run of ``plan`` and store the results under ``out``.
 
@@ -178,12 +179,22 @@ def run_sweep(
         workers: worker processes (default: all cores).
         retry_failed: run again the runs that ended with an error.
         dask_client: an existing ``distributed.Client`` to use (tests).
+        only: run only these configurations (algorithm labels) of the plan; the others' runs
+            are left as they are (the manifest still describes the whole plan).
     Raises:
         SweepInterrupted: on Ctrl-C, after saving every finished run.
     """
     if executor not in EXECUTORS:
         raise ValueError(f"unknown executor {executor!r}; choose from {EXECUTORS}")
     specs = plan.runs(scale, runs, root_seed, iterations)
+    labels = [a.label for a in plan.algorithms]
+    if only is not None:
+        unknown = [o for o in only if o not in labels]
+        if unknown or not only:
+            raise ValueError(
+                f"plan {plan.name!r} has no configuration {', '.join(map(repr, unknown))}; "
+                f"choose from {', '.join(labels)}"
+            )
     out = Path(out)
     store = ResultStore(out)
     write_json_atomic(
@@ -203,9 +214,10 @@ def run_sweep(
         },
     )
     finished = store.finished_ids(include_errors=not retry_failed)
-    todo = [s for s in specs if s.run_id not in finished]
+    selected = [s for s in specs if only is None or s.algorithm in only]
+    todo = [s for s in selected if s.run_id not in finished]
     n_workers = 1 if executor == "serial" else (workers or os.cpu_count() or 1)
-    prog = Progress(total=len(specs), skipped=len(specs) - len(todo))
+    prog = Progress(total=len(selected), skipped=len(selected) - len(todo))
     failures: list[str] = []
     run_time = 0.0
     t0 = time.perf_counter()

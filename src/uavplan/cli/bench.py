@@ -53,6 +53,10 @@ def run(
     seed: Annotated[int, typer.Option(help="Root seed.")] = 0,
     retry_failed: Annotated[bool, typer.Option(help="Run again runs that failed.")] = False,
     report: Annotated[bool, typer.Option(help="Write the report when done.")] = True,
+    only: Annotated[
+        str | None,
+        typer.Option(help="Run only these configurations (comma-separated labels) of PLAN."),
+    ] = None,
 ) -> None:
     """Run PLAN; finished runs in --out are skipped, so the same command resumes a sweep."""
     from uavplan.bench.catalog import get_plan
@@ -65,6 +69,14 @@ def run(
         p.runs(scale, runs, seed, iterations)  # validate before starting anything
     except PlanError as exc:
         raise _fail(str(exc)) from None
+    labels = [a.label for a in p.algorithms]
+    chosen = None if only is None else [o.strip() for o in only.split(",") if o.strip()]
+    if chosen is not None and (not chosen or any(o not in labels for o in chosen)):
+        bad = [o for o in chosen if o not in labels] or [only]
+        raise _fail(
+            f"--only: plan {plan!r} has no configuration {', '.join(map(repr, bad))}; "
+            f"choose from {', '.join(labels)}"
+        )
     if scheduler:
         executor = "dask"
     folder = out_dir or Path("results") / f"{plan}-{scale}"
@@ -101,6 +113,7 @@ def run(
                 scheduler,
                 on_progress,
                 retry_failed,
+                only=chosen,
             )
         except SweepInterrupted as exc:
             raise _fail(str(exc), 130) from None
