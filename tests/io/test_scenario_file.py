@@ -39,6 +39,10 @@ from uavplan.world import (
 
 BUILTINS = [
     "dense",
+    "hrmaga-jacksboro",
+    "hrmaga-spso",
+    "hrmaga-topobathy",
+    "hrmaga-virtual",
     "jacksboro",
     "open",
     "ppswarm1",

@@ -72,7 +72,7 @@ def run(
     labels = [a.label for a in p.algorithms]
     chosen = None if only is None else [o.strip() for o in only.split(",") if o.strip()]
     if chosen is not None and (not chosen or any(o not in labels for o in chosen)):
-        bad = [o for o in chosen if o not in labels] or [only]
+        bad = [o for o in chosen if o not in labels] or [str(only)]
         raise _fail(
             f"--only: plan {plan!r} has no configuration {', '.join(map(repr, bad))}; "
             f"choose from {', '.join(labels)}"

@@ -33,6 +33,7 @@ from uavplan.problems import costs as C
 from uavplan.problems.validity import Batch, MotionValidator
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
+from uavplan.world.terrain import Terrain
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -120,7 +121,7 @@ def _t_smooth_spso(ctx: Batch) -> FloatArray:
 
 
 def _t_hrmaga_altitude(ctx: Batch) -> FloatArray:
-    terrain = ctx.scenario.terrain
+    terrain = ctx.validator.cost_terrain
     if terrain is None:
         return np.zeros(ctx.paths.shape[0])
     return C.hrmaga_altitude_cost(terrain.mean_height(ctx.paths))
@@ -189,6 +190,8 @@ class PathProblem:
         lookup: how terrain heights under waypoints are read (default: as the preset reads
             them, :data:`LOOKUP`; ``"bilinear"`` for custom terms).
         name: the cost model's name (default: the preset's, ``"custom"`` for terms).
+        cost_terrain: the map the cost terms read heights from (default: the scenario's; a
+            terrain pyramid level's sampled map while the checks use its conservative one).
 
     Feasibility is the :attr:`validator`'s verdict; the cost terms and the checks of one
     evaluation share one :class:`~uavplan.problems.validity.Batch`.
@@ -204,6 +207,7 @@ class PathProblem:
         reservations: ReservationTable | None = None,
         lookup: str | None = None,
         name: str | None = None,
+        cost_terrain: Terrain | None = None,
     ) -> None:
         self.scenario = scenario
         self.task = task if isinstance(task, Task) else scenario.task(task)
@@ -231,6 +235,7 @@ class PathProblem:
             strict_altitude=strict_altitude,
             lookup=self.lookup,
             reservations=reservations,
+            cost_terrain=cost_terrain,
         )
         self.dim = scenario.dim
         self.start = np.asarray(self.task.start, dtype=np.float64)

@@ -57,6 +57,7 @@ from uavplan.world import _terrain_kernels as tk
 from uavplan.world import geometry as G
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
+from uavplan.world.terrain import Terrain
 from uavplan.world.tolerances import (
     ANGLE_TOL_DEG,
     BAND_TOL,
@@ -267,6 +268,9 @@ class MotionValidator:
             (``"bilinear"``, or ``"nearest"`` as SPSO's cost reads them).
         reservations: other UAVs' timed trajectories to keep clear of (``separation``).
         kinematics: also check the UAV's kinematic limits (``speed``, ``climb``, ``turn``).
+        cost_terrain: the map the cost terms read terrain heights from (a terrain pyramid
+            level's sampled map, :mod:`uavplan.world.pyramid`), where the checks read the
+            scenario's (that level's conservative map); default the scenario's terrain.
     """
 
     def __init__(
@@ -278,8 +282,10 @@ class MotionValidator:
         lookup: str = "bilinear",
         reservations: ReservationTable | None = None,
         kinematics: bool = False,
+        cost_terrain: Terrain | None = None,
     ) -> None:
         self.scenario = scenario
+        self.cost_terrain = cost_terrain if cost_terrain is not None else scenario.terrain
         self.kinematics = bool(kinematics)
         self.task = task if isinstance(task, Task) else scenario.task(task)
         self.dim = scenario.dim

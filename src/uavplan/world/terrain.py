@@ -22,7 +22,7 @@ FloatArray = NDArray[np.float64]
 #: Mean Earth metres per degree of latitude (WGS84 mean meridional), for the built-in lon/lat DEMs.
 METRES_PER_DEGREE = 111_195.0
 
-BUILTIN_TERRAINS = ("spso", "jacksboro", "topobathy")
+BUILTIN_TERRAINS = ("spso", "jacksboro", "topobathy", "virtual")
 
 
 class TerrainError(ValueError):
@@ -270,13 +270,15 @@ class Terrain:
     # ------------------------------------------------------------------ loading
     @classmethod
     def builtin(cls, name: str) -> Terrain:
-        """One of the built-in maps: ``spso``, ``jacksboro``, ``topobathy``."""
+        """One of the built-in maps: ``spso``, ``jacksboro``, ``topobathy``, ``virtual``."""
         if name == "spso":
             return _spso_terrain()
         if name == "jacksboro":
             return _jacksboro_terrain()
         if name == "topobathy":
             return _topobathy_terrain()
+        if name == "virtual":
+            return _virtual_terrain()
         raise TerrainError(f"unknown built-in terrain {name!r}; choose from {BUILTIN_TERRAINS}")
 
     @classmethod
@@ -434,3 +436,23 @@ def _topobathy_terrain() -> Terrain:
         "sea_level_clipped": True,
     }
     return Terrain(np.maximum(topo, 0.0), 0.0, 0.0, dx, dy, "topobathy", georef)
+
+
+#: The ``virtual`` map's mountains: centre x, y (km), height (m), spread (km).
+_VIRTUAL_HILLS = (
+    (4.0, 14.0, 900.0, 2.2), (6.5, 6.0, 700.0, 1.8), (9.5, 11.5, 1100.0, 2.0),
+    (13.0, 4.5, 650.0, 1.6), (14.5, 15.5, 950.0, 2.4), (17.0, 9.0, 800.0, 1.7),
+    (11.0, 17.5, 600.0, 1.5), (2.5, 3.0, 500.0, 1.4),
+)  # fmt: skip
+
+
+def _virtual_terrain() -> Terrain:
+    """A synthetic 20 km x 20 km map (100 m cells) of eight Gaussian mountains (500-1,100 m)
+    on a gently tilted plain with ridges, the stand-in for HR-MAGA's "virtual map" (Fig. 7(c)),
+    whose formula the paper does not give. Deterministic: a formula, no random numbers."""
+    x = np.arange(201) * 0.1  # km
+    X, Y = np.meshgrid(x, x)
+    H = 100.0 + 8.0 * X + 5.0 * Y + 40.0 * np.sin(X / 1.3) * np.cos(Y / 1.7)
+    for cx, cy, h, s in _VIRTUAL_HILLS:
+        H += h * np.exp(-((X - cx) ** 2 + (Y - cy) ** 2) / (2 * s * s))
+    return Terrain(H, 0.0, 0.0, 100.0, 100.0, "virtual", {"source": "synthetic (uavplan)"})

@@ -57,7 +57,7 @@ class TerrainSpec(_Spec):
         json_schema_extra={"oneOf": [{"required": ["builtin"]}, {"required": ["file"]}]}
     )
 
-    builtin: Literal["spso", "jacksboro", "topobathy"] | None = Field(
+    builtin: Literal["spso", "jacksboro", "topobathy", "virtual"] | None = Field(
         None, description="Name of a built-in terrain."
     )
     file: str | None = Field(

@@ -1,0 +1,439 @@
+"""HR-MAGA and P-MAGA (Yang, Liu & Li, "Path planning of UAVs under dynamic environment based on a
+hierarchical recursive multiagent genetic algorithm", IEEE CEC 2020).
+
+* ``p-maga``: the multi-agent GA of Alg. 1 (:mod:`uavplan.optimizers.maga`) directly on the
+  whole path: 26 free waypoints (27 segments, HR-MAGA's ``num ** v``), a 7 x 7 lattice, the
+  world's checks as constraints (feasibility-first, as ``hr-maga``).
+
+Both use the scenario's cost preset, as every planner here; the paper's loss, Eq. (4), is the
+``hrmaga`` preset (length Eq. 7, terrain under the path Eq. 8, length inside danger areas
+Eq. 9, weights 1 : 10 : 15, Table I), which the HR-MAGA scenarios and experiments set
+(``cost="hrmaga"`` on any other scenario).
+* ``hr-maga``: Alg. 2. Level 1 runs P-MAGA from start to goal on the coarsest map of a terrain
+  pyramid (:mod:`uavplan.world.pyramid`) and keeps its three best agents (Alg. 1 line 17); each
+  next level refines every segment of each of those paths as its own P-MAGA problem on a finer
+  map (Alg. 2 lines 6-13), recursively down to the DEM itself (depth ``v = 3``); bottom-up, the
+  three best sub-paths of each segment are combined (``Integration``, line 15: every one of the
+  ``3 ** num`` combinations is scored and the best kept for each of the three parent paths), and
+  the planner returns the best path, the three best in ``info["paths"]``.
+
+Everything one level's P-MAGA problems need is batched: the level's sub-problems (1, then
+``3 num = 9``, then 81) run in lockstep, one MAGA each, and every step evaluates all their asked
+agents as one population on the level's :class:`~uavplan.problems.path_problem.PathProblem`
+(they are independent: Alg. 2 visits them in turn only because it is written recursively).
+
+Decisions where the paper is vague (and why)
+--------------------------------------------
+* **num and the 27 waypoints.** Table I: ``num = 3`` waypoints per recursion, ``v = 3``, "agent
+  coding length 27 ... the layer-th power of num". We read a level's ``num`` waypoints as the
+  points after the sub-path's start, the last being its (fixed) end: each sub-problem optimizes
+  ``num - 1 = 2`` free waypoints, so a sub-path has ``num`` segments, and after ``v`` levels the
+  path has ``num ** v = 27`` segments (26 free waypoints + the goal = 27 waypoints after the
+  start). ``p-maga`` and the GA baseline get the same 26 free waypoints.
+* **Local maps.** "The algorithm first plans on a local high-precision map": a sub-problem's
+  genes live in the box around its two ends widened by ``local_margin = 0.5`` of their
+  horizontal distance on each side (clipped to the scenario's bounds); the whole map on level 1.
+  Without it, a sub-problem of a 27th of the path would mutate by 5 % of the whole map.
+* **Maps per level** (:mod:`uavplan.world.pyramid`): checks on the level's conservative map (a
+  coarse path that clears is a fine path that clears), Eq. (8) on its sampled map; the first
+  level about ``first_samples = 40`` cells per side.
+* **Uncertain areas** (Eq. 2) are unknown on level 1 and known from ``uncertain_from_level = 2``
+  on (the paper: "if there is an uncertain area on the planned point of the upper layer, the
+  point can be reinitialized ... in the deeper planning"); an area the scenario marks as not
+  revealed stays unknown (it is revealed in flight). A segment end inside a known area moves to
+  the nearest point outside it (1 m beyond its edge, inside the bounds; lifted above the
+  terrain by the band's floor when needed), and both segments meeting there use the moved point.
+* **Constraints.** Eq. (4) has no terrain term and Eq. (6) only forbids turning back; we keep
+  the loss as the paper's and pass the world's checks (bounds, terrain, revealed uncertain
+  areas, cylinders if any, the altitude band) as constraints under Deb's feasibility-first rule
+  (:mod:`uavplan.optimizers.constraints`), so a feasible agent always beats an infeasible one.
+  Eq. (6) is enforced as the paper does, by the smoothing behaviour of P-MAGA (Fig. 3(c)); in
+  the integration a combination with fewer turn-backs (``theta_k <= 0`` at any waypoint,
+  junctions included) ranks first, then the loss.
+* **Budget.** An iteration of the planner is one lockstep step (one evaluated batch of every
+  live sub-problem of a level: a MAGA iteration, :mod:`uavplan.optimizers.maga`). An iteration
+  budget is shared equally among the levels (a level that ends early, all its P-MAGAs at
+  ``G`` generations, leaves the rest to the next ones); an evaluation budget among the
+  sub-problems of all levels (a level of 81 sub-problems gets 81 times the first level's);
+  P-MAGA stops at Table I's ``G = 200`` generations in any case. Table I's full schedule (200
+  generations of 1 + sGen = 11 batches per level) is ``--iterations 6600``; the default, 300
+  iterations (about 9 generations per level), is what plans in a few seconds here.
+* **Integration at a junction** uses the moved segment ends, so the combined path is continuous
+  by construction.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from uavplan.optimizers.constraints import feasibility_first
+from uavplan.optimizers.maga import MAGA, MAGAConfig, turn_cosines
+from uavplan.planners.base import Planner
+from uavplan.planners.optimizer_planner import OptimizerPlanner
+from uavplan.planners.options import PlannerConfig, PlannerError, option
+from uavplan.planners.registry import register_planner
+from uavplan.planners.run import Outcome, Run, Tracker
+from uavplan.problems.path_problem import LOOKUP, PathProblem
+from uavplan.world.obstacles import UncertainArea
+from uavplan.world.pyramid import TerrainLevel, terrain_pyramid
+from uavplan.world.reservations import ReservationTable
+from uavplan.world.scenario import Scenario, Task
+
+FloatArray = NDArray[np.float64]
+
+#: one sub-path's three best results: (3, n_points, 3) paths, (3,) rule numbers
+Best3 = tuple[FloatArray, FloatArray]
+
+
+@dataclass(frozen=True)
+class HRMAGAConfig(PlannerConfig):
+    """Options of :class:`HRMAGA` (Table I where the paper gives them)."""
+
+    v: int = option(3, "recursion depth: levels of the terrain pyramid (Table I)", low=1, high=5)
+    num: int = option(
+        3, "waypoints per recursion (Table I): num - 1 free ones, num segments", low=2, high=10
+    )
+    pop_size: int = option(49, "agents per lattice (Table I: 7 x 7)", low=4)
+    P_c: float = option(0.5, "crossover rate (Table I)", low=0.0, high=1.0)
+    P_m: float = option(0.3, "mutation rate (Table I)", low=0.0, high=1.0)
+    sGen: int = option(10, "self-learning generations (MAGA [26]; not in the paper)", low=0)
+    keep: int = option(3, "best paths kept per sub-problem (Alg. 1 line 17)", low=1, high=10)
+    first_samples: int = option(40, "cells per side of the first level's map (Fig. 1(a))", low=2)
+    local_margin: float = option(
+        0.5, "sub-problem box: its ends' box widened by this share of their distance", low=0.0
+    )
+    G: int = option(200, "P-MAGA generations per sub-problem at most (Table I)", low=1)
+    uncertain_from_level: int = option(
+        2, "first level that knows the uncertain areas (the paper: the finer ones)", low=1
+    )
+
+
+@dataclass
+class _Sub:
+    """One P-MAGA problem: free waypoints between ``start`` and ``goal`` in a gene box."""
+
+    start: FloatArray
+    goal: FloatArray
+    lower: FloatArray
+    upper: FloatArray
+    block: int
+    n_free: int
+    ground: bool  # z gene = height above the level's conservative terrain
+
+    @property
+    def dim(self) -> int:
+        return int(self.lower.shape[0])
+
+    def evaluate(self, X: FloatArray) -> FloatArray:  # pragma: no cover - lockstep evaluates
+        raise NotImplementedError("HR-MAGA evaluates its sub-problems together")
+
+
+class HRMAGA(Planner):
+    """Hierarchical recursive MAGA (Alg. 2); see the module docstring."""
+
+    name = "hr-maga"
+    Config = HRMAGAConfig
+    config: HRMAGAConfig
+    dims = (3,)
+    inner_optimizer = None
+
+    default_iterations = 300
+
+    def check_input(self, scenario: Scenario, task: Task) -> None:
+        super().check_input(scenario, task)
+        if scenario.terrain is None:
+            raise PlannerError(
+                f"{self.name} plans over a terrain (its pyramid of maps); {scenario.name!r} "
+                "has none"
+            )
+
+    # ------------------------------------------------------------------ levels
+    def _level_scenario(self, scenario: Scenario, level: TerrainLevel, lv: int) -> Scenario:
+        cfg = self.config
+        known = lv >= cfg.uncertain_from_level
+        areas = tuple(
+            dataclasses.replace(u, revealed=u.revealed and known) for u in scenario.uncertain_areas
+        )
+        return dataclasses.replace(scenario, terrain=level.feasibility, uncertain_areas=areas)
+
+    def problem(
+        self, scenario: Scenario, task: Task, reservations: ReservationTable | None = None
+    ) -> PathProblem:
+        """The task's problem on the full map, the band checked along whole segments (as the
+        flight is checked)."""
+        return self._problem(scenario, task, None, True)
+
+    def _problem(
+        self, scenario: Scenario, task: Task, level: TerrainLevel | None, strict: bool
+    ) -> PathProblem:
+        cfg = self.config
+        try:
+            return PathProblem(
+                scenario, task, cost=cfg.cost, weights=cfg.weights, strict_altitude=strict,
+                cost_terrain=None if level is None else level.cost,
+                lookup=LOOKUP.get(scenario.cost, "bilinear"),  # as the flight reads the band
+            )  # fmt: skip
+        except ValueError as exc:
+            raise PlannerError(f"{self.name}: {exc}") from None
+
+    def _sub(self, sc: Scenario, a: FloatArray, b: FloatArray, local: bool) -> _Sub:
+        cfg = self.config
+        lo, hi = sc.bounds.lo.copy(), sc.bounds.hi.copy()
+        if local:
+            w = cfg.local_margin * float(np.linalg.norm(b[:2] - a[:2]))
+            lo[:2] = np.maximum(lo[:2], np.minimum(a[:2], b[:2]) - w)
+            hi[:2] = np.minimum(hi[:2], np.maximum(a[:2], b[:2]) + w)
+        ground = False
+        if sc.altitude is not None:
+            if sc.altitude.reference == "ground":
+                lo[2], hi[2], ground = sc.altitude.min, sc.altitude.max, True
+            else:
+                lo[2], hi[2] = max(lo[2], sc.altitude.min), min(hi[2], sc.altitude.max)
+        n_free = cfg.num - 1
+        return _Sub(a, b, np.tile(lo, n_free), np.tile(hi, n_free), 3, n_free, ground)
+
+    def _decode(self, sub: _Sub, X: FloatArray, sc: Scenario) -> FloatArray:
+        free = X.reshape(X.shape[0], sub.n_free, 3).copy()
+        if sub.ground:
+            assert sc.terrain is not None
+            free[..., 2] += sc.terrain.lookup(free[..., 0], free[..., 1], _lookup(sc))
+        out = np.empty((X.shape[0], sub.n_free + 2, 3))
+        out[:, 0], out[:, 1:-1], out[:, -1] = sub.start, free, sub.goal
+        return out
+
+    def _solve_level(
+        self, run: Run, problem: PathProblem, sc: Scenario, subs: list[_Sub],
+        rngs: list[np.random.Generator], steps: float, evaluations: float,
+    ) -> list[Best3]:  # fmt: skip
+        """Run one MAGA per sub-problem in lockstep; the ``keep`` best agents of each."""
+        cfg = self.config
+        mcfg = MAGAConfig(pop_size=cfg.pop_size, P_c=cfg.P_c, P_m=cfg.P_m, sGen=cfg.sGen)
+        opts = [MAGA(s, mcfg, seed=g) for s, g in zip(subs, rngs, strict=True)]
+        tr = run.tracker
+        used = n_steps = 0
+        while n_steps < steps and used < evaluations:
+            live = [k for k, o in enumerate(opts) if o.generation < cfg.G]
+            if not live:
+                break
+            asks = [opts[k].ask() for k in live]
+            paths = np.concatenate(
+                [self._decode(subs[k], X, sc) for k, X in zip(live, asks, strict=True)]
+            )
+            f, cv = problem.evaluate_cv(paths, exact=True)
+            num = feasibility_first(f, cv)
+            start = 0
+            for k, X in zip(live, asks, strict=True):
+                opts[k].tell(X, num[start : start + len(X)])
+                start += len(X)
+            tr.evaluations += len(paths)
+            used += len(paths)
+            n_steps += 1
+            if tr.end_iteration(best=tr.cost):
+                self._stopped = True
+                break
+        out = []
+        for s, o in zip(subs, opts, strict=True):
+            order = np.argsort(o.F, kind="stable")[: cfg.keep]
+            out.append((self._decode(s, o.L[order], sc), o.F[order]))
+        return out
+
+    # ------------------------------------------------------------------ integration
+    @staticmethod
+    def _turn_backs(paths: FloatArray) -> NDArray[np.int64]:
+        return np.asarray(np.sum(turn_cosines(paths) <= 0, axis=1), dtype=np.int64)
+
+    def _integrate(
+        self, problem: PathProblem, parts: list[Best3], tr: Tracker
+    ) -> tuple[FloatArray, FloatArray]:
+        """Alg. 2 line 15 for one parent path: every combination of its segments' best
+        sub-paths, ranked by turn-backs, then the rule's number; the best one."""
+        choices = [range(len(p[0])) for p in parts]
+        combos = list(itertools.product(*choices))
+        paths = np.stack(
+            [
+                np.concatenate(
+                    [parts[0][0][c[0]][:1]] + [parts[j][0][c[j]][1:] for j in range(len(parts))]
+                )
+                for c in combos
+            ]
+        )
+        f, cv = problem.evaluate_cv(paths, exact=True)
+        tr.evaluations += len(paths)
+        num = feasibility_first(f, cv)
+        order = np.lexsort((num, self._turn_backs(paths)))
+        return paths[order[0]], np.asarray(num[order[0]])
+
+    # ------------------------------------------------------------------ uncertain areas
+    @staticmethod
+    def _admit(p: FloatArray, areas: list[UncertainArea], sc: Scenario) -> FloatArray:
+        """Segment end ``p`` made admissible on level scenario ``sc``: moved to the nearest
+        point 1 m outside every known uncertain area it is in (Sect. III-C, Alg. 2 line 11),
+        then its altitude put back into the band over this level's map (a coarse map is
+        higher than the fine one, so a point at the top of the band there may be above it
+        here)."""
+        q = p.copy()
+        lo, hi = sc.bounds.lo, sc.bounds.hi
+        for _ in range(len(areas) + 1):
+            inside = [
+                a for a in areas if a.x <= q[0] <= a.x + a.width and a.y <= q[1] <= a.y + a.height
+            ]
+            if not inside:
+                break
+            a = inside[0]
+            cands = [
+                (q[0] - a.x, (a.x - 1.0, q[1])),
+                (a.x + a.width - q[0], (a.x + a.width + 1.0, q[1])),
+                (q[1] - a.y, (q[0], a.y - 1.0)),
+                (a.y + a.height - q[1], (q[0], a.y + a.height + 1.0)),
+            ]
+            cands = [c for c in cands if lo[0] <= c[1][0] <= hi[0] and lo[1] <= c[1][1] <= hi[1]]
+            if not cands:
+                break
+            q[:2] = min(cands)[1]
+        band = sc.altitude
+        if band is not None:
+            base = 0.0
+            if band.reference == "ground" and sc.terrain is not None:
+                base = float(sc.terrain.lookup(q[0], q[1], _lookup(sc)))
+            q[2] = min(max(q[2], base + band.min), base + band.max)
+        elif sc.terrain is not None:
+            q[2] = max(q[2], float(sc.terrain.height(q[0], q[1])))
+        q[2] = min(max(q[2], lo[2]), hi[2])
+        return q
+
+    # ------------------------------------------------------------------ Alg. 2
+    def _plan(self, run: Run) -> Outcome:
+        cfg = self.config
+        sc0 = run.scenario
+        assert sc0.terrain is not None
+        levels = terrain_pyramid(sc0.terrain, cfg.v, cfg.first_samples)
+        n_sub = [(cfg.keep * cfg.num) ** lv for lv in range(cfg.v)]
+        max_it, max_ev = run.max_iterations, run.budget.max_evaluations
+        self._stopped = False
+        root_seq = np.random.SeedSequence(run.seed)
+        # nodes of the recursion, level by level: (parent node, segment j) -> its sub-problem
+        start = np.asarray(run.task.start, dtype=np.float64)
+        goal = np.asarray(run.task.goal, dtype=np.float64)
+        ends: list[tuple[FloatArray, FloatArray]] = [(start, goal)]
+        results: list[list[Best3]] = []
+        problems: list[PathProblem] = []
+        best_so_far: FloatArray | None = None
+        for lv, level in enumerate(levels, start=1):
+            sc = self._level_scenario(sc0, level, lv)
+            problem = self._problem(sc, run.task, level, strict=lv == cfg.v)
+            problems.append(problem)
+            subs = [self._sub(sc, a, b, local=lv > 1) for a, b in ends]
+            tr = run.tracker
+            left = cfg.v - lv + 1  # levels still to run, this one included
+            steps = math.inf if max_it is None else (max_it - len(tr.history)) / left
+            evals = (
+                math.inf
+                if max_ev is None
+                else (max_ev - tr.evaluations) * len(subs) / sum(n_sub[lv - 1 :])
+            )
+            if lv == cfg.v:
+                steps = math.inf if max_it is None else max_it - len(tr.history)
+            rngs = [np.random.default_rng(s) for s in root_seq.spawn(len(subs))]
+            best = self._solve_level(run, problem, sc, subs, rngs, max(steps, 1), evals)
+            results.append(best)
+            # the best full path so far: each node's best sub-path, joined (anytime result)
+            best_so_far = self._join_best(results)
+            ev = run.problem.evaluate(best_so_far[None])
+            run.tracker.evaluations += 1
+            run.tracker.offer(best_so_far, float(ev.cost[0]), bool(ev.feasible[0]))
+            if lv == cfg.v or self._stopped:
+                break
+            nxt_sc = self._level_scenario(sc0, levels[lv], lv + 1)
+            known = [u for u in nxt_sc.uncertain_areas if u.revealed]
+            ends = []
+            for paths, _ in best:
+                for p in paths:  # each kept path of this node
+                    # every junction, the previous levels' too (a deterministic move: the
+                    # sub-paths meeting there move it alike); never the task's start and goal
+                    pts = [
+                        q
+                        if np.array_equal(q, start) or np.array_equal(q, goal)
+                        else self._admit(q, known, nxt_sc)
+                        for q in p
+                    ]
+                    ends.extend((pts[j], pts[j + 1]) for j in range(len(pts) - 1))
+        # bottom-up integration (Alg. 2 line 15) on the finest level's problem reached
+        paths3 = self._integrate_up(results, problems[-1], run.tracker)
+        final = run.problem.evaluate(paths3)
+        run.tracker.evaluations += len(paths3)
+        order = np.lexsort((final.cost, ~final.feasible))
+        for k in order:
+            run.tracker.offer(paths3[k], float(final.cost[k]), bool(final.feasible[k]))
+        tr = run.tracker
+        if tr.history:  # found after the last iteration closed
+            tr.amend(tr.cost, tr.cost if tr.feasible else math.inf)
+        return Outcome(
+            path=paths3[order[0]],
+            info={
+                "paths": [paths3[k].tolist() for k in order],
+                "costs": [float(final.cost[k]) for k in order],
+                "levels": len(results),
+                "factors": [lv.factor for lv in levels[: len(results)]],
+            },
+        )
+
+    def _join_best(self, results: list[list[Best3]]) -> FloatArray:
+        """The path of every node's best sub-path, recursively (no integration search)."""
+        cfg = self.config
+        k = cfg.keep * cfg.num
+
+        def node(lv: int, idx: int) -> FloatArray:
+            paths, _ = results[lv][idx]
+            if lv + 1 == len(results):
+                return paths[0]
+            kids = [node(lv + 1, idx * k + j) for j in range(cfg.num)]  # children of path 0
+            return np.concatenate([kids[0][:1]] + [c[1:] for c in kids])
+
+        return node(0, 0)
+
+    def _integrate_up(
+        self, results: list[list[Best3]], problem: PathProblem, tr: Tracker
+    ) -> FloatArray:
+        """The ``keep`` paths of the root after integrating every level bottom-up, each
+        combination scored on ``problem`` (the finest level reached)."""
+        cfg = self.config
+        k = cfg.keep * cfg.num
+        for lv in range(len(results) - 1, 0, -1):
+            parents = results[lv - 1]
+            merged: list[Best3] = []
+            for pidx, (ppaths, _) in enumerate(parents):
+                news, nums = [], []
+                for i in range(len(ppaths)):
+                    base = pidx * k + i * cfg.num
+                    parts = [results[lv][base + j] for j in range(cfg.num)]
+                    path, val = self._integrate(problem, parts, tr)
+                    news.append(path)
+                    nums.append(float(val))
+                order = np.argsort(nums, kind="stable")
+                merged.append((np.stack([news[o] for o in order]), np.asarray(nums)[order]))
+            results[lv - 1] = merged
+        return results[0][0][0]
+
+
+def _lookup(sc: Scenario) -> str:
+    """How the scenario's band reads terrain heights under waypoints (as its flight does)."""
+    return LOOKUP.get(sc.cost, "bilinear")
+
+
+register_planner(
+    HRMAGA, name="hr-maga", summary="HR-MAGA: hierarchical recursive P-MAGA over a terrain pyramid"
+)
+register_planner(
+    OptimizerPlanner,
+    name="p-maga",
+    summary="P-MAGA: HR-MAGA's multi-agent GA on the whole path (26 free waypoints, Eq. 4)",
+    optimizer="maga",
+    n_waypoints=26,
+    constraints="feasibility-first",
+)

@@ -1,0 +1,120 @@
+"""HR-MAGA (Alg. 2): a continuous start-to-goal path of num ** v segments that clears the
+terrain and every revealed uncertain area on the finest map; uncertain areas unknown on the
+first level; segment ends moved out of them."""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+
+import numpy as np
+import pytest
+
+from uavplan.planners import PlannerError, get_planner
+from uavplan.planners.hr_maga import HRMAGA
+from uavplan.problems.path_problem import PathProblem
+from uavplan.world.obstacles import DangerArea, UncertainArea
+from uavplan.world.pyramid import terrain_pyramid
+from uavplan.world.scenario import UAV, AltitudeBand, Bounds, Scenario, Task
+from uavplan.world.terrain import Terrain
+
+
+def hills() -> Scenario:
+    """A 2 km x 2 km map of hills (20 m cells), an uncertain area and a danger area on the
+    straight line, a band 30-250 m above ground."""
+    x = np.arange(0, 2001, 20.0)
+    X, Y = np.meshgrid(x, x)
+    H = 150 * np.exp(-((X - 700) ** 2 + (Y - 600) ** 2) / 2e5) + 120 * np.exp(
+        -((X - 1300) ** 2 + (Y - 1400) ** 2) / 1.5e5
+    ) + 20 * np.sin(X / 130) * np.cos(Y / 170)
+    t = Terrain(H, 0.0, 0.0, 20.0, 20.0, "hills")
+    s = (100.0, 100.0, float(t.height(100.0, 100.0)) + 100.0)
+    g = (1900.0, 1900.0, float(t.height(1900.0, 1900.0)) + 100.0)
+    return Scenario(
+        "hills",
+        Bounds((0.0, 0.0, -50.0), (2000.0, 2000.0, 600.0)),
+        (Task("uav0", s, g),),
+        terrain=t,
+        danger_areas=(DangerArea((1400.0, 1300.0), 150.0),),
+        uncertain_areas=(UncertainArea(850.0, 850.0, 300.0, 300.0, revealed=True),),
+        altitude=AltitudeBand(30.0, 250.0, "ground"),
+        uav=UAV(speed=20.0),
+        cost="hrmaga",
+        n_waypoints=5,
+    )
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_hr_maga_path_is_continuous_and_clear_on_the_finest_map(seed: int) -> None:
+    sc = hills()
+    r = get_planner("hr-maga").plan(sc, budget=150, seed=seed)
+    w = r.waypoints
+    assert w.shape == (28, 3)  # 3 ** 3 segments
+    assert np.allclose(w[0], sc.tasks[0].start) and np.allclose(w[-1], sc.tasks[0].goal)
+    assert r.feasible and r.flown_feasible, r.violations
+    ev = PathProblem(sc, strict_altitude=True).evaluate(w[None])
+    assert bool(ev.feasible[0])  # the terrain and the revealed area, along whole segments
+    a = sc.uncertain_areas[0]
+    dense = np.concatenate([np.linspace(p, q, 200) for p, q in itertools.pairwise(w)])
+    inside = (
+        (dense[:, 0] > a.x) & (dense[:, 0] < a.x + a.width)
+        & (dense[:, 1] > a.y) & (dense[:, 1] < a.y + a.height)
+    )  # fmt: skip
+    assert not inside.any()
+    assert np.all(dense[:, 2] >= sc.terrain.height(dense[:, 0], dense[:, 1]) + 30 - 1e-6)
+    # the three best paths, best first, the returned one among them
+    costs = r.info["costs"]
+    assert len(r.info["paths"]) == 3 and costs == sorted(costs)
+    assert np.allclose(r.info["paths"][0], w) and costs[0] == pytest.approx(r.cost)
+    assert r.info["factors"] == [2, 2, 1]  # 100 cells per side: 2.5 -> 2 on the first level
+
+
+def test_uncertain_areas_unknown_on_the_first_level() -> None:
+    sc = hills()
+    hr = HRMAGA()
+    levels = terrain_pyramid(sc.terrain, 3)
+    first = hr._level_scenario(sc, levels[0], 1)
+    second = hr._level_scenario(sc, levels[1], 2)
+    assert not first.uncertain_areas[0].revealed and not first.no_fly_polygons
+    assert second.uncertain_areas[0].revealed and len(second.no_fly_polygons) == 1
+    assert first.terrain is levels[0].feasibility
+    # an area the scenario keeps unrevealed (revealed in flight) is unknown on every level
+    hidden = dataclasses.replace(
+        sc, uncertain_areas=(dataclasses.replace(sc.uncertain_areas[0], revealed=False),)
+    )
+    assert not hr._level_scenario(hidden, levels[2], 3).no_fly_polygons
+
+
+def test_segment_end_moves_to_the_nearest_point_outside_the_area() -> None:
+    sc = hills()
+    lv = hr_level(sc)
+    a = sc.uncertain_areas[0]  # x 850-1150, y 850-1150
+    q = HRMAGA._admit(np.array([900.0, 1000.0, 500.0]), [a], lv)
+    assert q[0] == pytest.approx(849.0) and q[1] == 1000.0  # the west edge is nearest
+    ground = float(lv.terrain.height(q[0], q[1]))
+    assert ground + 30 <= q[2] <= ground + 250  # back in the band over this level's map
+    q = HRMAGA._admit(np.array([1000.0, 1140.0, ground + 100]), [a], lv)
+    assert q[1] == pytest.approx(1151.0) and q[0] == 1000.0
+    outside = np.array([500.0, 500.0, float(lv.terrain.height(500.0, 500.0)) + 100])
+    assert np.array_equal(HRMAGA._admit(outside, [a], lv), outside)
+
+
+def hr_level(sc: Scenario) -> Scenario:
+    return HRMAGA()._level_scenario(sc, terrain_pyramid(sc.terrain, 3)[2], 3)
+
+
+def test_hr_maga_needs_a_terrain_and_3d() -> None:
+    sc = hills()
+    flat = dataclasses.replace(sc, terrain=None, altitude=None)
+    with pytest.raises(PlannerError, match="terrain"):
+        get_planner("hr-maga").plan(flat, budget=10, seed=0)
+
+
+def test_evaluation_budget_is_kept_and_shared_by_the_levels() -> None:
+    sc = hills()
+    from uavplan.optimizers.base import Budget
+
+    r = get_planner("hr-maga").plan(sc, budget=Budget(max_evaluations=20_000), seed=0)
+    assert r.info["levels"] == 3
+    # every level stops at its share; the last batch and the integration may overshoot a little
+    assert 20_000 <= r.evaluations <= 24_000
