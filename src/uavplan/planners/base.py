@@ -294,6 +294,24 @@ class Planner(ABC):
     def _plan(self, run: Run) -> FloatArray | Outcome | None:
         """Search; record into ``run.tracker``; return the path (or an :class:`Outcome`)."""
 
+    def repair(
+        self,
+        scenario: Scenario,
+        task: Task,
+        path: FloatArray,
+        times: FloatArray,
+        area: int,
+        budget: Budget | int | None = None,
+        seed: int | None = None,
+    ) -> tuple[FloatArray, dict[str, Any]]:
+        """A new remaining path after uncertain area ``area`` was revealed in flight
+        (:mod:`uavplan.planners.replanning`): from ``task.start`` (the UAV's predicted
+        position, at ``task.start_time``) to its goal, on ``scenario`` (the world as now known);
+        ``path``/``times``: the remaining plan, starting there. The default plans again from
+        scratch; planners that can repair locally override it. Returns the path and figures."""
+        r = self.plan(scenario, task, budget, seed)
+        return np.asarray(r.waypoints), {"how": "from scratch", "evaluations": r.evaluations}
+
 
 def separated_problem(
     scenario: Scenario,

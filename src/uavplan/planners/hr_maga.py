@@ -68,17 +68,19 @@ import dataclasses
 import itertools
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from uavplan.optimizers.base import Budget
 from uavplan.optimizers.constraints import feasibility_first
 from uavplan.optimizers.maga import MAGA, MAGAConfig, turn_cosines
 from uavplan.planners.base import Planner
 from uavplan.planners.optimizer_planner import OptimizerPlanner
 from uavplan.planners.options import PlannerConfig, PlannerError, option
 from uavplan.planners.registry import register_planner
-from uavplan.planners.run import Outcome, Run, Tracker
+from uavplan.planners.run import Outcome, Run, Termination, Tracker
 from uavplan.problems.path_problem import LOOKUP, PathProblem
 from uavplan.world.obstacles import UncertainArea
 from uavplan.world.pyramid import TerrainLevel, terrain_pyramid
@@ -109,6 +111,9 @@ class HRMAGAConfig(PlannerConfig):
         0.5, "sub-problem box: its ends' box widened by this share of their distance", low=0.0
     )
     G: int = option(200, "P-MAGA generations per sub-problem at most (Table I)", low=1)
+    repair_iterations: int = option(
+        20, "lockstep steps of a repair in flight (ours; the paper gives none)", low=1
+    )
     uncertain_from_level: int = option(
         2, "first level that knows the uncertain areas (the paper: the finer ones)", low=1
     )
@@ -182,7 +187,9 @@ class HRMAGA(Planner):
         except ValueError as exc:
             raise PlannerError(f"{self.name}: {exc}") from None
 
-    def _sub(self, sc: Scenario, a: FloatArray, b: FloatArray, local: bool) -> _Sub:
+    def _sub(
+        self, sc: Scenario, a: FloatArray, b: FloatArray, local: bool, n_free: int | None = None
+    ) -> _Sub:
         cfg = self.config
         lo, hi = sc.bounds.lo.copy(), sc.bounds.hi.copy()
         if local:
@@ -195,7 +202,7 @@ class HRMAGA(Planner):
                 lo[2], hi[2], ground = sc.altitude.min, sc.altitude.max, True
             else:
                 lo[2], hi[2] = max(lo[2], sc.altitude.min), min(hi[2], sc.altitude.max)
-        n_free = cfg.num - 1
+        n_free = cfg.num - 1 if n_free is None else n_free
         return _Sub(a, b, np.tile(lo, n_free), np.tile(hi, n_free), 3, n_free, ground)
 
     def _decode(self, sub: _Sub, X: FloatArray, sc: Scenario) -> FloatArray:
@@ -419,6 +426,63 @@ class HRMAGA(Planner):
                 merged.append((np.stack([news[o] for o in order]), np.asarray(nums)[order]))
             results[lv - 1] = merged
         return results[0][0][0]
+
+    def repair(
+        self,
+        scenario: Scenario,
+        task: Task,
+        path: FloatArray,
+        times: FloatArray,
+        area: int,
+        budget: Budget | int | None = None,
+        seed: int | None = None,
+    ) -> tuple[FloatArray, dict[str, Any]]:
+        """Local repair (Sect. III-D: "HR-MAGA can effectively process the burst situation in
+        real time by correcting the local path"): every maximal run of consecutive segments of
+        the remaining ``path`` that fails the checks on the world as now known is re-optimized on
+        the finest level as one P-MAGA sub-problem between the run's two ends (which are outside
+        the area: a point inside it fails both its segments, so it is inside a run), with as many
+        free waypoints as the run had points and at least ``num - 1``; the runs are solved in
+        lockstep. Budget: ``repair_iterations`` lockstep steps unless ``budget`` says otherwise.
+        Falls back to planning from scratch when a run finds no feasible sub-path."""
+        cfg = self.config
+        P = np.asarray(path, dtype=np.float64)
+        problem = self._problem(scenario, task, None, True)
+        ok = problem.validator.paths_valid(np.stack([P[:-1], P[1:]], axis=1))
+        bad = np.flatnonzero(~ok)
+        if bad.size == 0:
+            return P, {"how": "none needed", "runs": 0, "evaluations": 0}
+        runs: list[tuple[int, int]] = []  # (first bad segment, last bad segment)
+        for k in bad:
+            if runs and k == runs[-1][1] + 1:
+                runs[-1] = (runs[-1][0], int(k))
+            else:
+                runs.append((int(k), int(k)))
+        subs = [self._sub(scenario, P[i], P[j + 1], True, max(cfg.num - 1, j - i)) for i, j in runs]
+        b = Budget.of(budget if budget is not None else cfg.repair_iterations)
+        term = Termination(b.max_iterations, b.max_evaluations, b.max_time)
+        tr = Tracker(term, track_feasibility=False)
+        run = Run(scenario, task, problem, seed, b, b.max_iterations, tr)
+        rngs = [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(len(subs))]
+        steps = math.inf if b.max_iterations is None else b.max_iterations
+        evals = math.inf if b.max_evaluations is None else b.max_evaluations
+        self._stopped = False
+        best = self._solve_level(run, problem, scenario, subs, rngs, steps, evals)
+        if any(not np.isfinite(nums[0]) or nums[0] >= 1e7 for _, nums in best):
+            fallback, info = Planner.repair(self, scenario, task, path, times, area, budget, seed)
+            return fallback, {**info, "how": "from scratch (local repair found no feasible path)",
+                              "runs": len(runs), "local_evaluations": tr.evaluations}  # fmt: skip
+        out = [P[: runs[0][0] + 1]]
+        for r_idx, ((_, j), (paths, _n)) in enumerate(zip(runs, best, strict=True)):
+            out.append(paths[0][1:-1])
+            nxt = runs[r_idx + 1][0] if r_idx + 1 < len(runs) else len(P) - 1
+            out.append(P[j + 1 : nxt + 1])
+        return np.concatenate(out), {
+            "how": "local repair",
+            "runs": len(runs),
+            "segments": int(bad.size),
+            "evaluations": tr.evaluations,
+        }
 
 
 def _lookup(sc: Scenario) -> str:
