@@ -81,3 +81,18 @@ def test_factors_of_the_builtin_maps() -> None:
     with pytest.raises(ValueError, match="factor must be >= 1"):
         conservative_level(t := _terrain(0, 5, 5), 0)
     assert conservative_level(t, 1).feasibility is t
+
+
+def test_relaxed_near_the_fixed_ends_only() -> None:
+    from uavplan.world.pyramid import relaxed_near
+
+    t = _terrain(5, 41, 41)
+    lv = conservative_level(t, 5)
+    ends = np.array([[t.x0 + 1.0, t.y0 + 1.0, 0.0]])
+    r = relaxed_near(lv, ends)
+    changed = r.heights != lv.feasibility.heights
+    assert changed.any() and np.all(r.heights <= lv.feasibility.heights)
+    assert np.array_equal(r.heights[changed], lv.cost.heights[changed])
+    js, is_ = np.nonzero(changed)
+    assert js.max() <= 2 and is_.max() <= 2  # the end's cell and one ring around it
+    assert relaxed_near(conservative_level(t, 1), ends) is t

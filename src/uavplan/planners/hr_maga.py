@@ -36,7 +36,11 @@ Decisions where the paper is vague (and why)
   Without it, a sub-problem of a 27th of the path would mutate by 5 % of the whole map.
 * **Maps per level** (:mod:`uavplan.world.pyramid`): checks on the level's conservative map (a
   coarse path that clears is a fine path that clears), Eq. (8) on its sampled map; the first
-  level about ``first_samples = 40`` cells per side.
+  level about ``first_samples = 40`` cells per side. Next to the task's start and goal (one
+  coarse cell around them) the checks read the sampled map: the ends are placed on the fine
+  map and may be under a conservative coarse one, which would make every agent of the level
+  infeasible alike and leave the loss unoptimized (we saw it: level 1 never left the
+  infeasible side on any of our maps).
 * **Uncertain areas** (Eq. 2) are unknown on level 1 and known from ``uncertain_from_level = 2``
   on (the paper: "if there is an uncertain area on the planned point of the upper layer, the
   point can be reinitialized ... in the deeper planning"); an area the scenario marks as not
@@ -83,7 +87,7 @@ from uavplan.planners.registry import register_planner
 from uavplan.planners.run import Outcome, Run, Termination, Tracker
 from uavplan.problems.path_problem import LOOKUP, PathProblem
 from uavplan.world.obstacles import UncertainArea
-from uavplan.world.pyramid import TerrainLevel, terrain_pyramid
+from uavplan.world.pyramid import TerrainLevel, relaxed_near, terrain_pyramid
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 
@@ -159,13 +163,19 @@ class HRMAGA(Planner):
             )
 
     # ------------------------------------------------------------------ levels
-    def _level_scenario(self, scenario: Scenario, level: TerrainLevel, lv: int) -> Scenario:
+    def _level_scenario(
+        self, scenario: Scenario, level: TerrainLevel, lv: int, ends: FloatArray | None = None
+    ) -> Scenario:
+        """The world of level ``lv``: its conservative map (relaxed next to the task's fixed
+        ``ends``, :func:`~uavplan.world.pyramid.relaxed_near`) and the uncertain areas it
+        knows."""
         cfg = self.config
         known = lv >= cfg.uncertain_from_level
         areas = tuple(
             dataclasses.replace(u, revealed=u.revealed and known) for u in scenario.uncertain_areas
         )
-        return dataclasses.replace(scenario, terrain=level.feasibility, uncertain_areas=areas)
+        terrain = level.feasibility if ends is None else relaxed_near(level, ends)
+        return dataclasses.replace(scenario, terrain=terrain, uncertain_areas=areas)
 
     def problem(
         self, scenario: Scenario, task: Task, reservations: ReservationTable | None = None
@@ -216,13 +226,17 @@ class HRMAGA(Planner):
 
     def _solve_level(
         self, run: Run, problem: PathProblem, sc: Scenario, subs: list[_Sub],
-        rngs: list[np.random.Generator], steps: float, evaluations: float,
-    ) -> list[Best3]:  # fmt: skip
-        """Run one MAGA per sub-problem in lockstep; the ``keep`` best agents of each."""
+        rngs: list[np.random.Generator], steps: float, evaluations: float, group: int = 1,
+    ) -> tuple[list[Best3], list[float]]:  # fmt: skip
+        """Run one MAGA per sub-problem in lockstep; the ``keep`` best agents of each, and
+        after every step the level's loss: the lowest, over the parent paths (``group``
+        consecutive sub-problems each), of the sum of their sub-problems' best numbers (the
+        smallest loss in the level's population, Eq. 13's ``loss_layer_i``)."""
         cfg = self.config
         mcfg = MAGAConfig(pop_size=cfg.pop_size, P_c=cfg.P_c, P_m=cfg.P_m, sGen=cfg.sGen)
         opts = [MAGA(s, mcfg, seed=g) for s, g in zip(subs, rngs, strict=True)]
         tr = run.tracker
+        trace: list[float] = []
         used = n_steps = 0
         while n_steps < steps and used < evaluations:
             live = [k for k, o in enumerate(opts) if o.generation < cfg.G]
@@ -241,6 +255,8 @@ class HRMAGA(Planner):
             tr.evaluations += len(paths)
             used += len(paths)
             n_steps += 1
+            bests = np.array([o.best_f for o in opts])
+            trace.append(float(bests.reshape(-1, group).sum(axis=1).min()))
             if tr.end_iteration(best=tr.cost):
                 self._stopped = True
                 break
@@ -248,7 +264,7 @@ class HRMAGA(Planner):
         for s, o in zip(subs, opts, strict=True):
             order = np.argsort(o.F, kind="stable")[: cfg.keep]
             out.append((self._decode(s, o.L[order], sc), o.F[order]))
-        return out
+        return out, trace
 
     # ------------------------------------------------------------------ integration
     @staticmethod
@@ -329,10 +345,11 @@ class HRMAGA(Planner):
         goal = np.asarray(run.task.goal, dtype=np.float64)
         ends: list[tuple[FloatArray, FloatArray]] = [(start, goal)]
         results: list[list[Best3]] = []
+        traces: list[list[float]] = []
         problems: list[PathProblem] = []
         best_so_far: FloatArray | None = None
         for lv, level in enumerate(levels, start=1):
-            sc = self._level_scenario(sc0, level, lv)
+            sc = self._level_scenario(sc0, level, lv, np.stack([start, goal]))
             problem = self._problem(sc, run.task, level, strict=lv == cfg.v)
             problems.append(problem)
             subs = [self._sub(sc, a, b, local=lv > 1) for a, b in ends]
@@ -347,7 +364,10 @@ class HRMAGA(Planner):
             if lv == cfg.v:
                 steps = math.inf if max_it is None else max_it - len(tr.history)
             rngs = [np.random.default_rng(s) for s in root_seq.spawn(len(subs))]
-            best = self._solve_level(run, problem, sc, subs, rngs, max(steps, 1), evals)
+            best, trace = self._solve_level(
+                run, problem, sc, subs, rngs, max(steps, 1), evals, 1 if lv == 1 else cfg.num
+            )
+            traces.append(trace)
             results.append(best)
             # the best full path so far: each node's best sub-path, joined (anytime result)
             best_so_far = self._join_best(results)
@@ -356,7 +376,7 @@ class HRMAGA(Planner):
             run.tracker.offer(best_so_far, float(ev.cost[0]), bool(ev.feasible[0]))
             if lv == cfg.v or self._stopped:
                 break
-            nxt_sc = self._level_scenario(sc0, levels[lv], lv + 1)
+            nxt_sc = self._level_scenario(sc0, levels[lv], lv + 1, np.stack([start, goal]))
             known = [u for u in nxt_sc.uncertain_areas if u.revealed]
             ends = []
             for paths, _ in best:
@@ -387,6 +407,7 @@ class HRMAGA(Planner):
                 "costs": [float(final.cost[k]) for k in order],
                 "levels": len(results),
                 "factors": [lv.factor for lv in levels[: len(results)]],
+                "level_history": traces,
             },
         )
 
@@ -467,7 +488,7 @@ class HRMAGA(Planner):
         steps = math.inf if b.max_iterations is None else b.max_iterations
         evals = math.inf if b.max_evaluations is None else b.max_evaluations
         self._stopped = False
-        best = self._solve_level(run, problem, scenario, subs, rngs, steps, evals)
+        best, _ = self._solve_level(run, problem, scenario, subs, rngs, steps, evals)
         if any(not np.isfinite(nums[0]) or nums[0] >= 1e7 for _, nums in best):
             fallback, info = Planner.repair(self, scenario, task, path, times, area, budget, seed)
             return fallback, {**info, "how": "from scratch (local repair found no feasible path)",

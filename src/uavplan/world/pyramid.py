@@ -31,9 +31,12 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.ndimage import maximum_filter
 
 from uavplan.world.terrain import Terrain
+
+FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,3 +99,23 @@ def terrain_pyramid(
     """``levels`` levels of ``terrain``, coarsest first, the last the DEM itself."""
     factors = pyramid_factors(terrain.shape, levels, first_samples)
     return tuple(conservative_level(terrain, f) for f in factors)
+
+
+def relaxed_near(level: TerrainLevel, points: FloatArray, ring: int = 1) -> Terrain:
+    """The level's conservative map, except at the nodes within ``ring`` coarse cells of the
+    cells holding ``points`` (n, >= 2), where it takes the sampled map's heights. A path's
+    fixed start and goal sit where the *fine* map placed them (e.g. 150 m above it); on a
+    conservative coarse map they may be below the ground, which no waypoint can repair, and
+    every agent would fail alike. Conservativeness is given up only there, next to the fixed
+    ends; the finest level (factor 1) is the DEM itself either way."""
+    if level.factor == 1:
+        return level.feasibility
+    F, C = level.feasibility, level.cost
+    H = np.array(F.heights)
+    ny, nx = H.shape
+    for p in np.asarray(points, dtype=np.float64).reshape(-1, np.shape(points)[-1]):
+        i = int(np.clip(np.floor((p[0] - F.x0) / F.dx), 0, nx - 1))
+        j = int(np.clip(np.floor((p[1] - F.y0) / F.dy), 0, ny - 1))
+        sl = (slice(max(j - ring, 0), j + ring + 2), slice(max(i - ring, 0), i + ring + 2))
+        H[sl] = C.heights[sl]
+    return Terrain(H, F.x0, F.y0, F.dx, F.dy, f"{F.name}~ends", dict(F.georef))
