@@ -34,7 +34,10 @@ def register_kind(name: str) -> Callable[[RunKind], RunKind]:
 
 
 def run_kind(name: str) -> RunKind:
-    """The run kind registered under ``name``."""
+    """The run kind registered under ``name`` (the paper modules' kinds too: a worker process
+    imports them here, on its first run of a kind it does not know)."""
+    if name not in _KINDS:
+        import uavplan.bench.papers  # noqa: F401  (registers the papers' kinds)
     try:
         return _KINDS[name]
     except KeyError:
@@ -63,14 +66,23 @@ def _budget(params: Any) -> Any:
 @register_kind("planner")
 def run_planner(spec: RunSpec) -> dict[str, Any]:
     """A single-UAV planner on the scenario's first task (feasibility tracked)."""
+    scenario = _scenario(spec.scenario)
+    return planner_row(plan_run(spec), scenario)
+
+
+def plan_run(spec: RunSpec) -> Any:
+    """The :class:`~uavplan.planners.PlanResult` of a planner run (feasibility tracked)."""
     from uavplan.planners import get_planner
 
     p = spec.params
-    scenario = _scenario(spec.scenario)
     planner = get_planner(p["planner"], **dict(p["options"]))
     if "track_feasibility" in planner.option_names():
         planner = get_planner(p["planner"], track_feasibility=True, **dict(p["options"]))
-    r = planner.plan(scenario, None, _budget(p), spec.seed)
+    return planner.plan(_scenario(spec.scenario), None, _budget(p), spec.seed)
+
+
+def planner_row(r: Any, scenario: Any) -> dict[str, Any]:
+    """The row of a single-UAV planner run."""
     return {
         "best_cost": r.cost,
         "path_length": r.length,
