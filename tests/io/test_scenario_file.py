@@ -40,6 +40,7 @@ from uavplan.world import (
 BUILTINS = [
     "dense",
     "hrmaga-jacksboro",
+    "hrmaga-popup",
     "hrmaga-spso",
     "hrmaga-topobathy",
     "hrmaga-virtual",

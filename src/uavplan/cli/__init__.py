@@ -14,6 +14,7 @@ import typer
 from uavplan.cli.bench import bench_app
 from uavplan.cli.bench import report as report_command
 from uavplan.cli.export import export as export_command
+from uavplan.cli.fly import fly as fly_command
 from uavplan.cli.plan import demo as demo_command
 from uavplan.cli.plan import plan as plan_command
 from uavplan.cli.planners import planners as planners_command
@@ -34,6 +35,7 @@ app.add_typer(scenario_app, name="scenario")
 app.add_typer(bench_app, name="bench")
 app.command("report")(report_command)
 app.command("verify")(verify_command)
+app.command("fly")(fly_command)
 app.command("export")(export_command)
 app.command("planners")(planners_command)
 app.command("schema")(schema_command)
