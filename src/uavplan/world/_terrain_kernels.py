@@ -342,13 +342,7 @@ def bilinear_one(H, x0, y0, dx, dy, x, y):  # pragma: no cover - numba
     v = min(max(v, 0.0), ny - 1.0)
     i = min(int(np.floor(u)), nx - 2)
     j = min(int(np.floor(v)), ny - 2)
-    s = u - i
-    r = v - j
-    h00 = H[j, i]
-    h10 = H[j, i + 1]
-    h01 = H[j + 1, i]
-    h11 = H[j + 1, i + 1]
-    return h00 + (h10 - h00) * s + (h01 - h00) * r + (h00 - h10 - h01 + h11) * s * r
+    return _bilinear_cell(H, i, j, u - i, v - j)
 
 
 @njit(cache=True)
