@@ -55,6 +55,11 @@ COLUMNS = (
     "violations",
 )
 RTOL = 1e-9
+#: Evaluation counts to 0.1 %: HR-MAGA's depend on ties between agents whose losses differ in
+#: the last ulp from one CPU to another (the same commit, 57f38eb, gave 20,368 evaluations for
+#: one smoke mission on the machine that recorded the file and 20,366 on a later one; every
+#: cost, path and history equal). Every other integer is compared exactly.
+EVALUATIONS_RTOL = 1e-3
 
 
 def _plain(v: Any) -> Any:
@@ -137,6 +142,9 @@ def differences(want: Any, got: Any, where: str = "") -> list[str]:
         if math.isclose(want, float(got), rel_tol=RTOL, abs_tol=1e-12):
             return []
         return [f"{where}: {got!r}, recorded {want!r}"]
+    if where.endswith("/evaluations") and isinstance(want, int) and isinstance(got, int):
+        if abs(want - got) <= EVALUATIONS_RTOL * abs(want):
+            return []
     if want != got:
         return [f"{where}: {got!r}, recorded {want!r}"]
     return []

@@ -23,3 +23,10 @@ def test_differences_detects_a_change() -> None:
     assert differences(want, {"a": [1.0, 2.0], "b": False, "c": "inf"})
     assert differences(want, {"a": [1.0, 2.0], "b": True, "c": 3.0})
     assert differences(want, {"a": [1.0], "b": True, "c": "inf"})
+
+
+def test_evaluation_counts_allow_a_tie_flipped_by_an_ulp_and_nothing_more() -> None:
+    want = {"run": {"evaluations": 20368, "iterations": 30}}
+    assert differences(want, {"run": {"evaluations": 20366, "iterations": 30}}) == []
+    assert differences(want, {"run": {"evaluations": 20300, "iterations": 30}})
+    assert differences(want, {"run": {"evaluations": 20366, "iterations": 31}})

@@ -18,6 +18,7 @@ from uavplan.optimizers.maga import (
     mutate_adjacent,
     single_point_crossover,
     smooth,
+    smooth_reference,
     torus_neighbours,
     turn_cosines,
 )
@@ -452,3 +453,16 @@ def test_planner_pop_size_accepted() -> None:
     opt = MAGA(problem(), cfg, seed=0)
     X, _ = step(opt)
     assert X.shape == (40, 5)
+
+
+@pytest.mark.parametrize("block", [2, 3])
+def test_numba_smoothing_is_bit_identical_to_the_numpy_reference(block: int) -> None:
+    rng = np.random.default_rng(11)
+    for n_w in (3, 4, 9, 27):
+        X = rng.random((200, n_w * block))
+        X[:20] = np.round(X[:20] * 3) / 3  # repeated points: zero-length segments
+        X[20:40, block : 2 * block] = X[20:40, :block]
+        for passes in (1, 2, 30):
+            np.testing.assert_array_equal(
+                smooth(X, block, passes), smooth_reference(X, block, passes)
+            )

@@ -126,6 +126,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from uavplan.optimizers.base import (
@@ -247,6 +248,67 @@ def turn_cosines(P: FloatArray) -> FloatArray:
 
 def smooth(X: FloatArray, block: int, passes: int) -> FloatArray:
     """Fig. 3(c): remove turn-backs (``theta_k <= 0``, Eq. 5; Eq. 6 asks ``theta_k > 0``).
+
+    The same operation as :func:`smooth_reference` (bit-identical, tested), one row at a time in
+    Numba: rows are independent, so the red-black passes of a row do not wait for the others.
+    It was a third of P-MAGA's run time in NumPy (many small batches in self-learning)."""
+    n, D = X.shape
+    if block < 2 or D % block or D // block < 3 or passes < 1 or n == 0:
+        return X.copy()
+    P = np.ascontiguousarray(X, dtype=np.float64).reshape(n, D // block, block).copy()
+    _smooth_rows(P, passes)
+    return P.reshape(n, D)
+
+
+@njit(cache=True)
+def _turns_back(Q: FloatArray) -> bool:  # pragma: no cover - numba
+    """``any(turn_cosines(Q[None]) <= 0)`` for one polyline ``(n_p, d)``."""
+    n_p, d = Q.shape
+    for k in range(1, n_p - 1):
+        dot = 0.0
+        s_in = 0.0
+        s_out = 0.0
+        for j in range(d):
+            a = Q[k, j] - Q[k - 1, j]
+            b = Q[k + 1, j] - Q[k, j]
+            dot += b * a
+            s_in += a * a
+            s_out += b * b
+        norm = np.sqrt(s_out) * np.sqrt(s_in)
+        if norm > 0 and dot / norm <= 0:
+            return True
+    return False
+
+
+@njit(cache=True)
+def _smooth_rows(P: FloatArray, passes: int) -> None:  # pragma: no cover - numba
+    """In place: :func:`smooth_reference`'s passes on every polyline of ``P`` ``(n, n_p, d)``."""
+    n, n_p, d = P.shape
+    for r in range(n):
+        Q = P[r]
+        if not _turns_back(Q):
+            continue
+        for _ in range(passes):
+            for start in (1, 2):
+                for k in range(start, n_p - 1, 2):
+                    dot = 0.0
+                    defined_in = False
+                    defined_out = False
+                    for j in range(d):
+                        a = Q[k, j] - Q[k - 1, j]
+                        b = Q[k + 1, j] - Q[k, j]
+                        dot += a * b
+                        defined_in |= a != 0
+                        defined_out |= b != 0
+                    if dot <= 0 and defined_in and defined_out:
+                        for j in range(d):
+                            Q[k, j] = 0.5 * (Q[k - 1, j] + Q[k + 1, j])
+            if not _turns_back(Q):
+                break
+
+
+def smooth_reference(X: FloatArray, block: int, passes: int) -> FloatArray:
+    """The NumPy reference of :func:`smooth`. Fig. 3(c): remove turn-backs (``theta_k <= 0``, Eq. 5; Eq. 6 asks ``theta_k > 0``).
 
     ``X`` ``(n, n_w * block)`` is read as ``n_w`` waypoints of ``block`` coordinates. An interior
     waypoint that turns back is moved to the midpoint of its two neighbours (its turn becomes
