@@ -118,3 +118,18 @@ def test_evaluation_budget_is_kept_and_shared_by_the_levels() -> None:
     assert r.info["levels"] == 3
     # every level stops at its share; the last batch and the integration may overshoot a little
     assert 20_000 <= r.evaluations <= 24_000
+
+
+def test_hull_chains_go_both_ways_around_and_need_the_ends_on_the_hull() -> None:
+    from uavplan.planners.hr_maga import _hull_chains
+
+    # ends west and east of a square: one chain over its north side, one over its south
+    pts = np.array([[0.0, 0.5], [3.0, 0.5], [1, 0], [2, 0], [2, 1], [1, 1]])
+    a, b = _hull_chains(pts)
+    assert a[0] == b[0] == 0 and a[-1] == b[-1] == 1
+    assert sorted([sorted(a[1:-1]), sorted(b[1:-1])]) == [[2, 3], [4, 5]]
+    # an end inside the square's hull: no way around from it
+    assert _hull_chains(np.array([[1.5, 0.5], [3.0, 0.5], [1, 0], [2, 0], [2, 1], [1, 1]])) == (
+        [],
+        [],
+    )

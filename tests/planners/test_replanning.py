@@ -44,10 +44,10 @@ def _hidden_on_path(sc, plan, size: float = 200.0):
     return dataclasses.replace(sc, uncertain_areas=(*sc.uncertain_areas, area))
 
 
-@pytest.mark.parametrize("seed", [0, 2])
-def test_hr_maga_repairs_an_area_revealed_on_its_path(seed: int) -> None:
+@pytest.mark.parametrize(("seed", "detour"), [(0, True), (2, True), (0, False), (2, False)])
+def test_hr_maga_repairs_an_area_revealed_on_its_path(seed: int, detour: bool) -> None:
     sc0 = hills()
-    hr = get_planner("hr-maga")
+    hr = get_planner("hr-maga", repair_detour=detour)
     first = hr.plan(sc0, budget=150, seed=seed)
     sc = _hidden_on_path(sc0, first)
     world = revealed_world(sc)
@@ -55,7 +55,8 @@ def test_hr_maga_repairs_an_area_revealed_on_its_path(seed: int) -> None:
     m = fly_mission(hr, sc, initial=first, seed=seed, sensor_range=300.0, latency=0.1)
     assert [e.action for e in m.events] == ["repair"]
     e = m.events[0]
-    assert e.repaired_feasible and e.compute_time > 0 and e.info["how"] == "local repair"
+    assert e.repaired_feasible and e.compute_time > 0
+    assert e.info["how"] == ("detour" if detour else "local repair")
     assert m.feasible and not m.violations
     # what was flown before the repair is the first plan
     t_r = e.time + m.latency

@@ -125,6 +125,9 @@ class HRMAGAConfig(PlannerConfig):
     repair_iterations: int = option(
         20, "lockstep steps of a repair in flight (ours; the paper gives none)", low=1
     )
+    repair_detour: bool = option(
+        True, "repair first tries the way around the revealed area's corners (ours; fast)"
+    )
     uncertain_from_level: int = option(
         2, "first level that knows the uncertain areas (the paper: the finer ones)", low=1
     )
@@ -311,12 +314,15 @@ class HRMAGA(Planner):
 
     # ------------------------------------------------------------------ uncertain areas
     @staticmethod
-    def _admit(p: FloatArray, areas: list[UncertainArea], sc: Scenario) -> FloatArray:
+    def _admit(
+        p: FloatArray, areas: list[UncertainArea], sc: Scenario, level: float | None = None
+    ) -> FloatArray:
         """Segment end ``p`` made admissible on level scenario ``sc``: moved to the nearest
         point 1 m outside every known uncertain area it is in (Sect. III-C, Alg. 2 line 11),
         then its altitude put back into the band over this level's map (a coarse map is
         higher than the fine one, so a point at the top of the band there may be above it
-        here)."""
+        here). ``level``: put the altitude at this share of the band instead (0 its floor, 1
+        its ceiling)."""
         q = p.copy()
         lo, hi = sc.bounds.lo, sc.bounds.hi
         for _ in range(len(areas) + 1):
@@ -341,6 +347,8 @@ class HRMAGA(Planner):
             base = 0.0
             if band.reference == "ground" and sc.terrain is not None:
                 base = float(sc.terrain.lookup(q[0], q[1], _lookup(sc)))
+            if level is not None and math.isfinite(band.max):
+                q[2] = base + band.min + level * (band.max - band.min)
             q[2] = min(max(q[2], base + band.min), base + band.max)
         elif sc.terrain is not None:
             q[2] = max(q[2], float(sc.terrain.height(q[0], q[1])))
@@ -465,6 +473,96 @@ class HRMAGA(Planner):
             results[lv - 1] = merged
         return results[0][0][0]
 
+    def _detour(
+        self, problem: PathProblem, sc: Scenario, P: FloatArray, i: int, j: int
+    ) -> tuple[FloatArray | None, int]:
+        """The interior points of the best feasible way from ``P[i]`` to ``P[j + 1]`` around
+        the no-fly polygons near the run, revealed uncertain areas included (ours, tried before
+        any optimization: a repair must come within one control period). Both chains of the
+        convex hull of the two ends and the polygons' corners (pushed out by 2 % of the
+        polygon's size, or by half the ends' distance to it if less; the set grows while a
+        chain meets another polygon), each edge cut in 1, 2, 4 or 8 pieces or in pieces of one
+        terrain cell, every new point admitted (:meth:`_admit`: out of the areas, into the band
+        over the terrain) at the ends' interpolated altitude or at half or three quarters of
+        the band; all candidates scored in one batch by the sub-problems' rule. ``None`` if
+        none is feasible (then P-MAGA repairs the run); and the evaluations spent."""
+        A, B = P[i], P[j + 1]
+        areas = [u for u in sc.uncertain_areas if u.revealed]
+        polys = [np.asarray(q.array, dtype=np.float64) for q in sc.no_fly_polygons]
+        margins = [q.margin for q in sc.no_fly_polygons]
+        used = 0
+
+        def touched(xy: FloatArray) -> set[int]:
+            """The polygons whose box meets the box of a segment of ``xy``."""
+            lo = np.minimum(xy[:-1], xy[1:])[:, None, :]
+            hi = np.maximum(xy[:-1], xy[1:])[:, None, :]
+            plo = np.array([v.min(axis=0) - m for v, m in zip(polys, margins, strict=True)])[None]
+            phi = np.array([v.max(axis=0) + m for v, m in zip(polys, margins, strict=True)])[None]
+            hit = np.all((lo <= phi) & (hi >= plo), axis=-1).any(axis=0)
+            return set(np.flatnonzero(hit).tolist())
+
+        if not polys:
+            return None, 0
+        near = touched(P[i : j + 2, :2])
+        XY = np.empty((0, 2))
+        chains: tuple[list[int], list[int]] = ([], [])
+        for _ in range(4):  # grow the set while a way around meets another polygon
+            pts = [A[:2], B[:2]]
+            for q in sorted(near):
+                v, c = polys[q], polys[q].mean(axis=0)
+                size = float(np.max(v.max(axis=0) - v.min(axis=0)))
+                gap = min(_box_gap(A[:2], v), _box_gap(B[:2], v)) - margins[q]
+                m = margins[q] + max(min(0.02 * size, 0.5 * gap), 1e-3)  # ends stay outside
+                r = np.linalg.norm(v - c, axis=1, keepdims=True)
+                pts += list(v + math.sqrt(2.0) * m * (v - c) / np.maximum(r, 1e-12))
+            XY = np.clip(np.asarray(pts, dtype=np.float64), sc.bounds.lo[:2], sc.bounds.hi[:2])
+            chains = _hull_chains(XY)
+            more = set().union(*(touched(XY[ch]) for ch in chains if len(ch) >= 2)) - near
+            if not more:
+                break
+            near |= more
+        cands: list[FloatArray] = []
+        for chain in chains:
+            if len(chain) < 2:
+                continue
+            corners = XY[chain]  # two points: the ends see each other past every polygon
+            edges = np.linalg.norm(np.diff(corners, axis=0), axis=1)
+            cell = sc.terrain.cell_size if sc.terrain is not None else math.inf
+            by_cell = np.maximum(1, np.ceil(edges / cell)).astype(int)
+            for pieces in ([1], [2], [4], [8], list(by_cell)):  # per edge; the last: a cell each
+                ts = [
+                    np.linspace(0.0, 1.0, n + 1)[:-1] for n in np.broadcast_to(pieces, len(edges))
+                ]
+                xy = np.concatenate(
+                    [
+                        a + t[:, None] * (b - a)
+                        for a, b, t in zip(corners[:-1], corners[1:], ts, strict=True)
+                    ]
+                    + [corners[-1:]]
+                )
+                xy = np.clip(xy, sc.bounds.lo[:2], sc.bounds.hi[:2])
+                d = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(xy, axis=0), axis=1))])
+                z = A[2] + (B[2] - A[2]) * d / max(d[-1], 1e-12)
+                if len(xy) < 3:
+                    continue  # the straight segment: it failed
+                for level in (None, 0.5, 0.75):  # the ends' line, or a share of the band
+                    Q = np.column_stack([xy, z])
+                    Q[1:-1] = [self._admit(q, areas, sc, level) for q in Q[1:-1]]
+                    Q[0], Q[-1] = A, B
+                    cands.append(Q)
+        if not cands:
+            return None, 0
+        best: tuple[float, FloatArray] | None = None
+        for n_pts in sorted({len(c) for c in cands}):  # one batch per path length
+            same = [c for c in cands if len(c) == n_pts]
+            f, cv = problem.evaluate_cv(np.stack(same), exact=True)
+            used += len(same)
+            num = feasibility_first(f, cv)
+            k = int(np.argmin(num))
+            if cv[k] <= 0 and np.isfinite(f[k]) and (best is None or num[k] < best[0]):
+                best = (float(num[k]), same[k])
+        return (None if best is None else best[1][1:-1]), used
+
     def repair(
         self,
         scenario: Scenario,
@@ -498,6 +596,21 @@ class HRMAGA(Planner):
                 runs[-1] = (runs[-1][0], int(k))
             else:
                 runs.append((int(k), int(k)))
+        if cfg.repair_detour:
+            found = [self._detour(problem, scenario, P, i, j) for i, j in runs]
+            detours = [d for d, _ in found if d is not None]
+            if len(detours) == len(runs):
+                out = [P[: runs[0][0] + 1]]
+                for r_idx, ((_, j), d) in enumerate(zip(runs, detours, strict=True)):
+                    out.append(d)
+                    nxt = runs[r_idx + 1][0] if r_idx + 1 < len(runs) else len(P) - 1
+                    out.append(P[j + 1 : nxt + 1])
+                return np.concatenate(out), {
+                    "how": "detour",
+                    "runs": len(runs),
+                    "segments": int(bad.size),
+                    "evaluations": sum(n for _, n in found),
+                }
         b = Budget.of(budget if budget is not None else cfg.repair_iterations)
         steps = math.inf if b.max_iterations is None else b.max_iterations
         evals = math.inf if b.max_evaluations is None else b.max_evaluations
@@ -543,6 +656,44 @@ class HRMAGA(Planner):
             "attempts": attempt + 1,
             "evaluations": used,
         }
+
+
+def _box_gap(p: FloatArray, v: FloatArray) -> float:
+    """Distance from point ``p`` to the bounding box of vertices ``v`` (0 inside)."""
+    d = np.maximum(np.maximum(v.min(axis=0) - p, p - v.max(axis=0)), 0.0)
+    return float(np.hypot(d[0], d[1]))
+
+
+def _hull_chains(pts: FloatArray) -> tuple[list[int], list[int]]:
+    """The two chains of the convex hull of 2-D points ``pts`` from ``pts[0]`` to ``pts[1]``
+    (indices, ends included); empty when either end is not a hull vertex. Andrew's monotone
+    chain (a dozen points: a library call would cost more than the work)."""
+    order = sorted(range(len(pts)), key=lambda k: (pts[k][0], pts[k][1]))
+
+    def cross(o: int, a: int, b: int) -> float:
+        return float(
+            (pts[a][0] - pts[o][0]) * (pts[b][1] - pts[o][1])
+            - (pts[a][1] - pts[o][1]) * (pts[b][0] - pts[o][0])
+        )
+
+    lower: list[int] = []
+    upper: list[int] = []
+    for k in order:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], k) <= 0:
+            lower.pop()
+        lower.append(k)
+    for k in reversed(order):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], k) <= 0:
+            upper.pop()
+        upper.append(k)
+    ring = lower[:-1] + upper[:-1]  # counter-clockwise
+    if 0 not in ring or 1 not in ring:
+        return [], []
+    a, b = ring.index(0), ring.index(1)
+    n = len(ring)
+    one = [ring[(a + t) % n] for t in range((b - a) % n + 1)]
+    other = [ring[(a - t) % n] for t in range((a - b) % n + 1)]
+    return one, other
 
 
 def _lookup(sc: Scenario) -> str:
