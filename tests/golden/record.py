@@ -142,9 +142,13 @@ def differences(want: Any, got: Any, where: str = "") -> list[str]:
         if math.isclose(want, float(got), rel_tol=RTOL, abs_tol=1e-12):
             return []
         return [f"{where}: {got!r}, recorded {want!r}"]
-    if where.endswith("/evaluations") and isinstance(want, int) and isinstance(got, int):
-        if abs(want - got) <= EVALUATIONS_RTOL * abs(want):
-            return []
+    if (
+        where.endswith("/evaluations")
+        and isinstance(want, int)
+        and isinstance(got, int)
+        and abs(want - got) <= EVALUATIONS_RTOL * abs(want)
+    ):
+        return []
     if want != got:
         return [f"{where}: {got!r}, recorded {want!r}"]
     return []

@@ -308,7 +308,8 @@ def _smooth_rows(P: FloatArray, passes: int) -> None:  # pragma: no cover - numb
 
 
 def smooth_reference(X: FloatArray, block: int, passes: int) -> FloatArray:
-    """The NumPy reference of :func:`smooth`. Fig. 3(c): remove turn-backs (``theta_k <= 0``, Eq. 5; Eq. 6 asks ``theta_k > 0``).
+    """The NumPy reference of :func:`smooth`. Fig. 3(c): remove turn-backs (``theta_k <= 0``,
+    Eq. 5; Eq. 6 asks ``theta_k > 0``).
 
     ``X`` ``(n, n_w * block)`` is read as ``n_w`` waypoints of ``block`` coordinates. An interior
     waypoint that turns back is moved to the midpoint of its two neighbours (its turn becomes
