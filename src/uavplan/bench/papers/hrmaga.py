@@ -241,20 +241,24 @@ def layers_sections(df: pd.DataFrame, plan: str) -> Sections:
                     per_level.append([])
                 per_level[k].append(part)
         means = [_mean_curve(pd.Series(level)) for level in per_level]
-        if means and all(np.isfinite(x).any() for x in means):
-            for k, c in enumerate(eq13(means), start=1):
-                ax.plot(c, label=f"level {k}")
-                gain = float(np.nanmax(means[k - 1]) - np.nanmin(means[k - 1]))
-                rows.append(
-                    {
-                        "map": m,
-                        "level": k,
-                        "runs": len(g),
-                        "loss_start": means[k - 1][0],
-                        "loss_end": means[k - 1][-1],
-                        "improvement": gain,
-                    }
-                )
+        finite = [x for x in means if np.isfinite(x).any()]
+        scaled = iter(eq13(finite)) if finite else iter(())
+        for k, (c, level) in enumerate(zip(means, per_level, strict=True), start=1):
+            has = bool(np.isfinite(c).any())
+            if has:
+                ax.plot(next(scaled), label=f"level {k}", color=f"C{k - 1}")
+            rows.append(
+                {
+                    "map": m,
+                    "level": k,
+                    "runs": len(g),
+                    # the level's best parent path made only of feasible sub-paths at its end
+                    "feasible_end": float(np.mean([len(x) and x[-1] < 1e7 for x in level])),
+                    "loss_start": c[0] if has else np.nan,
+                    "loss_end": c[-1] if has else np.nan,
+                    "improvement": float(np.nanmax(c) - np.nanmin(c)) if has else np.nan,
+                }
+            )
         ax.set_title(str(m), fontsize=9)
         ax.set_xlabel("step of the level")
         ax.set_ylabel("loss_layer* (Eq. 13)")
@@ -263,7 +267,9 @@ def layers_sections(df: pd.DataFrame, plan: str) -> Sections:
     fig.tight_layout()
     note = (
         "loss per level = the lowest, over the parent paths, sum of their sub-problems' best "
-        "loss (infeasible values left out); the paper: the deeper the level the smaller its "
+        "loss (infeasible values left out, a level with none is not drawn; Eq. 13 scales by "
+        "the first level drawn); feasible_end = share of runs whose level ended with a parent "
+        "path made only of feasible sub-paths; the paper: the deeper the level the smaller its "
         "share of the optimization, sharply smaller on the third (Fig. 5b)"
     )
     return [("Fig. 5b: optimization per level", note, pd.DataFrame(rows))], [
