@@ -8,7 +8,9 @@ side, at half its flight time) and revealed in flight; HR-MAGA's local repair is
 planning the rest from scratch with HR-MAGA itself (``Planner.repair``, the baseline), with
 p50/p95/max and the misses of a 100 ms deadline.
 
-Run: ``python benchmarks/hrmaga_speed.py [--iterations 300] [--seeds 5]``. Set
+Then, with ``--budgets 30,60,120,300``, what a smaller budget buys: per map and budget the median
+plan time, the share of flown-feasible plans and the median loss (Eq. 4) of the feasible ones.
+Run: ``python benchmarks/hrmaga_speed.py [--iterations 300] [--seeds 5] [--budgets ...]``. Set
 ``NUMBA_NUM_THREADS=1`` on a shared machine: small batches lose more to a busy thread pool than
 they gain.
 """
@@ -34,9 +36,14 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--iterations", type=int, default=300)
     ap.add_argument("--seeds", type=int, default=5)
+    ap.add_argument("--budgets", default="", help="comma-separated iteration budgets")
     args = ap.parse_args()
+    if args.budgets:
+        budgets(args.seeds, [int(b) for b in args.budgets.split(",")])
+        return
     print(f"{'map':18} {'hr-maga s':>10} {'p-maga s':>9} {'ratio':>6} {'feasible':>9}")
     repairs: dict[str, list[float]] = {"local": [], "scratch": []}
+    hows: list[str] = []
     for name in MAPS:
         sc = resolve(name)
         hr = get_planner("hr-maga")
@@ -58,6 +65,7 @@ def main() -> None:
             hidden = dataclasses.replace(sc, uncertain_areas=(*sc.uncertain_areas, area))
             m = fly_mission(hr, hidden, initial=r, seed=seed)
             repairs["local"] += [e.compute_time for e in m.events if e.action == "repair"]
+            hows += [str(e.info.get("how")) for e in m.events if e.action == "repair"]
             scratch = _Scratch(hr, args.iterations)
             m2 = fly_mission(scratch, hidden, initial=r, seed=seed)
             repairs["scratch"] += [e.compute_time for e in m2.events if e.action == "repair"]
@@ -74,6 +82,27 @@ def main() -> None:
             )
     loc, scr = np.median(repairs["local"] or [np.nan]), np.median(repairs["scratch"] or [np.nan])
     print(f"local repair / from scratch (median): {loc / scr:.3f}")
+    print("HR-MAGA repairs by kind:", {h: hows.count(h) for h in sorted(set(hows))})
+
+
+def budgets(seeds: int, iterations: list[int]) -> None:
+    """Plan time, feasibility and loss of hr-maga against its iteration budget."""
+    print(f"{'map':18} {'iterations':>10} {'median s':>9} {'feasible':>9} {'median loss':>12}")
+    for name in MAPS:
+        sc = resolve(name)
+        hr = get_planner("hr-maga")
+        hr.plan(sc, budget=10, seed=0)  # compile outside the timing
+        for it in iterations:
+            ts, losses, feas = [], [], 0
+            for seed in range(seeds):
+                t0 = time.perf_counter()
+                r = hr.plan(sc, budget=it, seed=seed)
+                ts.append(time.perf_counter() - t0)
+                if r.flown_feasible:
+                    feas += 1
+                    losses.append(r.cost)
+            loss = f"{np.median(losses):12,.0f}" if losses else f"{'-':>12}"
+            print(f"{name:18} {it:10d} {np.median(ts):9.3f} {feas:>4}/{seeds:<4} {loss}")
 
 
 class _Scratch:
