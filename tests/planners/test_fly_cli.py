@@ -18,7 +18,7 @@ def test_fly_repairs_and_verifies(tmp_path: Path) -> None:
     )
     assert res.exit_code == 0, res.output
     assert "1 area(s) unknown at take-off" in res.output
-    assert "area 0 seen at t=" in res.output and "repair, local repair" in res.output
+    assert "area 0 seen at t=" in res.output and "repair, detour" in res.output
     assert "verified" in res.output
     m = json.loads(out.read_text())
     assert m["feasible"] is True and m["events"][0]["action"] == "repair"

@@ -96,10 +96,12 @@ def test_planner_solves_easy_scenario(name: str, make: Callable[[], Scenario]) -
     # times at the UAV's speed
     seg = np.linalg.norm(np.diff(r.waypoints, axis=0), axis=1)
     assert np.allclose(np.diff(r.times), seg / sc.uav.speed)
-    assert r.evaluations > 0 and r.iterations == 60 and len(r.history) == 60
+    n_it = 60 if planner.anytime else r.iterations  # a planner that ends on arrival: fewer
+    assert r.evaluations > 0 and 0 < r.iterations <= 60
+    assert r.iterations == n_it and len(r.history) == n_it
     assert np.all(r.history[1:] <= r.history[:-1])  # inf until a first path, then falling
     eh = np.asarray(r.evaluations_history)
-    assert len(eh) == 60 and np.all(np.diff(eh) >= 0) and eh[-1] <= r.evaluations
+    assert len(eh) == n_it and np.all(np.diff(eh) >= 0) and eh[-1] <= r.evaluations
 
 
 @pytest.mark.parametrize("name", PLANNERS)
@@ -110,7 +112,8 @@ def test_planner_deterministic_per_seed(name: str) -> None:
     c = quick(name).plan(sc, budget=10, seed=8)
     assert np.array_equal(a.waypoints, b.waypoints)
     assert np.array_equal(a.history, b.history)
-    assert not np.array_equal(a.waypoints, c.waypoints)
+    # a deterministic method gives one plan whatever the seed; the others differ by seed
+    assert np.array_equal(a.waypoints, c.waypoints) == quick(name).deterministic
 
 
 @pytest.mark.parametrize("name", PLANNERS)

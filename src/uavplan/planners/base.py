@@ -81,6 +81,9 @@ class Planner(ABC):
         dims: the scenario dimensions handled.
         default_iterations: the iteration budget when none is given.
         supports_reservations: whether its search keeps clear of other UAVs' flights.
+        deterministic: whether the seed is unused (the same plan from every seed).
+        anytime: whether it uses its whole iteration budget (False: it may end earlier, e.g.
+            on arrival, and its history is as long as the iterations it ran).
         inner_optimizer: the population optimizer this planner is built on, if fixed
             (otherwise the config's ``optimizer`` field names it, if it has one).
     """
@@ -93,6 +96,8 @@ class Planner(ABC):
     #: whether the search keeps clear of reserved UAVs (it evaluates whole timed paths on the
     #: run's problem); planners that check edges without time cannot
     supports_reservations: ClassVar[bool] = False
+    deterministic: ClassVar[bool] = False
+    anytime: ClassVar[bool] = True
 
     def __init__(
         self,

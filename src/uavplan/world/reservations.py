@@ -450,6 +450,19 @@ class ReservationTable:
         self._idx = np.concatenate([self._idx, idx + base])
         self._build()
 
+    def trajectories(self) -> list[tuple[FloatArray, FloatArray]]:
+        """Every reserved trajectory as ``(points (n, 3), times (n,))``, in the order added
+        (the polylines as reserved: simplified ones as their kept points)."""
+        out = []
+        for k in range(len(self.owners)):
+            sel = np.flatnonzero(self._owner == k)
+            if sel.size == 0:
+                continue
+            pts = np.vstack([self._p0[sel], self._p1[sel[-1]][None]])
+            ts = np.concatenate([self._t0[sel], [self._t1[sel[-1]]]])
+            out.append((pts, ts))
+        return out
+
     def _build(self) -> None:
         order = np.argsort(self._keys, kind="stable")
         self._keys = self._keys[order]

@@ -1,0 +1,81 @@
+"""The artificial potential field planner: caught in the cup of ``rscdwoa-static`` as the
+classical APF is in the RSCDWOA paper's Fig. 12(a); around a moving obstacle that crosses its
+straight line; other UAVs' flights as moving obstacles."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from uavplan.planners import get_planner
+from uavplan.planners.apf import field_params, fly_field
+from uavplan.problems.path_problem import PathProblem
+from uavplan.scenarios import resolve
+from uavplan.world import UAV, Bounds, Scenario, Task
+from uavplan.world.dynamic import MovingObstacle
+from uavplan.world.reservations import ReservationTable
+
+
+def test_classical_apf_is_caught_in_the_cup_of_the_static_layout() -> None:
+    sc = resolve("rscdwoa-static")
+    for task in sc.tasks:
+        r = get_planner("apf").plan(sc, task, seed=0)
+        assert r.info["status"] == "stalled" and not r.feasible
+        assert "local_minimum" in r.violations
+        stall = np.asarray(r.info["stall_point"])
+        # in the cup: within its 9 km opening around [50, 50] km, short of the obstacles
+        assert np.linalg.norm(stall[:2] - [50_000, 50_000]) < 9_000
+        assert np.linalg.norm(stall[:2] - task.goal[:2]) > 40_000
+
+
+def crossing(moving: bool = True) -> Scenario:
+    """A 1 km square; the UAV flies west to east at 20 m/s; a disc of radius 40 m crosses its
+    straight line from north to south and is at its midpoint when the UAV would be."""
+    obs = (MovingObstacle(40.0, [0.0, 50.0], [[500.0, 1000.0], [500.0, 0.0]]),) if moving else ()
+    return Scenario(
+        "crossing",
+        Bounds((0.0, 0.0), (1000.0, 1000.0)),
+        (Task("uav0", (10.0, 500.0), (990.0, 500.0)),),
+        moving_obstacles=obs,
+        uav=UAV(speed=20.0),
+        cost="length2d",
+    )
+
+
+def test_apf_gives_way_to_a_moving_obstacle_on_its_straight_line() -> None:
+    sc = crossing()
+    straight = np.array([[[10.0, 500.0], [990.0, 500.0]]])
+    assert not PathProblem(sc).evaluate(straight).feasible[0]  # the straight line collides
+    r = get_planner("apf").plan(sc, seed=0)
+    assert r.info["status"] == "arrived" and r.feasible, r.violations
+    d = sc.moving_obstacles[0].min_distance(r.waypoints[None], r.times[None])
+    assert d.min() > 40.0
+    # without the obstacle the field leads straight to the goal
+    free = get_planner("apf").plan(crossing(moving=False), seed=0)
+    assert free.feasible and free.length < 1.01 * 980.0
+
+
+def test_other_uavs_flights_repel_only_while_they_fly() -> None:
+    sc = crossing(moving=False)
+    prm = field_params(get_planner("apf").config, sc, 980.0)
+    start, goal = np.array([10.0, 500.0]), np.array([990.0, 500.0])
+    alone = fly_field(sc, start, goal, prm, 5000)
+    # a UAV flying north to south through the midpoint when this one gets there
+    other = (np.array([[500.0, 1000.0, 0.0], [500.0, 0.0, 0.0]]), np.array([0.0, 49.0]))
+    near = fly_field(sc, start, goal, prm, 5000, others=[other], separation=10.0)
+    assert alone.status == near.status == "arrived"
+    assert np.abs(alone.points[:, 1] - 500.0).max() < 1e-6  # straight
+    assert np.abs(near.points[:, 1] - 500.0).max() > 10.0  # made way
+    # the same flight long over (it landed at t = 49 s): no effect
+    gone = (other[0], other[1] - 1000.0)
+    later = fly_field(sc, start, goal, prm, 5000, others=[gone], separation=10.0)
+    np.testing.assert_array_equal(later.points, alone.points)
+
+
+def test_reservation_table_gives_back_its_trajectories() -> None:
+    tab = ReservationTable(np.zeros(3), np.full(3, 1000.0), 10.0, dt=1.0)
+    p = np.array([[0.0, 0, 0], [100, 0, 0], [100, 100, 0]])
+    t = np.array([0.0, 5.0, 10.0])
+    tab.add("a", p, t)
+    ((q, s),) = tab.trajectories()
+    assert q[0].tolist() == p[0].tolist() and q[-1].tolist() == p[-1].tolist()
+    assert s[0] == 0.0 and s[-1] == 10.0 and np.all(np.diff(s) > 0)
