@@ -29,8 +29,11 @@ radius so that one set of gains serves a 100 m scene and a 100 km one):
 **Motion** (the RSCDWOA paper's Eq. 1, ``x(t+1) = x(t) + v cos(theta)``, extended to 3-D): the
 UAV flies at its cruise speed ``v``; every ``dt`` its heading turns towards the force by at most
 ``v dt / R`` (``R`` the minimum turn radius), its flight-path angle follows the force within the
-climb and descent limits, and it moves ``v dt``. It arrives within ``goal_radius`` of the goal
-(then the last segment goes to the goal itself). It **stalls** when its best distance to the goal
+climb and descent limits, and it moves ``v dt``; it never descends below the floor. It arrives
+within ``goal_radius`` of the goal when the straight last segment to it is within the climb
+limits and its turn into it within the turn radius (then the last segment goes to the goal
+itself). The floor's and ceiling's influence is at most half the goal's room between them (a
+goal near the floor must stay reachable). It **stalls** when its best distance to the goal
 has not improved by ``v dt / 2`` for ``stall_steps`` steps: a local minimum of the field (or a
 goal it cannot turn into); the plan is then infeasible (``local_minimum``) and ``info`` gives
 the point where it stalled (the mean of the last ``stall_steps`` positions).
@@ -63,6 +66,10 @@ FloatArray = NDArray[np.float64]
 
 #: smallest scaled clearance used in a repulsion (inside an obstacle the force stays finite)
 R_MIN = 1e-3
+#: heading change per step as a share of the turn radius's (the flight check allows 1)
+TURN_MARGIN = 0.99
+#: the largest turn into the goal at arrival, radians (the flight check allows 30 degrees)
+ARRIVAL_TURN = math.radians(29.0)
 
 
 @dataclass(frozen=True)
@@ -119,7 +126,7 @@ class FieldParams:
     rho0_z: float
     eta_m: float
     a_max: float
-    dpsi_max: float
+    turn_k: float  # largest heading change per metre flown horizontally (0: no limit)
     climb: float
     descent: float
     goal_radius: float
@@ -159,7 +166,7 @@ def field_params(cfg: APFConfig, sc: Scenario, distance: float | None = None) ->
         rho0_z=max(rho0_z, 1e-9),
         eta_m=float(cfg.eta_m),
         a_max=max(a_max, 1e-9),
-        dpsi_max=step / R if R > 0 else math.pi,
+        turn_k=TURN_MARGIN / R if R > 0 else 0.0,
         climb=math.radians(u.max_climb_angle) if u.max_climb_angle is not None else math.pi / 2,
         descent=(
             math.radians(u.max_descent_angle) if u.max_descent_angle is not None else math.pi / 2
@@ -374,7 +381,7 @@ def integrate(
     """Up to ``n_steps`` steps from ``state`` = [x, y, z, psi, gamma, t, best_d, since_best]
     (updated in place); positions into ``out`` (n_steps, 3). Returns (steps, status): status 0
     running, 1 arrived (the last row is the goal), 2 stalled."""
-    v, dt, dpsi_max, climb, descent, goal_r, stall_steps = kin
+    v, dt, turn_k, climb, descent, goal_r, stall_steps = kin
     p = np.empty(3)
     vel = np.empty(3)
     for k in range(n_steps):
@@ -386,12 +393,20 @@ def integrate(
         F = _force(p, vel, t, goal, prm, cyl_c, cyl_r, cyl_lo, cyl_hi, circ_c, circ_r, pv, ps,
                    pm, mo_r, mo_s, mo_t, mo_p, mo_hold, H, z_args, q_cyl, q_circ, q_poly,
                    q_mo, dim3)  # fmt: skip
-        want = math.atan2(F[1], F[0])
-        turn = (want - psi + math.pi) % (2 * math.pi) - math.pi
-        psi += min(max(turn, -dpsi_max), dpsi_max)
+        step = v * dt
+        gam_prev = gam
         if dim3:
             gam = min(max(math.atan2(F[2], math.hypot(F[0], F[1])), -descent), climb)
-        step = v * dt
+            f = _limits(z_args, H, p[0], p[1])[0]
+            if p[2] + step * math.sin(gam) < f:  # never below the floor
+                gam = min(math.asin(max(min((f - p[2]) / step, 1.0), -1.0)), climb)
+        # the horizontal track's curvature: heading change over the horizontal step
+        # (the flight check divides by the mean of the two horizontal steps at a point)
+        cos_g = min(math.cos(gam), math.cos(gam_prev))
+        dpsi = turn_k * step * cos_g if turn_k > 0 else math.pi
+        want = math.atan2(F[1], F[0])
+        turn = (want - psi + math.pi) % (2 * math.pi) - math.pi
+        psi += min(max(turn, -dpsi), dpsi)
         p[0] += step * math.cos(gam) * math.cos(psi)
         p[1] += step * math.cos(gam) * math.sin(psi)
         if dim3:
@@ -404,7 +419,15 @@ def integrate(
             state[7] = 0.0
         else:
             state[7] += 1.0
-        if d <= goal_r:
+        dz = goal[2] - p[2]
+        flat = math.hypot(goal[0] - p[0], goal[1] - p[1])
+        slope_ok = dz <= flat * math.tan(climb) and -dz <= flat * math.tan(descent)
+        if turn_k > 0 and flat > 0:  # the last turn, into the goal, as the flight check sees it
+            last = abs((math.atan2(goal[1] - p[1], goal[0] - p[0]) - psi + math.pi) % (2 * math.pi)
+                       - math.pi)  # fmt: skip
+            limit = min(ARRIVAL_TURN, turn_k * 0.5 * (step * math.cos(gam) + flat))
+            slope_ok = slope_ok and last <= limit
+        if d <= goal_r and (slope_ok or d <= 1e-9):
             out[k, 0], out[k, 1], out[k, 2] = goal[0], goal[1], goal[2]
             return k + 1, 1
         out[k, 0], out[k, 1], out[k, 2] = p[0], p[1], p[2]
@@ -483,10 +506,14 @@ def fly_field(
     g3[: sc.dim] = goal
     psi = math.atan2(g3[1] - s3[1], g3[0] - s3[0])
     state = np.array([s3[0], s3[1], s3[2], psi, 0.0, t0, np.linalg.norm(g3 - s3), 0.0])
-    kin = (prm.v, prm.dt, prm.dpsi_max, prm.climb, prm.descent, prm.goal_radius,
+    kin = (prm.v, prm.dt, prm.turn_k, prm.climb, prm.descent, prm.goal_radius,
            float(prm.stall_steps))  # fmt: skip
     fp = (prm.k_att, prm.d_att, prm.eta, prm.rho0_z, prm.eta_m, prm.a_max)
     args = _packed(sc, prm, others or [], separation)
+    if dim3:  # a goal near the floor or ceiling: their push must not keep the UAV from it
+        f, _, _, c, _, _ = _limits(args[15], args[14], g3[0], g3[1])
+        room = min(g3[2] - f, c - g3[2])
+        fp = (*fp[:3], max(min(prm.rho0_z, 0.5 * room), 1e-9), *fp[4:])
     parts = [s3[None]]
     done, status = 0, 0
     while done < max_steps:
@@ -522,6 +549,7 @@ class APFPlanner(Planner):
     deterministic: ClassVar[bool] = True
     anytime: ClassVar[bool] = False
     supports_reservations = True  # other UAVs' flights are moving obstacles of its field
+    steps_in_time = True  # its path is flown as planned when it passes every check
 
     def _plan(self, run: Run) -> Outcome:
         sc, task, tr = run.scenario, run.task, run.tracker

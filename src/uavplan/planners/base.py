@@ -98,6 +98,9 @@ class Planner(ABC):
     supports_reservations: ClassVar[bool] = False
     deterministic: ClassVar[bool] = False
     anytime: ClassVar[bool] = True
+    #: its path is a trajectory stepped in time within the UAV's limits (flown as planned if
+    #: it passes every check, see :func:`~uavplan.planners.flight.fly`)
+    steps_in_time: ClassVar[bool] = False
 
     def __init__(
         self,
@@ -290,7 +293,9 @@ class Planner(ABC):
             reasons=reasons,
             info=outcome.info,
         )
-        flight = fly(scenario, t, result.waypoints, result.times, reservations)
+        flight = fly(
+            scenario, t, result.waypoints, result.times, reservations, as_planned=self.steps_in_time
+        )
         if reasons:  # a planner's reason (no path found) fails the flight too
             flight = dataclasses.replace(flight, violations=flight.violations + reasons)
         return dataclasses.replace(declare(result, flight), wall_time=time.perf_counter() - t0)

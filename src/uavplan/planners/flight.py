@@ -62,7 +62,7 @@ class Flight:
 
     Attributes:
         kind: ``"smoothed"`` (Dubins curves) or ``"polyline"`` (the planned polyline).
-        variant: which construction (``polyline``, ``through``, ``corners``,
+        variant: which construction (``polyline``, ``as planned``, ``through``, ``corners``,
             ``shortcut-through``, ``shortcut-corners``).
         violations: the checks it fails (empty: ``ok``).
         late: the most it arrives after a planned pose time, seconds (0 for on time or early).
@@ -240,13 +240,22 @@ def fly(
     timing: str = "planned",
     step: float = DEFAULT_STEP,
     cruise: float | None = None,
+    as_planned: bool = False,
 ) -> Flight:
     """The flight of a planned polyline (see the module docstring), checked against the world,
     the ``reservations`` and the UAV's kinematic limits. The task's start time is the
     polyline's first time (a delayed take-off keeps its delay). ``cruise``: fly at this
-    constant speed instead (``timing`` is then ``"constant"``)."""
+    constant speed instead (``timing`` is then ``"constant"``). ``as_planned``: the polyline
+    is already a trajectory within the UAV's limits (a planner that steps in time, as the
+    APF): it is the flight if it passes every check, kinematics included; else the usual
+    variants are tried."""
     t = dataclasses.replace(task, start_time=float(np.asarray(times)[0]))
     validator = flight_validator(scenario, t, reservations)
+    if as_planned:
+        own = Flight(np.asarray(waypoints), np.asarray(times), "polyline", "as planned", ())
+        checked = check_flights(validator, [own])[0]
+        if not checked.violations:
+            return checked
     timing = "constant" if scenario.moving_obstacles or cruise is not None else timing
     short = flight_validator(scenario, t, reservations, kinematics=False)
     flights = check_flights(
