@@ -79,3 +79,15 @@ def test_reservation_table_gives_back_its_trajectories() -> None:
     ((q, s),) = tab.trajectories()
     assert q[0].tolist() == p[0].tolist() and q[-1].tolist() == p[-1].tolist()
     assert s[0] == 0.0 and s[-1] == 10.0 and np.all(np.diff(s) > 0)
+
+
+def test_fused_apf_escapes_the_cup_that_catches_the_classical_one() -> None:
+    from uavplan.planners.apf_fused import curvature
+
+    sc = resolve("rscdwoa-static")
+    r = get_planner("rscdwoa-apf", pop_size=10).plan(sc, 0, budget=5, seed=0)
+    assert r.info["status"] == "arrived" and r.feasible and r.flown_ok, r.violations
+    assert np.allclose(r.waypoints[-1], sc.tasks[0].goal)
+    # flown as planned, within the turn radius everywhere
+    assert r.flown_kind == "polyline"
+    assert curvature(r.waypoints).max() <= 1.0 / sc.uav.turn_radius

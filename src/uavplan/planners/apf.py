@@ -377,10 +377,13 @@ def _force(
 def integrate(
     state, goal, n_steps, kin, prm, cyl_c, cyl_r, cyl_lo, cyl_hi, circ_c, circ_r, pv, ps, pm,
     mo_r, mo_s, mo_t, mo_p, mo_hold, H, z_args, q_cyl, q_circ, q_poly, q_mo, dim3, out,
+    final=True,
 ):  # fmt: skip  # pragma: no cover - numba
     """Up to ``n_steps`` steps from ``state`` = [x, y, z, psi, gamma, t, best_d, since_best]
     (updated in place); positions into ``out`` (n_steps, 3). Returns (steps, status): status 0
-    running, 1 arrived (the last row is the goal), 2 stalled."""
+    running, 1 arrived (the last row is the goal), 2 stalled. ``final`` False: ``goal`` is a
+    sub-goal, reached within ``goal_r`` whatever the last segment (the last row is where the UAV
+    is)."""
     v, dt, turn_k, climb, descent, goal_r, stall_steps = kin
     p = np.empty(3)
     vel = np.empty(3)
@@ -427,6 +430,9 @@ def integrate(
                        - math.pi)  # fmt: skip
             limit = min(ARRIVAL_TURN, turn_k * 0.5 * (step * math.cos(gam) + flat))
             slope_ok = slope_ok and last <= limit
+        if not final and d <= goal_r:
+            out[k, 0], out[k, 1], out[k, 2] = p[0], p[1], p[2]
+            return k + 1, 1
         if d <= goal_r and (slope_ok or d <= 1e-9):
             out[k, 0], out[k, 1], out[k, 2] = goal[0], goal[1], goal[2]
             return k + 1, 1
@@ -492,13 +498,16 @@ def fly_field(
     sc: Scenario, start: FloatArray, goal: FloatArray, prm: FieldParams, max_steps: int,
     t0: float = 0.0, chunk: int = 4096, on_chunk: Any = None,
     others: list[tuple[FloatArray, FloatArray]] | None = None, separation: float = 0.0,
+    via: FloatArray | None = None, via_radius: float | None = None,
 ) -> Trajectory:  # fmt: skip
     """Integrate the field from ``start`` (heading to the goal, level) for at most
     ``max_steps`` steps. ``on_chunk(k, path)`` after each chunk of ``k`` steps (``path``: the
     whole path if it arrived in this chunk, else None) may return a number of this chunk's
     steps to keep and stop there (the planner's tracker and callback). ``others``: other UAVs'
     timed flights (points (n, 3), times (n,)), repulsive while airborne, of radius
-    ``separation``."""
+    ``separation``. ``via`` (k, dim): sub-goals flown to in turn before the goal, each left
+    for the next once within ``via_radius`` (default: the goal radius); the field's attraction
+    is towards the current one (the optimizer-fused APF)."""
     dim3 = sc.dim == 3
     s3 = np.zeros(3)
     g3 = np.zeros(3)
@@ -514,14 +523,25 @@ def fly_field(
         f, _, _, c, _, _ = _limits(args[15], args[14], g3[0], g3[1])
         room = min(g3[2] - f, c - g3[2])
         fp = (*fp[:3], max(min(prm.rho0_z, 0.5 * room), 1e-9), *fp[4:])
+    targets = [] if via is None else [np.pad(np.asarray(q, float), (0, 3 - sc.dim)) for q in via]
+    targets.append(g3)
+    r_via = prm.goal_radius if via_radius is None else float(via_radius)
     parts = [s3[None]]
-    done, status = 0, 0
+    done, status, leg = 0, 0, 0
     while done < max_steps:
+        final = leg == len(targets) - 1
+        tgt = targets[leg]
         n = min(chunk, max_steps - done)
         out = np.empty((n, 3))
-        k, status = integrate(state, g3, n, kin, fp, *args, dim3, out)  # type: ignore[call-arg]
+        kin_leg = kin if final else (*kin[:5], r_via, *kin[6:])
+        k, status = integrate(state, tgt, n, kin_leg, fp, *args, dim3, out, final)  # type: ignore[call-arg]
         parts.append(out[:k])
         done += k
+        if status == 1 and not final:  # on to the next target, progress measured anew
+            leg += 1
+            state[6] = float(np.linalg.norm(targets[leg] - state[:3]))
+            state[7] = 0.0
+            status = 0
         if on_chunk is not None:
             whole = np.concatenate(parts)[:, : sc.dim] if status == 1 else None
             keep = on_chunk(k, whole)

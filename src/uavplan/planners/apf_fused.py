@@ -1,0 +1,175 @@
+"""Optimizer-fused APF (``rscdwoa-apf``, ``woa-apf``, ``pso-apf``, ``ga-apf``): a population
+optimizer chooses the sub-goals the artificial potential field flies through.
+
+The RSCDWOA paper (Zhang et al., Sect. 5.1 and Fig. 6) fuses its optimizer with the APF so that
+the UAV escapes the field's local minima (Sect. 5.3, Fig. 12) and its trajectory is smoothed
+(Sect. 5.4, Figs. 14 and 16), and leaves open what the optimizer decides. Ours:
+
+* **decision variables**: ``n_subgoals`` sub-goals (x, y, and z in 3-D) inside the scenario's
+  box; the UAV flies the field of :mod:`uavplan.planners.apf` (same gains, kinematics and
+  obstacles, other UAVs' flights included) with its attraction towards the first sub-goal, then,
+  once within ``subgoal_radius`` of it, the next, and last the goal;
+* **fitness**: the flight's length plus ``curvature_weight`` times the start-goal distance
+  times the mean squared curvature of the horizontal track relative to the largest allowed one
+  (``1 / turn_radius``; without a turn radius ``1 / (v dt)``), so that 1 means "always at the
+  tightest turn"; with Deb's feasibility-first rule on the constraint violation: the motion
+  validator's graded violation of the flight (obstacles, band, moving obstacles, other UAVs),
+  plus ``1 + remaining distance / start-goal distance`` for a flight that stalls or runs out of
+  steps. A feasible flight always beats an infeasible one;
+* every candidate of a population is one flight of the field (a Numba loop); the planner's
+  iterations are the optimizer's; the best flight so far is the path.
+
+The classical APF is one candidate of the search space (sub-goals on the straight line), so the
+fused planner can only match or improve on it in the fitness.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from uavplan.optimizers.base import FunctionProblem
+from uavplan.optimizers.base import get as get_optimizer
+from uavplan.optimizers.constraints import feasibility_first
+from uavplan.planners.apf import APFConfig, FieldParams, field_params, fly_field
+from uavplan.planners.base import Planner
+from uavplan.planners.options import PlannerError, option
+from uavplan.planners.registry import register_planner
+from uavplan.planners.run import Outcome, Run
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class FusedAPFConfig(APFConfig):
+    """The APF's options plus the optimizer's."""
+
+    optimizer: str = option("rscdwoa", "the optimizer choosing the sub-goals")
+    optimizer_options: dict[str, Any] = option(
+        default_factory=dict, doc="the optimizer's options (w, F, CR, ...), given plainly"
+    )
+    pop_size: int = option(30, "candidates per iteration (the paper gives none)", low=2)
+    n_subgoals: int = option(2, "sub-goals before the goal", low=1, high=10)
+    subgoal_radius: float | None = option(
+        None, "a sub-goal is passed within this distance, m (None: the goal radius)", low=0
+    )
+    curvature_weight: float = option(1.0, "weight of the mean squared curvature", low=0.0)
+    max_steps: int | None = option(
+        None, "steps per flight at most (None: four times the straight line's)", low=1
+    )
+
+
+def curvature(points: FloatArray) -> FloatArray:
+    """Curvature of the horizontal track at every interior point, 1/m: the heading change over
+    the mean of the two horizontal steps (the flight check's estimate)."""
+    d = np.diff(np.asarray(points, dtype=np.float64)[:, :2], axis=0)
+    h = np.hypot(d[:, 0], d[:, 1])
+    keep = h > 0
+    d, h = d[keep], h[keep]
+    if len(h) < 2:
+        return np.zeros(0)
+    ang = np.arctan2(d[:, 1], d[:, 0])
+    turn = np.abs((np.diff(ang) + np.pi) % (2 * np.pi) - np.pi)
+    return np.asarray(turn / (0.5 * (h[1:] + h[:-1])))
+
+
+class FusedAPFPlanner(Planner):
+    """APF whose sub-goals a population optimizer chooses (see the module docstring)."""
+
+    name = "apf-fused"
+    Config = FusedAPFConfig
+    config: FusedAPFConfig
+    default_iterations = 40  # the paper's Fig. 16 converges within 40 rounds
+    supports_reservations = True
+    steps_in_time = True
+
+    def _plan(self, run: Run) -> Outcome:
+        cfg = self.config
+        sc, task, tr = run.scenario, run.task, run.tracker
+        start = np.asarray(task.start, dtype=np.float64)
+        goal = np.asarray(task.goal, dtype=np.float64)
+        L0 = float(np.linalg.norm(goal - start)) or 1.0
+        prm: FieldParams = field_params(cfg, sc, L0)
+        steps = cfg.max_steps or int(4 * L0 / (prm.v * prm.dt)) + 100
+        k_max = 1.0 / sc.uav.turn_radius if sc.uav.turn_radius > 0 else 1.0 / (prm.v * prm.dt)
+        res = run.reservations
+        others = res.trajectories() if res is not None else []
+        sep = res.separation if res is not None else 0.0
+        lo, hi = sc.bounds.lo.astype(float), sc.bounds.hi.astype(float)
+        K, dim = int(cfg.n_subgoals), sc.dim
+        best: dict[str, Any] = {"f": np.inf, "path": None, "status": None}
+
+        def one(x: FloatArray) -> tuple[float, float, FloatArray, str]:
+            traj = fly_field(
+                sc, start, goal, prm, steps, float(task.start_time), others=others,
+                separation=sep, via=x.reshape(K, dim), via_radius=cfg.subgoal_radius,
+            )  # fmt: skip
+            P = traj.points
+            _, cv = run.problem.evaluate_cv(P[None], exact=True)
+            kappa = curvature(P)
+            f = float(np.sum(np.linalg.norm(np.diff(P, axis=0), axis=1)))
+            if kappa.size:
+                f += cfg.curvature_weight * L0 * float(np.mean((kappa / k_max) ** 2))
+            v = float(cv[0])
+            if traj.status != "arrived":
+                v += 1.0 + float(np.linalg.norm(P[-1] - goal)) / L0
+            return f, v, P, traj.status
+
+        def batch(X: FloatArray) -> FloatArray:
+            fs, vs = np.empty(len(X)), np.empty(len(X))
+            for i, x in enumerate(X):
+                f, v, P, status = one(x)
+                fs[i], vs[i] = f, v
+                num = float(feasibility_first(np.array([f]), np.array([v]))[0])
+                if num < best["f"]:
+                    best.update(f=num, path=P, status=status)
+                    if v == 0:
+                        ev = run.problem.evaluate(P[None])
+                        tr.offer(P, float(ev.cost[0]), bool(ev.feasible[0]))
+            tr.evaluations += len(X)
+            return np.asarray(feasibility_first(fs, vs))
+
+        problem = FunctionProblem(
+            batch, np.tile(lo[:dim], K), np.tile(hi[:dim], K), block=dim, name="apf-subgoals"
+        )
+        try:
+            cls = get_optimizer(cfg.optimizer)
+            opt = cls(problem, self.optimizer_config, seed=np.random.SeedSequence(run.seed),
+                      pop_size=cfg.pop_size)  # fmt: skip
+        except Exception as exc:  # an optimizer that does not take this size, an unknown name
+            raise PlannerError(f"{self.name}: optimizer {cfg.optimizer!r}: {exc}") from None
+        # the classical APF's flight first: sub-goals evenly on the straight line
+        line = np.concatenate([start + (goal - start) * (k + 1) / (K + 1) for k in range(K)])
+        batch(line[None])
+        while True:
+            X = opt.ask()
+            opt.tell(X, batch(X))
+            if tr.end_iteration():
+                break
+        path = best["path"]
+        reasons: tuple[str, ...] = ()
+        if best["status"] != "arrived":
+            reasons = ("local_minimum",) if best["status"] == "stalled" else ("no_path",)
+        kappa = curvature(path) if path is not None else np.zeros(0)
+        return Outcome(
+            path=path,
+            reasons=reasons,
+            info={
+                "status": best["status"],
+                "fitness": best["f"],
+                "max_curvature_per_km": float(kappa.max() * 1000) if kappa.size else 0.0,
+                "optimizer": cfg.optimizer,
+            },
+        )
+
+
+for _opt in ("rscdwoa", "woa", "pso", "ga"):
+    register_planner(
+        FusedAPFPlanner,
+        name=f"{_opt}-apf",
+        summary=f"APF whose sub-goals {_opt.upper()} chooses (RSCDWOA Sect. 5.1, Fig. 6)",
+        optimizer=_opt,
+    )
