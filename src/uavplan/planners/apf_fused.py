@@ -144,9 +144,11 @@ class FusedAPFPlanner(Planner):
         # the classical APF's flight first: sub-goals evenly on the straight line
         line = np.concatenate([start + (goal - start) * (k + 1) / (K + 1) for k in range(K)])
         batch(line[None])
+        fitness: list[float] = []
         while True:
             X = opt.ask()
             opt.tell(X, batch(X))
+            fitness.append(float(best["f"]))
             if tr.end_iteration():
                 break
         path = best["path"]
@@ -162,6 +164,7 @@ class FusedAPFPlanner(Planner):
                 "fitness": best["f"],
                 "max_curvature_per_km": float(kappa.max() * 1000) if kappa.size else 0.0,
                 "optimizer": cfg.optimizer,
+                "fitness_history": fitness,  # best feasibility-first number per iteration
             },
         )
 
