@@ -482,10 +482,10 @@ class HRMAGA(Planner):
         convex hull of the two ends and the polygons' corners (pushed out by 2 % of the
         polygon's size, or by half the ends' distance to it if less; the set grows while a
         chain meets another polygon), each edge cut in 1, 2, 4 or 8 pieces or in pieces of one
-        terrain cell, every new point admitted (:meth:`_admit`: out of the areas, into the band
-        over the terrain) at the ends' interpolated altitude or at half or three quarters of
-        the band; all candidates scored in one batch by the sub-problems' rule. ``None`` if
-        none is feasible (then P-MAGA repairs the run); and the evaluations spent."""
+        terrain cell (at most 32), every new point admitted (:meth:`_admit`: out of the areas,
+        into the band over the terrain) at the ends' interpolated altitude or at half or three
+        quarters of the band; all candidates scored in one batch by the sub-problems' rule.
+        ``None`` if none is feasible (then P-MAGA repairs the run); and the evaluations spent."""
         A, B = P[i], P[j + 1]
         areas = [u for u in sc.uncertain_areas if u.revealed]
         polys = [np.asarray(q.array, dtype=np.float64) for q in sc.no_fly_polygons]
@@ -528,7 +528,7 @@ class HRMAGA(Planner):
             corners = XY[chain]  # two points: the ends see each other past every polygon
             edges = np.linalg.norm(np.diff(corners, axis=0), axis=1)
             cell = sc.terrain.cell_size if sc.terrain is not None else math.inf
-            by_cell = np.maximum(1, np.ceil(edges / cell)).astype(int)
+            by_cell = np.clip(np.ceil(edges / cell), 1, MAX_PIECES).astype(int)
             for pieces in ([1], [2], [4], [8], list(by_cell)):  # per edge; the last: a cell each
                 ts = [
                     np.linspace(0.0, 1.0, n + 1)[:-1] for n in np.broadcast_to(pieces, len(edges))
@@ -656,6 +656,10 @@ class HRMAGA(Planner):
             "attempts": attempt + 1,
             "evaluations": used,
         }
+
+
+#: the most pieces a detour's edge is cut into (per terrain cell up to this many)
+MAX_PIECES = 32
 
 
 def _box_gap(p: FloatArray, v: FloatArray) -> float:
