@@ -108,7 +108,10 @@ class FusedAPFPlanner(Planner):
                 separation=sep, via=x.reshape(K, dim), via_radius=cfg.subgoal_radius,
             )  # fmt: skip
             P = traj.points
-            _, cv = run.problem.evaluate_cv(P[None], exact=True)
+            val = run.problem.validator
+            b = val.batch(np.ascontiguousarray(P[None]))
+            passes = val.passing(b).size > 0  # the fused checks, cheap ones first
+            cv = np.zeros(1) if passes else val.graded_violation(b, val.violations(b))
             kappa = curvature(P)
             f = float(np.sum(np.linalg.norm(np.diff(P, axis=0), axis=1)))
             if kappa.size:
