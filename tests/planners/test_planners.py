@@ -223,3 +223,42 @@ def test_named_configurations_share_one_class() -> None:
 def test_unknown_planner() -> None:
     with pytest.raises(PlannerError, match="unknown planner 'nope'; available"):
         get_planner("nope")
+
+
+def with_traffic(sc: Scenario) -> Scenario:
+    """``sc`` with a moving obstacle crossing the straight line midway when the UAV would be
+    there (radius 5 % of the map)."""
+    import dataclasses
+
+    from uavplan.world.dynamic import MovingObstacle
+
+    s, g = np.asarray(sc.tasks[0].start), np.asarray(sc.tasks[0].goal)
+    mid = 0.5 * (s + g)
+    t_mid = float(np.linalg.norm(g - s)) / sc.uav.speed / 2
+    side = np.zeros_like(mid)
+    side[1] = 0.4 * float(sc.bounds.hi[1] - sc.bounds.lo[1])
+    r = 0.05 * float(sc.bounds.hi[0] - sc.bounds.lo[0])
+    obs = MovingObstacle(r, [0.0, 2 * t_mid], [mid + side, mid - side])
+    return dataclasses.replace(sc, name=sc.name + "-traffic", moving_obstacles=(obs,))
+
+
+@pytest.mark.parametrize("name", PLANNERS)
+def test_moving_obstacles_are_planned_around_or_refused_naming_why(name: str) -> None:
+    planner = quick(name)
+    sc = with_traffic(scenario_for(name))
+    if not planner.handles_moving:
+        with pytest.raises(PlannerError, match="cannot plan around moving obstacles"):
+            planner.plan(sc, budget=20, seed=0)
+        return
+    r = planner.plan(sc, budget=20, seed=0)
+    # judged over continuous time as flown at the UAV's speed, by a fresh evaluation
+    ev = PathProblem(sc).evaluate(r.waypoints[None])
+    assert bool(ev.feasible[0]) == r.feasible
+    if not r.feasible:
+        assert r.violations
+    d = sc.moving_obstacles[0].min_distance(r.flown[None], r.flown_times[None])
+    assert r.flown_ok == r.flown_feasible
+    if r.flown_ok:
+        assert d.min() >= sc.moving_obstacles[0].radius
+    if name in ("apf", "rscdwoa-apf"):
+        assert r.feasible and r.flown_ok, r.violations

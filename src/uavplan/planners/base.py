@@ -81,6 +81,7 @@ class Planner(ABC):
         dims: the scenario dimensions handled.
         default_iterations: the iteration budget when none is given.
         supports_reservations: whether its search keeps clear of other UAVs' flights.
+        handles_moving: whether its search sees moving obstacles in time.
         deterministic: whether the seed is unused (the same plan from every seed).
         anytime: whether it uses its whole iteration budget (False: it may end earlier, e.g.
             on arrival, and its history is as long as the iterations it ran).
@@ -101,6 +102,8 @@ class Planner(ABC):
     #: its path is a trajectory stepped in time within the UAV's limits (flown as planned if
     #: it passes every check, see :func:`~uavplan.planners.flight.fly`)
     steps_in_time: ClassVar[bool] = False
+    #: whether its search sees moving obstacles in time (False: refused on such a scenario)
+    handles_moving: ClassVar[bool] = True
 
     def __init__(
         self,
@@ -217,7 +220,16 @@ class Planner(ABC):
 
     def check_input(self, scenario: Scenario, task: Task) -> None:
         """Refuse what this planner cannot plan: a dimension it does not handle, a task
-        outside the bounds or of the wrong dimension."""
+        outside the bounds or of the wrong dimension, moving obstacles it cannot see in time."""
+        if scenario.moving_obstacles and not self.handles_moving:
+            from uavplan.planners.registry import registry
+
+            able = sorted(n for n, e in registry().items() if e.cls.handles_moving)
+            raise PlannerError(
+                f"{self.name} cannot plan around moving obstacles (its search has no time); "
+                f"{scenario.name!r} has {len(scenario.moving_obstacles)}: plan it with one of "
+                f"{', '.join(able)}"
+            )
         if scenario.dim not in self.dims:
             raise PlannerError(
                 f"{self.name} plans {' or '.join(f'{d}-D' for d in self.dims)} scenarios; "

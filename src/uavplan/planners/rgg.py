@@ -380,6 +380,8 @@ class RGGPlanner(Planner):
     unchanged path is not re-evaluated), stopped earlier by its evaluations or time.
     """
 
+    handles_moving = False  # its graph has no time: moving obstacles are refused
+
     name = "rgg"
     Config = RGGConfig
     config: RGGConfig

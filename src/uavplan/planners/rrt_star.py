@@ -535,6 +535,8 @@ class RRTStarPlanner(Planner):
     callback, or at the first goal connection with ``stop_at_goal``.
     """
 
+    handles_moving = False  # its graph has no time: moving obstacles are refused
+
     name = "rrt-star"
     Config = RRTStarPlannerConfig
     config: RRTStarPlannerConfig
