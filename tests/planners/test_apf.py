@@ -91,3 +91,25 @@ def test_fused_apf_escapes_the_cup_that_catches_the_classical_one() -> None:
     # flown as planned, within the turn radius everywhere
     assert r.flown_kind == "polyline"
     assert curvature(r.waypoints).max() <= 1.0 / sc.uav.turn_radius
+
+
+def test_kernel_force_matches_the_numpy_reference() -> None:
+    import dataclasses
+
+    from uavplan.planners.apf import force_at, force_reference
+
+    rng = np.random.default_rng(3)
+    for name in ("rscdwoa-mixed", "rscdwoa-static", "hrmaga-virtual", "ppswarm1"):
+        sc = resolve(name)
+        if name == "hrmaga-virtual":  # a moving obstacle over terrain, a band and polygons
+            sc = dataclasses.replace(sc, moving_obstacles=resolve("rscdwoa-mixed").moving_obstacles)
+        prm = field_params(get_planner("apf").config, sc, 1e4)
+        lo, hi = sc.bounds.lo, sc.bounds.hi
+        for _ in range(200):
+            p = lo + rng.random(sc.dim) * (hi - lo)
+            vel = rng.normal(size=sc.dim) * sc.uav.speed
+            goal = lo + rng.random(sc.dim) * (hi - lo)
+            t = float(rng.uniform(0, 2000))
+            a = force_at(sc, prm, p, vel, t, goal)
+            b = force_reference(sc, prm, p, vel, t, goal)
+            np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-9 * max(1.0, np.abs(b).max()))

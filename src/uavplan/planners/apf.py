@@ -442,6 +442,130 @@ def integrate(
     return n_steps, 0
 
 
+def force_at(
+    sc: Scenario, prm: FieldParams, p: FloatArray, vel: FloatArray, t: float, goal: FloatArray,
+    others: list[tuple[FloatArray, FloatArray]] | None = None, separation: float = 0.0,
+) -> FloatArray:  # fmt: skip
+    """The kernel's force at one state (3,) (2-D scenes: z = 0), for tests and benchmarks."""
+    dim3 = sc.dim == 3
+    q, v, g = (np.zeros(3) for _ in range(3))
+    q[: sc.dim], v[: sc.dim], g[: sc.dim] = p, vel, goal
+    fp = (prm.k_att, prm.d_att, prm.eta, prm.rho0_z, prm.eta_m, prm.a_max)
+    args = _packed(sc, prm, others or [], separation)
+    return np.asarray(_force(q, v, float(t), g, fp, *args, dim3))
+
+
+def force_reference(
+    sc: Scenario, prm: FieldParams, p: FloatArray, vel: FloatArray, t: float, goal: FloatArray
+) -> FloatArray:
+    """The same field written plainly from the scenario's objects in NumPy (the reference
+    :func:`force_at` is tested against; no floor-room adjustment, no other UAVs)."""
+    dim = sc.dim
+    P = np.zeros(3)
+    V = np.zeros(3)
+    G = np.zeros(3)
+    P[:dim], V[:dim], G[:dim] = p, vel, goal
+
+    def khatib(rho: float, rho0: float) -> float:
+        if rho >= rho0 or rho0 <= 0:
+            return 0.0
+        r = max(rho / rho0, R_MIN)
+        return (1.0 / r - 1.0) / r**2
+
+    e = G - P
+    F = prm.k_att * e / max(float(np.linalg.norm(e)), prm.d_att, 1e-12)
+    discs = [(c.center, c.effective_radius, c.z_min - c.margin, c.z_max + c.margin)
+             for c in sc.cylinders] + [(c.center, c.effective_radius, -np.inf, np.inf)
+                                       for c in sc.circles]  # fmt: skip
+    for center, radius, lo, hi in discs:
+        h = P[:2] - np.asarray(center)
+        dh = float(np.hypot(*h))
+        u = h / dh if dh > 0 else np.array([1.0, 0.0])
+        radial = dh - radius
+        gap = 0.0 if dim == 2 or lo <= P[2] <= hi else P[2] - (hi if P[2] > hi else lo)
+        if gap == 0.0:
+            rho, grad = radial, np.array([u[0], u[1], 0.0])
+        elif radial > 0:
+            rho = float(np.hypot(radial, gap))
+            grad = np.array([u[0] * radial, u[1] * radial, gap]) / rho
+        else:
+            rho, grad = abs(gap), np.array([0.0, 0.0, np.sign(gap)])
+        F += prm.eta * khatib(rho, float(rho0_of(prm, np.array([radius]))[0])) * grad
+    for poly in sc.no_fly_polygons:
+        v = poly.array
+        a, b = v, np.roll(v, -1, axis=0)
+        ab = b - a
+        u = np.clip(np.einsum("kd,kd->k", P[:2] - a, ab) / np.einsum("kd,kd->k", ab, ab), 0, 1)
+        near = a + u[:, None] * ab
+        dist = np.linalg.norm(P[:2] - near, axis=1)
+        k = int(np.argmin(dist))
+        out = (P[:2] - near[k]) / dist[k] if dist[k] > 0 else np.zeros(2)
+        inside = bool(poly.contains(P[None, :2])[0])
+        rho = -dist[k] if inside else dist[k]
+        size = 0.5 * float(np.ptp(v, axis=0).max())
+        m = prm.eta * khatib(rho - poly.margin, float(rho0_of(prm, np.array([size]))[0]))
+        F[:2] += m * (-out if inside else out)
+    if dim == 3:
+        lo_z, hi_z = float(sc.bounds.lo[2]), float(sc.bounds.hi[2])
+        band, ter = sc.altitude, sc.terrain
+
+        def limits(x: float, y: float) -> tuple[float, float]:
+            ground = float(ter.height(x, y)) if ter is not None else 0.0
+            f, c = lo_z, hi_z
+            if band is not None and band.reference == "absolute":
+                f, c = max(f, band.min), min(c, band.max)
+            rel_f = band.min if band is not None and band.reference == "ground" else -np.inf
+            rel_c = band.max if band is not None and band.reference == "ground" else np.inf
+            if ter is not None:
+                rel_f = max(rel_f, 0.0)
+            return max(f, ground + rel_f), min(c, ground + rel_c)
+
+        ee = 0.5 * min(ter.dx, ter.dy) if ter is not None else 1.0
+        f0, c0 = limits(P[0], P[1])
+        fx = (limits(P[0] + ee, P[1])[0] - limits(P[0] - ee, P[1])[0]) / (2 * ee)
+        fy = (limits(P[0], P[1] + ee)[0] - limits(P[0], P[1] - ee)[0]) / (2 * ee)
+        cx = (limits(P[0] + ee, P[1])[1] - limits(P[0] - ee, P[1])[1]) / (2 * ee)
+        cy = (limits(P[0], P[1] + ee)[1] - limits(P[0], P[1] - ee)[1]) / (2 * ee)
+        n_f = np.array([-fx, -fy, 1.0])
+        n_c = np.array([cx, cy, -1.0])
+        F += prm.eta * khatib(P[2] - f0, prm.rho0_z) * n_f / np.linalg.norm(n_f)
+        F += prm.eta * khatib(c0 - P[2], prm.rho0_z) * n_c / np.linalg.norm(n_c)
+    for o in sc.moving_obstacles:
+        Q = o.position_at(t)
+        inside = o.times[0] < t < o.times[-1]
+        k = int(np.searchsorted(o.times, t, side="right")) - 1
+        W = 0 * Q
+        if inside:
+            W = (o.positions[k + 1] - o.positions[k]) / (o.times[k + 1] - o.times[k])
+        if dim == 2:
+            Q, W = Q * [1, 1, 0], W * [1, 1, 0]
+        r = P - Q
+        dist = float(np.linalg.norm(r))
+        if dist <= 0:
+            continue
+        u = r / dist
+        rho_s = dist - o.radius
+        rho0_m = float(rho0_of(prm, np.array([o.radius]))[0])
+        F += prm.eta_m * khatib(rho_s, rho0_m) * u
+        w = V - W
+        v_a = -float(w @ u)
+        if v_a > 0:
+            rho_e = rho_s - v_a**2 / (2 * prm.a_max)
+            if rho_e < rho0_m:
+                r_e = max(rho_e / rho0_m, R_MIN)
+                w_perp = w + v_a * u
+                F += prm.eta_m / r_e**2 * (u + v_a / (prm.a_max * dist) * w_perp)
+    h = float(np.hypot(e[0], e[1]))
+    if h > 0:
+        a = e[:2] / h
+        along = float(F[:2] @ a)
+        side = abs(F[1] * a[0] - F[0] * a[1])
+        mag = float(np.hypot(F[0], F[1]))
+        if along < 0 and side <= 1e-9 * mag:
+            F[:2] += 0.1 * mag * np.array([-a[1], a[0]])
+    return F
+
+
 # ---------------------------------------------------------------------- the planner
 def _packed(
     sc: Scenario, prm: FieldParams, others: list[tuple[FloatArray, FloatArray]], sep: float
@@ -624,4 +748,7 @@ class APFPlanner(Planner):
 
 register_planner(APFPlanner)
 
-__all__ = ["APFConfig", "APFPlanner", "FieldParams", "Trajectory", "field_params", "fly_field"]
+__all__ = [
+    "APFConfig", "APFPlanner", "FieldParams", "Trajectory", "field_params", "fly_field",
+    "force_at", "force_reference",
+]  # fmt: skip
