@@ -93,6 +93,7 @@ from uavplan.planners.options import PlannerConfig, PlannerError, option
 from uavplan.planners.registry import register_planner
 from uavplan.planners.run import Outcome, Run, Termination, Tracker
 from uavplan.problems.path_problem import LOOKUP, PathProblem
+from uavplan.problems.validity import greedy_shortcut
 from uavplan.world.obstacles import UncertainArea
 from uavplan.world.pyramid import TerrainLevel, relaxed_near, terrain_pyramid
 from uavplan.world.reservations import ReservationTable
@@ -124,6 +125,9 @@ class HRMAGAConfig(PlannerConfig):
     G: int = option(200, "P-MAGA generations per sub-problem at most (Table I)", low=1)
     repair_iterations: int = option(
         20, "lockstep steps of a repair in flight (ours; the paper gives none)", low=1
+    )
+    repair_shortcut: bool = option(
+        True, "the way around is shortened by line of sight when that lowers its loss (ours)"
     )
     repair_detour: bool = option(
         True, "repair first tries the way around the revealed area's corners (ours; fast)"
@@ -561,6 +565,16 @@ class HRMAGA(Planner):
             k = int(np.argmin(num))
             if cv[k] <= 0 and np.isfinite(f[k]) and (best is None or num[k] < best[0]):
                 best = (float(num[k]), same[k])
+        if best is not None and cfg_shortcut(self):
+            # line of sight over the chosen way: fewer, longer legs where they stay clear
+            Q = best[1]
+            S, _, _ = greedy_shortcut(problem.validator, Q)
+            if len(S) < len(Q):
+                f, cv = problem.evaluate_cv(S[None], exact=True)
+                used += 1
+                num = float(feasibility_first(f, cv)[0])
+                if cv[0] <= 0 and num <= best[0]:
+                    best = (num, S)
         return (None if best is None else best[1][1:-1]), used
 
     def repair(
@@ -660,6 +674,10 @@ class HRMAGA(Planner):
 
 #: the most pieces a detour's edge is cut into (per terrain cell up to this many)
 MAX_PIECES = 32
+
+
+def cfg_shortcut(planner: Any) -> bool:
+    return bool(planner.config.repair_shortcut)
 
 
 def _box_gap(p: FloatArray, v: FloatArray) -> float:
