@@ -452,7 +452,7 @@ def force_at(
     q[: sc.dim], v[: sc.dim], g[: sc.dim] = p, vel, goal
     fp = (prm.k_att, prm.d_att, prm.eta, prm.rho0_z, prm.eta_m, prm.a_max)
     args = _packed(sc, prm, others or [], separation)
-    return np.asarray(_force(q, v, float(t), g, fp, *args, dim3))
+    return np.asarray(_force(q, v, float(t), g, fp, *args, dim3))  # type: ignore[call-arg]
 
 
 def force_reference(

@@ -572,9 +572,9 @@ class HRMAGA(Planner):
             if len(S) < len(Q):
                 f, cv = problem.evaluate_cv(S[None], exact=True)
                 used += 1
-                num = float(feasibility_first(f, cv)[0])
-                if cv[0] <= 0 and num <= best[0]:
-                    best = (num, S)
+                num_s = float(feasibility_first(f, cv)[0])
+                if cv[0] <= 0 and num_s <= best[0]:
+                    best = (num_s, S)
         return (None if best is None else best[1][1:-1]), used
 
     def repair(
