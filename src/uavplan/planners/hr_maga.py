@@ -614,12 +614,7 @@ class HRMAGA(Planner):
             found = [self._detour(problem, scenario, P, i, j) for i, j in runs]
             detours = [d for d, _ in found if d is not None]
             if len(detours) == len(runs):
-                out = [P[: runs[0][0] + 1]]
-                for r_idx, ((_, j), d) in enumerate(zip(runs, detours, strict=True)):
-                    out.append(d)
-                    nxt = runs[r_idx + 1][0] if r_idx + 1 < len(runs) else len(P) - 1
-                    out.append(P[j + 1 : nxt + 1])
-                return np.concatenate(out), {
+                return _splice(P, runs, detours), {
                     "how": "detour",
                     "runs": len(runs),
                     "segments": int(bad.size),
@@ -658,12 +653,7 @@ class HRMAGA(Planner):
             fallback, info = Planner.repair(self, scenario, task, path, times, area, budget, seed)
             return fallback, {**info, "how": "from scratch (local repair found no feasible path)",
                               "runs": len(runs), "local_evaluations": used}  # fmt: skip
-        out = [P[: runs[0][0] + 1]]
-        for r_idx, ((_, j), (paths, _n)) in enumerate(zip(runs, best, strict=True)):
-            out.append(paths[0][1:-1])
-            nxt = runs[r_idx + 1][0] if r_idx + 1 < len(runs) else len(P) - 1
-            out.append(P[j + 1 : nxt + 1])
-        return np.concatenate(out), {
+        return _splice(P, runs, [paths[0][1:-1] for paths, _n in best]), {
             "how": "local repair",
             "runs": len(runs),
             "segments": int(bad.size),
@@ -674,6 +664,17 @@ class HRMAGA(Planner):
 
 #: the most pieces a detour's edge is cut into (per terrain cell up to this many)
 MAX_PIECES = 32
+
+
+def _splice(P: FloatArray, runs: list[tuple[int, int]], inner: list[FloatArray]) -> FloatArray:
+    """``P`` with the interior of every run of segments ``(i, j)`` (from ``P[i]`` to
+    ``P[j + 1]``) replaced by the matching ``inner`` points."""
+    out = [P[: runs[0][0] + 1]]
+    for r_idx, ((_, j), d) in enumerate(zip(runs, inner, strict=True)):
+        out.append(d)
+        nxt = runs[r_idx + 1][0] if r_idx + 1 < len(runs) else len(P) - 1
+        out.append(P[j + 1 : nxt + 1])
+    return np.concatenate(out)
 
 
 def cfg_shortcut(planner: Any) -> bool:

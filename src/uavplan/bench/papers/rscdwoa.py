@@ -222,7 +222,7 @@ def apf_sections(df: pd.DataFrame, plan: str) -> Any:
                 "wilson_lo": lo,
                 "wilson_hi": hi,
                 "arrived": float(g["arrived"].astype(bool).mean()),
-            "all_four_arrived": float((runs["n_arrived"] == runs["n_uavs"]).mean()),
+                "all_four_arrived": float((runs["n_arrived"] == runs["n_uavs"]).mean()),
                 "flown_verified": float(runs["flown_verified"].mean()),
                 "feasible_but_failed": int(runs["feasible_but_failed"].sum()),
                 "median_arrival_s": float(np.nanmedian(g["arrival_s"]))
@@ -308,50 +308,53 @@ def table3_sections(df: pd.DataFrame, plan: str) -> Any:
 #: the classical APF's iteration is 50 steps; 500 per iteration lets it fly 20,000 steps (400 km)
 #: in the 40 iterations the optimizers get
 _APF = {"steps_per_iteration": 500}
-register_plan(
-    ExperimentPlan(
-        name="rscdwoa-static",
-        description="RSCDWOA Fig. 12: APF and its fused versions in the static layout with a trap",
-        scenarios=("rscdwoa-static",),
-        algorithms=(Algorithm("apf", "apf", _APF), *(Algorithm(a, a) for a in APF_FAMILY[1:])),
-        scales={
-            "smoke": Scale(runs=1, iterations=1),
-            "paper": Scale(runs=100, iterations=40),
-        },
-        kind="rscdwoa",
-        report=apf_sections,
+
+
+def _apf_plan(name: str, description: str, scenario: str, algorithms: tuple[Algorithm, ...],
+              runs: int, report: Any) -> None:  # fmt: skip
+    """One of the APF application's plans: smoke 1 run of 1 iteration, paper ``runs`` of 40."""
+    register_plan(
+        ExperimentPlan(
+            name=name,
+            description=description,
+            scenarios=(scenario,),
+            algorithms=algorithms,
+            scales={
+                "smoke": Scale(runs=1, iterations=1),
+                "paper": Scale(runs=runs, iterations=40),
+            },
+            kind="rscdwoa",
+            report=report,
+        )
     )
+
+
+_apf_plan(
+    "rscdwoa-static",
+    "RSCDWOA Fig. 12: APF and its fused versions in the static layout with a trap",
+    "rscdwoa-static",
+    (Algorithm("apf", "apf", _APF), *(Algorithm(a, a) for a in APF_FAMILY[1:])),
+    100,
+    apf_sections,
 )
-register_plan(
-    ExperimentPlan(
-        name="rscdwoa-dynamic",
-        description="RSCDWOA Figs. 13-16: the APF family among three moving obstacles; SPSO, PSO",
-        scenarios=("rscdwoa-mixed",),
-        algorithms=(
-            Algorithm("apf", "apf", _APF),
-            *(Algorithm(a, a) for a in APF_FAMILY[1:]),
-            Algorithm("spso", "spso", {"constraints": "feasibility-first"}),
-            Algorithm("pso", "pso", {"constraints": "feasibility-first"}),
-        ),
-        scales={
-            "smoke": Scale(runs=1, iterations=1),
-            "paper": Scale(runs=20, iterations=40),
-        },
-        kind="rscdwoa",
-        report=apf_sections,
-    )
+_apf_plan(
+    "rscdwoa-dynamic",
+    "RSCDWOA Figs. 13-16: the APF family among three moving obstacles; SPSO, PSO",
+    "rscdwoa-mixed",
+    (
+        Algorithm("apf", "apf", _APF),
+        *(Algorithm(a, a) for a in APF_FAMILY[1:]),
+        Algorithm("spso", "spso", {"constraints": "feasibility-first"}),
+        Algorithm("pso", "pso", {"constraints": "feasibility-first"}),
+    ),
+    20,
+    apf_sections,
 )
-register_plan(
-    ExperimentPlan(
-        name="rscdwoa-table3",
-        description="RSCDWOA Table 3: MAE and RMSE per UAV of PSO-, GA-, WOA- and RSCDWOA-APF",
-        scenarios=("rscdwoa-mixed",),
-        algorithms=tuple(Algorithm(a, a) for a in ("pso-apf", "ga-apf", "woa-apf", "rscdwoa-apf")),
-        scales={
-            "smoke": Scale(runs=1, iterations=1),
-            "paper": Scale(runs=20, iterations=40),
-        },
-        kind="rscdwoa",
-        report=table3_sections,
-    )
+_apf_plan(
+    "rscdwoa-table3",
+    "RSCDWOA Table 3: MAE and RMSE per UAV of PSO-, GA-, WOA- and RSCDWOA-APF",
+    "rscdwoa-mixed",
+    tuple(Algorithm(a, a) for a in ("pso-apf", "ga-apf", "woa-apf", "rscdwoa-apf")),
+    20,
+    table3_sections,
 )
