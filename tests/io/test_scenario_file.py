@@ -50,6 +50,8 @@ BUILTINS = [
     "ppswarm2",
     "ppswarm3",
     "ppswarm4",
+    "rscdwoa-mixed",
+    "rscdwoa-static",
     "simple2d",
     "spso",
     "topobathy",
