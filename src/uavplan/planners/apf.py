@@ -223,7 +223,7 @@ def _limits(z_args, H, x, y):  # pragma: no cover - numba
 @njit(cache=True)
 def _force(
     p, vel, t, goal, prm, cyl_c, cyl_r, cyl_lo, cyl_hi, circ_c, circ_r, pv, ps, pm,
-    mo_r, mo_s, mo_t, mo_p, mo_hold, H, z_args, q_cyl, q_circ, q_poly, q_mo, dim3,
+    mo_r, mo_s, mo_t, mo_p, mo_hold, H, z_args, q_cyl, q_circ, q_poly, q_mo, walls, dim3,
 ):  # fmt: skip  # pragma: no cover - numba
     """The field's force at ``p`` (3,) moving at ``vel`` (3,) at time ``t``; ``q_*`` the
     influence radius of each obstacle."""
@@ -300,6 +300,10 @@ def _force(
         m = eta * _khatib(rho - pm[q], q_poly[q])
         F[0] += m * ox
         F[1] += m * oy
+    # the map's side walls: [lo_x, hi_x, lo_y, hi_y, and their influence radii]
+    for a in range(2):
+        F[a] += eta * _khatib(p[a] - walls[2 * a], walls[4 + 2 * a])
+        F[a] -= eta * _khatib(walls[2 * a + 1] - p[a], walls[5 + 2 * a])
     # floor and ceiling
     if dim3:
         f, fx, fy, c, cx, cy = _limits(z_args, H, p[0], p[1])
@@ -376,7 +380,7 @@ def _force(
 @njit(cache=True)
 def integrate(
     state, goal, n_steps, kin, prm, cyl_c, cyl_r, cyl_lo, cyl_hi, circ_c, circ_r, pv, ps, pm,
-    mo_r, mo_s, mo_t, mo_p, mo_hold, H, z_args, q_cyl, q_circ, q_poly, q_mo, dim3, out,
+    mo_r, mo_s, mo_t, mo_p, mo_hold, H, z_args, q_cyl, q_circ, q_poly, q_mo, walls, dim3, out,
     final=True,
 ):  # fmt: skip  # pragma: no cover - numba
     """Up to ``n_steps`` steps from ``state`` = [x, y, z, psi, gamma, t, best_d, since_best]
@@ -395,7 +399,7 @@ def integrate(
         vel[2] = v * math.sin(gam) if dim3 else 0.0
         F = _force(p, vel, t, goal, prm, cyl_c, cyl_r, cyl_lo, cyl_hi, circ_c, circ_r, pv, ps,
                    pm, mo_r, mo_s, mo_t, mo_p, mo_hold, H, z_args, q_cyl, q_circ, q_poly,
-                   q_mo, dim3)  # fmt: skip
+                   q_mo, walls, dim3)  # fmt: skip
         step = v * dt
         gam_prev = gam
         if dim3:
@@ -451,7 +455,7 @@ def force_at(
     q, v, g = (np.zeros(3) for _ in range(3))
     q[: sc.dim], v[: sc.dim], g[: sc.dim] = p, vel, goal
     fp = (prm.k_att, prm.d_att, prm.eta, prm.rho0_z, prm.eta_m, prm.a_max)
-    args = _packed(sc, prm, others or [], separation)
+    args = (*_packed(sc, prm, others or [], separation), _walls(sc, prm, g))
     return np.asarray(_force(q, v, float(t), g, fp, *args, dim3))  # type: ignore[call-arg]
 
 
@@ -505,6 +509,11 @@ def force_reference(
         size = 0.5 * float(np.ptp(v, axis=0).max())
         m = prm.eta * khatib(rho - poly.margin, float(rho0_of(prm, np.array([size]))[0]))
         F[:2] += m * (-out if inside else out)
+    for a in range(2):  # side walls, influence at most half the goal's room
+        lo_a, hi_a = float(sc.bounds.lo[a]), float(sc.bounds.hi[a])
+        q_lo = min(prm.rho0_floor, 0.5 * max(G[a] - lo_a, 0.0))
+        q_hi = min(prm.rho0_floor, 0.5 * max(hi_a - G[a], 0.0))
+        F[a] += prm.eta * (khatib(P[a] - lo_a, q_lo) - khatib(hi_a - P[a], q_hi))
     if dim == 3:
         lo_z, hi_z = float(sc.bounds.lo[2]), float(sc.bounds.hi[2])
         band, ter = sc.altitude, sc.terrain
@@ -607,6 +616,15 @@ def _packed(
     )  # fmt: skip
 
 
+def _walls(sc: Scenario, prm: FieldParams, goal3: FloatArray) -> FloatArray:
+    """The side walls of the map and their influence: the least influence radius, at most half
+    the goal's distance to the wall (a goal near the edge stays reachable)."""
+    lo, hi = sc.bounds.lo[:2].astype(float), sc.bounds.hi[:2].astype(float)
+    q = [min(prm.rho0_floor, 0.5 * max(goal3[a] - lo[a], 0.0)) for a in range(2)]
+    r = [min(prm.rho0_floor, 0.5 * max(hi[a] - goal3[a], 0.0)) for a in range(2)]
+    return np.array([lo[0], hi[0], lo[1], hi[1], q[0], r[0], q[1], r[1]], dtype=np.float64)
+
+
 @dataclass(frozen=True)
 class Trajectory:
     """An APF flight: positions from the start (the goal last if it arrived), the status and
@@ -642,7 +660,7 @@ def fly_field(
     kin = (prm.v, prm.dt, prm.turn_k, prm.climb, prm.descent, prm.goal_radius,
            float(prm.stall_steps))  # fmt: skip
     fp = (prm.k_att, prm.d_att, prm.eta, prm.rho0_z, prm.eta_m, prm.a_max)
-    args = _packed(sc, prm, others or [], separation)
+    args = (*_packed(sc, prm, others or [], separation), _walls(sc, prm, g3))
     if dim3:  # a goal near the floor or ceiling: their push must not keep the UAV from it
         f, _, _, c, _, _ = _limits(args[15], args[14], g3[0], g3[1])
         room = min(g3[2] - f, c - g3[2])
