@@ -81,6 +81,20 @@ FloatArray = NDArray[np.float64]
 # --------------------------------------------------------------------------------------------
 
 
+def stack_histories(histories: Sequence[ArrayLike], fill: float = np.nan) -> NDArray[np.float64]:
+    """Per-run curves of different lengths as one ``(runs, longest)`` array: each padded with
+    its last value (``fill`` for an empty one); values that are not finite or at least 1e7 (the
+    feasibility-first numbers of infeasible candidates) become ``fill``."""
+    n = max((len(np.atleast_1d(h)) for h in histories), default=0)
+    M = np.full((len(histories), n), fill, dtype=np.float64)
+    for k, h in enumerate(histories):
+        a = np.atleast_1d(np.asarray(h, dtype=np.float64))
+        M[k, : len(a)] = a
+        M[k, len(a) :] = a[-1] if len(a) else fill
+    M[~np.isfinite(M) | (M >= 1e7)] = fill
+    return M
+
+
 def _as_columns(cols: str | Sequence[str] | None) -> list[str]:
     """``"scenario"`` -> ``["scenario"]``; sequences are copied; ``None`` -> ``[]``."""
     if cols is None:

@@ -509,11 +509,11 @@ def force_reference(
         size = 0.5 * float(np.ptp(v, axis=0).max())
         m = prm.eta * khatib(rho - poly.margin, float(rho0_of(prm, np.array([size]))[0]))
         F[:2] += m * (-out if inside else out)
-    for a in range(2):  # side walls, influence at most half the goal's room
-        lo_a, hi_a = float(sc.bounds.lo[a]), float(sc.bounds.hi[a])
-        q_lo = min(prm.rho0_floor, 0.5 * max(G[a] - lo_a, 0.0))
-        q_hi = min(prm.rho0_floor, 0.5 * max(hi_a - G[a], 0.0))
-        F[a] += prm.eta * (khatib(P[a] - lo_a, q_lo) - khatib(hi_a - P[a], q_hi))
+    for i_ax in range(2):  # side walls, influence at most half the goal's room
+        lo_a, hi_a = float(sc.bounds.lo[i_ax]), float(sc.bounds.hi[i_ax])
+        q_lo = min(prm.rho0_floor, 0.5 * max(G[i_ax] - lo_a, 0.0))
+        q_hi = min(prm.rho0_floor, 0.5 * max(hi_a - G[i_ax], 0.0))
+        F[i_ax] += prm.eta * (khatib(P[i_ax] - lo_a, q_lo) - khatib(hi_a - P[i_ax], q_hi))
     if dim == 3:
         lo_z, hi_z = float(sc.bounds.lo[2]), float(sc.bounds.hi[2])
         band, ter = sc.altitude, sc.terrain

@@ -31,6 +31,7 @@ import pandas as pd
 
 from uavplan.bench.kinds import _budget, plan_run, planner_row, register_kind
 from uavplan.bench.plans import Algorithm, ExperimentPlan, RunSpec, Scale, register_plan
+from uavplan.bench.stats import stack_histories
 
 MAPS = tuple(f"hrmaga-{m}" for m in ("spso", "jacksboro", "topobathy", "virtual"))
 #: every method: the world's checks as constraints, Eq. (4) as the cost (the maps' preset)
@@ -58,29 +59,15 @@ def eq13(layers: list[np.ndarray]) -> list[np.ndarray]:
 
 def _mean_curve(histories: pd.Series) -> np.ndarray:
     """The mean over runs of best-so-far curves (infinite values left out per step)."""
-    n = max(len(h) for h in histories)
-    M = np.full((len(histories), n), np.nan)
-    for k, h in enumerate(histories):
-        a = np.asarray(h, dtype=np.float64)
-        M[k, : len(a)] = a
-        M[k, len(a) :] = a[-1] if len(a) else np.nan
-    M[~np.isfinite(M) | (M >= 1e7)] = np.nan
     with np.errstate(all="ignore"):
-        return np.asarray(np.nanmean(M, axis=0))
+        return np.asarray(np.nanmean(stack_histories(list(histories)), axis=0))
 
 
 def _median_curve(histories: pd.Series) -> np.ndarray:
     """The median over runs of best-so-far curves, an infeasible step counted as infinite (the
     curve starts once half the runs have a feasible path; no jump when one more run becomes
     feasible, as a mean over the feasible ones has)."""
-    n = max(len(h) for h in histories)
-    M = np.full((len(histories), n), np.inf)
-    for k, h in enumerate(histories):
-        a = np.asarray(h, dtype=np.float64)
-        M[k, : len(a)] = a
-        M[k, len(a) :] = a[-1] if len(a) else np.inf
-    M[~np.isfinite(M) | (M >= 1e7)] = np.inf
-    med = np.median(M, axis=0)
+    med = np.median(stack_histories(list(histories), np.inf), axis=0)
     return np.asarray(np.where(np.isfinite(med), med, np.nan))
 
 

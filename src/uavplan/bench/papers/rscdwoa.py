@@ -30,6 +30,7 @@ import pandas as pd
 
 from uavplan.bench.kinds import register_kind
 from uavplan.bench.plans import Algorithm, ExperimentPlan, RunSpec, Scale, register_plan
+from uavplan.bench.stats import stack_histories
 
 register_plan(
     ExperimentPlan(
@@ -242,12 +243,8 @@ def apf_sections(df: pd.DataFrame, plan: str) -> Any:
     if not hist.empty:
         fig, ax = plt.subplots(figsize=(6.0, 3.6))
         for alg, g in hist.groupby("algorithm", sort=False):
-            n = max(len(h) for h in g["fitness_history"])
-            M = np.full((len(g), n), np.nan)
-            for i, h in enumerate(g["fitness_history"]):
-                M[i, : len(h)] = h
-            M[M >= 1e7] = np.nan
-            ax.plot(np.arange(1, n + 1), np.nanmean(M, axis=0) / 1000, label=str(alg))
+            M = stack_histories(list(g["fitness_history"]))
+            ax.plot(np.arange(1, M.shape[1] + 1), np.nanmean(M, axis=0) / 1000, label=str(alg))
         ax.set_xlabel("iteration")
         ax.set_ylabel("best fitness, km (mean over runs and UAVs)")
         ax.grid(True, alpha=0.3)
