@@ -39,6 +39,7 @@ from uavplan.planners.base import Planner
 from uavplan.planners.options import PlannerError, option
 from uavplan.planners.registry import register_planner
 from uavplan.planners.run import Outcome, Run
+from uavplan.problems.validity import turn_estimates
 
 FloatArray = NDArray[np.float64]
 
@@ -63,17 +64,9 @@ class FusedAPFConfig(APFConfig):
 
 
 def curvature(points: FloatArray) -> FloatArray:
-    """Curvature of the horizontal track at every interior point, 1/m: the heading change over
-    the mean of the two horizontal steps (the flight check's estimate)."""
-    d = np.diff(np.asarray(points, dtype=np.float64)[:, :2], axis=0)
-    h = np.hypot(d[:, 0], d[:, 1])
-    keep = h > 0
-    d, h = d[keep], h[keep]
-    if len(h) < 2:
-        return np.zeros(0)
-    ang = np.arctan2(d[:, 1], d[:, 0])
-    turn = np.abs((np.diff(ang) + np.pi) % (2 * np.pi) - np.pi)
-    return np.asarray(turn / (0.5 * (h[1:] + h[:-1])))
+    """Curvature of the horizontal track at every interior point, 1/m: the flight check's
+    estimate (:func:`~uavplan.problems.validity.turn_estimates`)."""
+    return turn_estimates(np.asarray(points, dtype=np.float64)[:, :2])[1]
 
 
 class FusedAPFPlanner(Planner):

@@ -565,7 +565,7 @@ class HRMAGA(Planner):
             k = int(np.argmin(num))
             if cv[k] <= 0 and np.isfinite(f[k]) and (best is None or num[k] < best[0]):
                 best = (float(num[k]), same[k])
-        if best is not None and cfg_shortcut(self):
+        if best is not None and self.config.repair_shortcut:
             # line of sight over the chosen way: fewer, longer legs where they stay clear
             Q = best[1]
             S, _, _ = greedy_shortcut(problem.validator, Q)
@@ -675,10 +675,6 @@ def _splice(P: FloatArray, runs: list[tuple[int, int]], inner: list[FloatArray])
         nxt = runs[r_idx + 1][0] if r_idx + 1 < len(runs) else len(P) - 1
         out.append(P[j + 1 : nxt + 1])
     return np.concatenate(out)
-
-
-def cfg_shortcut(planner: Any) -> bool:
-    return bool(planner.config.repair_shortcut)
 
 
 def _box_gap(p: FloatArray, v: FloatArray) -> float:

@@ -110,7 +110,6 @@ def run_rscdwoa(spec: RunSpec) -> dict[str, Any]:
     from uavplan.io.plan_file import plan_document
     from uavplan.planners import get_planner
     from uavplan.planners.fleet_plan import plan_all
-    from uavplan.planners.flight import flight_validator  # noqa: F401 - registers nothing
     from uavplan.scenarios import resolve
     from uavplan.verify import verify_plan
 
