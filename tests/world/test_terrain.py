@@ -595,6 +595,29 @@ def test_mean_height_outside_grid_uses_the_terrain_height() -> None:
     assert T.mean_height(np.array([[a, b]]))[0, 0] == pytest.approx(total)
 
 
+@FAST
+@given(seed=SEEDS)
+def test_mean_height_kernel_gives_the_bits_of_its_sorted_reference(seed: int) -> None:
+    """The merged-breakpoint kernel against the first form (breakpoints sorted per segment), on
+    segments inside and off the grid, along grid lines, through grid nodes and of zero length."""
+    from uavplan.world import _terrain_kernels as tk
+
+    rng = np.random.default_rng(seed)
+    H = rng.normal(size=(int(rng.integers(2, 40)), int(rng.integers(2, 40)))) * 100.0
+    P, N = 12, 9
+    u = rng.uniform(-5.0, H.shape[1] + 4.0, (P, N))
+    v = rng.uniform(-5.0, H.shape[0] + 4.0, (P, N))
+    u[1] = np.round(u[1])  # through grid lines in u
+    v[2] = np.round(v[2] * 2.0) / 2.0
+    u[3, 1], v[3, 1] = u[3, 0], v[3, 0]  # zero length
+    u[4, 2] = u[4, 1]  # along a column
+    v[5, 3] = v[5, 2]  # along a row
+    u[6], v[6] = np.round(u[6]), np.round(v[6])  # node to node, diagonals through nodes
+    np.testing.assert_array_equal(
+        tk.mean_height_batch(H, u, v), tk.mean_height_batch_reference(H, u, v)
+    )
+
+
 # ----------------------------------------------------------------------------- loading
 def test_npy_round_trip(tmp_path) -> None:
     T = random_terrain(5)
