@@ -356,7 +356,10 @@ def test_uav_limits_round_trip(tmp_path: Path, suffix: str) -> None:
     assert again.uav == s.uav
     assert scenario_to_dict(again)["uav"] == UAV_LIMITS
     # a Scenario built in code: load -> save -> load gives an equal UAV, with or without limits
-    for uav in (s.uav, UAV(), UAV(speed=12, min_speed=3), UAV(max_climb_angle=90)):
+    for uav in (
+        s.uav, UAV(), UAV(speed=12, min_speed=3), UAV(max_climb_angle=90),
+        UAV(s2_axes=(50, 50, 20)),
+    ):  # fmt: skip
         code = Scenario(
             "code", Bounds((0, 0, 0), (100, 100, 50)), (Task("a", (5, 5, 10), (95, 95, 10)),),
             uav=uav,
@@ -367,6 +370,10 @@ def test_uav_limits_round_trip(tmp_path: Path, suffix: str) -> None:
     # limits not given are left out of the written file (null means the default)
     written = scenario_to_dict(spec_from_scenario(code))["uav"]
     assert "max_speed" not in written and "max_descent_angle" not in written
+    assert scenario_to_dict(load_builtin("rscdwoa-static"))["uav"]["s2_axes"] == [50, 50, 20]
+    assert load_builtin("rscdwoa-static").uav.separation_radius == pytest.approx(73.4847, 1e-5)
+    with pytest.raises(ValueError, match="s2_axes must be three finite distances"):
+        UAV(s2_axes=(50.0, float("nan"), 20.0))
 
 
 def test_ppswarm_uav_limits() -> None:

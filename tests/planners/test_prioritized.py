@@ -457,3 +457,18 @@ def test_a_fleet_whose_smoothing_fails_is_declared_and_verified_as_it_would_fly(
     good = [t for t in parse_plan(d).trajectories("flown") if t.id not in bad]
     rep_ok = verify_trajectories(good, sc, sc.name, kinematics=True, trajectory="flown")
     assert rep_ok.ok, [v.message for v in rep_ok.violations][:3]
+
+
+def test_fleet_keeps_a_per_axis_separation_as_flown() -> None:
+    """With ``uav.s2_axes`` the planner's reservation table and the verifier both use the box
+    (the RSCDWOA paper's per-axis minimal distance); a fleet called feasible passes it."""
+    base = with_fleet(resolve("ppswarm2"), 5, seed=2)
+    sc = dataclasses.replace(base, uav=dataclasses.replace(base.uav, s2_axes=(30.0, 30.0, 8.0)))
+    r = get_planner("ppswarm", **{**SMALL, "n_restart": 1}).plan_fleet(sc, seed=3)
+    rep = verify_plan(plan_document(FleetPlan(sc, "ppswarm", {}, 3, r.results, r)), sc)
+    assert rep.s2_axes == (30.0, 30.0, 8.0) and rep.s2 == 30.0
+    if r.feasible:
+        assert rep.ok, [v.message for v in rep.violations]
+        assert rep.min_separation >= 30.0 - 1e-6
+    bad_uavs = {u for v in rep.violations for u in v.uavs if v.kind != "separation"}
+    assert not bad_uavs & {x.uav_id for x in r.results if x.feasible}

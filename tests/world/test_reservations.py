@@ -178,3 +178,103 @@ def test_simplified_reservation_is_conservative_within_its_pad():
         assert np.all(dp[near] <= de[near] + 1e-9)
         assert np.all(dp[near] >= de[near] - 2 * tol - 1e-9)  # chord within tol, less tol
         assert (cp & ~ce).sum() <= max(2, ce.sum() // 5)  # few false alarms
+
+
+# ------------------------------------------------------------------ per-axis separation (box)
+AXES = (50.0, 50.0, 20.0)  # the RSCDWOA paper's minimal distance between UAVs, Sect. 5
+
+
+def _box_path(rng: np.random.Generator, n: int = 6) -> np.ndarray:
+    """A random path in a 1.6 km x 1.6 km x 100 m box (sized to the 50 m separation)."""
+    return rng.uniform(LO, HI * [4.0, 4.0, 1.0], size=(n, 3))
+
+
+def _dense_box_measure(pa, ta, pb, tb, axes=AXES, step=0.002):
+    """Sampled reference of the box measure max(S) max_i |r_i| / S_i."""
+    lo, hi = max(ta[0], tb[0]), min(ta[-1], tb[-1])
+    if lo > hi:
+        return np.inf
+    t = np.linspace(lo, hi, max(2, int((hi - lo) / step)))
+    a = np.stack([np.interp(t, ta, pa[:, d]) for d in range(3)], axis=1)
+    b = np.stack([np.interp(t, tb, pb[:, d]) for d in range(3)], axis=1)
+    S = np.asarray(axes)
+    return float(S.max() * np.min(np.max(np.abs(a - b) / S, axis=1)))
+
+
+@pytest.mark.parametrize("dt", [1.0, 3.0])
+def test_box_conflicts_equal_brute_force(dt):
+    rng = np.random.default_rng(int(dt * 10))
+    table = ReservationTable(LO, HI * [4.0, 4.0, 1.0], separation=AXES, dt=dt)
+    assert table.axes == AXES and table.separation == 50.0
+    for i in range(10):
+        p = _box_path(rng)
+        table.add(f"u{i}", p, _times(p, speed=80.0, t0=rng.uniform(0, 5)))
+    cands = np.stack([_box_path(rng) for _ in range(60)])
+    times = np.stack([_times(c, speed=80.0, t0=rng.uniform(0, 5)) for c in cands])
+    got = table.conflicts(cands, times)
+    mind = table.min_distance(cands, times)
+    ref = np.array([table.min_distance_reference(c, t) for c, t in zip(cands, times, strict=True)])
+    np.testing.assert_array_equal(got, ref < 50.0)
+    close = ref < 50.0
+    np.testing.assert_allclose(mind[close], ref[close], rtol=1e-9, atol=1e-9)
+    assert 5 < close.sum() < 55
+
+
+def test_box_measure_agrees_with_dense_sampling():
+    rng = np.random.default_rng(3)
+    table = ReservationTable(LO, HI, separation=AXES, dt=1.0)
+    pa = _box_path(rng)
+    ta = _times(pa)
+    table.add("a", pa, ta)
+    for _ in range(30):
+        pb = _box_path(rng)
+        tb = _times(pb, t0=rng.uniform(0, 3))
+        exact = table.min_distance_reference(pb, tb)
+        got = float(table.min_distance(pb[None], tb[None])[0])
+        dense = _dense_box_measure(pa, ta, pb, tb)
+        assert exact <= dense + 1e-9
+        # closing at <= 40 m/s, scaled by at most 50 / 20 on z, sampled every 0.002 s
+        assert dense - exact < 0.3
+        if exact < 50.0:
+            assert got == pytest.approx(exact, abs=1e-9)
+
+
+def test_box_is_not_a_sphere():
+    """Stacked 30 m apart in z: clear of the [50, 50, 20] box though 30 m is less than 50; side
+    by side 40 m apart in x and 10 m in z: inside the box though farther apart than 10 m."""
+    a = np.array([[0.0, 100.0, 50.0], [200.0, 100.0, 50.0]])
+    t = np.array([0.0, 10.0])
+    box = ReservationTable(LO, HI, separation=AXES)
+    box.add("a", a, t)
+    above = a + np.array([0.0, 0.0, 30.0])
+    assert not box.conflicts(above[None], t[None])[0]
+    np.testing.assert_allclose(box.min_distance(above[None], t[None]), [75.0])  # 50 * 30 / 20
+    beside = a + np.array([40.0, 0.0, 10.0])
+    assert box.conflicts(beside[None], t[None])[0]
+    sphere = ReservationTable(LO, HI, separation=50.0)
+    sphere.add("a", a, t)
+    assert sphere.conflicts(above[None], t[None])[0]
+    small = ReservationTable(LO, HI, separation=10.0)
+    small.add("a", a, t)
+    assert not small.conflicts(beside[None], t[None])[0]
+    # the enclosing sphere a sphere-minded planner keeps
+    assert box.radius == pytest.approx(np.sqrt(50**2 + 50**2 + 20**2))
+
+
+def test_box_crossing_between_samples_is_a_conflict():
+    # Two UAVs cross at right angles, 15 m apart in z (inside the box's 20 m), both at 20 m/s:
+    # at whole seconds they are >= 20 m apart in x or y, yet for 2.5 s inside 50 m on both.
+    table = ReservationTable(LO, HI, separation=AXES, dt=1.0)
+    table.add("a", np.array([[0.0, 200.0, 50.0], [400.0, 200.0, 50.0]]), np.array([0.0, 20.0]))
+    b = np.array([[200.0, 0.0, 65.0], [200.0, 400.0, 65.0]])
+    tb = np.array([0.0, 20.0])
+    assert table.conflicts(b[None], tb[None])[0]
+    np.testing.assert_allclose(table.min_distance(b[None], tb[None]), [37.5])  # 50 * 15 / 20
+    assert not table.conflicts((b + np.array([0, 0, 20.0]))[None], tb[None])[0]
+
+
+def test_box_separation_rejects_bad_axes():
+    with pytest.raises(ValueError, match="separation"):
+        ReservationTable(LO, HI, separation=(50.0, 0.0, 20.0))
+    with pytest.raises(ValueError, match="separation"):
+        ReservationTable(LO, HI, separation=(50.0, 20.0))

@@ -149,7 +149,7 @@ def _summary(plan: Any, elapsed: float, out_dir: Path) -> None:
     if fleet is not None:
         n_bad = sum(not r.feasible for r in plan.results)
         verdict = (
-            "polylines feasible (separation S2 included)"
+            "polylines feasible (UAV separation included)"
             if fleet.planned_feasible
             else f"{n_bad} UAV polyline(s) infeasible"
         )

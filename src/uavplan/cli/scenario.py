@@ -102,9 +102,14 @@ def summary_lines(s: Scenario) -> list[str]:
         ref = "above ground" if s.altitude.reference == "ground" else "absolute"
         lines.append(f"altitude band: [{_n(s.altitude.min)}, {_n(s.altitude.max)}] m {ref}")
     u = s.uav
+    s2 = (
+        f"s2 {_n(u.s2)} m"
+        if u.s2_axes is None
+        else "separation per axis " + "/".join(_n(a) for a in u.s2_axes) + " m"
+    )
     lines.append(
         f"uav: speed {_n(u.speed)} m/s, turn radius {_n(u.turn_radius)} m, s1 {_n(u.s1)} m, "
-        f"s2 {_n(u.s2)} m, size {_n(u.size)} m"
+        f"{s2}, size {_n(u.size)} m"
     )
     climb = (
         "climb/descent unlimited"

@@ -49,14 +49,18 @@ def summary_lines(report: VerifyReport, plan_name: str) -> list[str]:
     lines.append(
         f"pairs: {report.pairs_total}, {report.pairs_checked} checked exactly after pruning"
     )
+    need = f"S2 {_m(report.s2)} m"
+    if report.s2_axes is not None:
+        box = "/".join(_m(x) for x in report.s2_axes)
+        need = f"S2 per axis {box} m: scaled to the widest axis"
     if report.min_separation_pair is not None:
         a, b = report.min_separation_pair
         lines.append(
             f"min separation: {_m(report.min_separation)} m between {a} and {b} at "
-            f"t={report.min_separation_time:.3f} s (S2 {_m(report.s2)} m)"
+            f"t={report.min_separation_time:.3f} s ({need})"
         )
     elif n > 1:
-        lines.append(f"min separation: more than S2 = {_m(report.s2)} m (no pair came close)")
+        lines.append(f"min separation: more than {need} (no pair came close)")
     counts = {k: c for k, c in report.counts.items() if c}
     if counts:
         detail = ", ".join(f"{k} {c}" for k, c in counts.items())

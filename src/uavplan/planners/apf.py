@@ -742,7 +742,7 @@ class APFPlanner(Planner):
 
         res = run.reservations
         others = res.trajectories() if res is not None else []
-        sep = res.separation if res is not None else 0.0
+        sep = res.radius if res is not None else 0.0
         traj = fly_field(
             sc, start, goal, prm, limit, float(task.start_time), on_chunk=on_chunk,
             others=others, separation=sep,

@@ -90,7 +90,7 @@ class FusedAPFPlanner(Planner):
         k_max = 1.0 / sc.uav.turn_radius if sc.uav.turn_radius > 0 else 1.0 / (prm.v * prm.dt)
         res = run.reservations
         others = res.trajectories() if res is not None else []
-        sep = res.separation if res is not None else 0.0
+        sep = res.radius if res is not None else 0.0
         lo, hi = sc.bounds.lo.astype(float), sc.bounds.hi.astype(float)
         K, dim = int(cfg.n_subgoals), sc.dim
         best: dict[str, Any] = {"f": np.inf, "path": None, "status": None}

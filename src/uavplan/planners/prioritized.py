@@ -275,8 +275,8 @@ class PrioritizedPlanner(FleetPlanner):
         evaluations = 0
         stop = False
         for r in range(cfg.n_restart):
-            table = ReservationTable(
-                lower, upper, scenario.uav.s2 + cfg.separation_margin, dt=cfg.dt
+            table = ReservationTable.for_uav(
+                lower, upper, scenario.uav, cfg.separation_margin, dt=cfg.dt
             )
             results: list[PlanResult | None] = [None] * M
             delayed: dict[str, float] = {}
@@ -606,8 +606,8 @@ def declare_polylines(
 
     by_id = {r.uav_id: r for r in results}
     tasks = {t.id: t for t in scenario.tasks}
-    table = ReservationTable(scenario.bounds.lo, scenario.bounds.hi,
-                             scenario.uav.s2 + cfg.separation_margin, dt=cfg.dt)  # fmt: skip
+    table = ReservationTable.for_uav(scenario.bounds.lo, scenario.bounds.hi, scenario.uav,
+                                     cfg.separation_margin, dt=cfg.dt)  # fmt: skip
     out: dict[str, PlanResult] = {}
     for uid in priority:
         r = by_id[uid]
@@ -658,7 +658,9 @@ def smooth_fleet(
     )
 
     by_id = {r.uav_id: r for r in results}
-    table = ReservationTable(scenario.bounds.lo, scenario.bounds.hi, scenario.uav.s2, dt=cfg.dt)
+    table = ReservationTable.for_uav(
+        scenario.bounds.lo, scenario.bounds.hi, scenario.uav, dt=cfg.dt
+    )
     out: dict[str, PlanResult] = {}
     not_clear: list[str] = []
     failed: list[str] = []

@@ -85,7 +85,10 @@ class VerifyReport:
         kinematics: whether the UAV's kinematic limits were checked (turn radius, climb and
             descent angles, minimum speed); the maximum speed is always checked.
         uav_ids: the UAVs, in plan order; n_segments: segments checked over all UAVs.
-        s2: the required UAV-UAV separation, metres.
+        s2: the required UAV-UAV separation, metres (per axis: the widest axis).
+        s2_axes: the per-axis separation ``(S_x, S_y, S_z)`` when the UAV has one (an
+            axis-aligned box; the separations reported are then the box measure
+            ``max(S) max_i |r_i| / S_i``, below ``s2`` exactly inside the box), else None.
         pairs_total: ``n (n - 1) / 2``; pairs_checked: pairs left after pruning, checked exactly.
         min_separation: the smallest distance between two UAVs over continuous time, over all
             pairs (exact; inf if no two flights overlap in time).
@@ -99,6 +102,7 @@ class VerifyReport:
     uav_ids: list[str]
     n_segments: int
     s2: float
+    s2_axes: tuple[float, float, float] | None = None
     pairs_total: int = 0
     pairs_checked: int = 0
     min_separation: float = math.inf
@@ -134,6 +138,7 @@ class VerifyReport:
             "uavs": len(self.uav_ids),
             "segments": self.n_segments,
             "s2": self.s2,
+            "s2_axes": list(self.s2_axes) if self.s2_axes is not None else None,
             "pairs_total": self.pairs_total,
             "pairs_checked": self.pairs_checked,
             "min_separation": json_number(self.min_separation),

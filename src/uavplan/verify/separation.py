@@ -1,5 +1,15 @@
 """Separation between UAVs over continuous time: every pair, exact closest approach per common
-interval, pruned by sort-and-sweep on whole-flight boxes."""
+interval, pruned by sort-and-sweep on whole-flight boxes.
+
+Two kinds of separation: a sphere (the UAVs at least ``S2`` apart, Euclidean) or per axis
+``(S_x, S_y, S_z)`` (the RSCDWOA paper's ``[50, 50, 20]`` m: the UAVs are too close when closer
+than all three at once, an axis-aligned box). For the box the measure is ``S_ref q`` with
+``q = max_i |r_i| / S_i`` and ``S_ref = max_i S_i``, so "distance below ``S_ref``" means "inside
+the box" and the rest of the code is shared. On a common interval the offset ``r(s)`` is
+linear; the verifier finds the smallest ``q`` by bisection on the level ``lam``: the set of
+``s`` in [0, 1] with ``|r_i(s)| <= lam S_i`` on every axis is an intersection of three
+intervals, non-empty exactly when ``lam >= q_min`` (the planner's reservation table enumerates
+the kinks of ``q(s)`` instead: two methods, so that one cannot hide the other's bug)."""
 
 from __future__ import annotations
 
@@ -27,7 +37,55 @@ IntArray = NDArray[np.int64]
 
 # ================================================================================ separation
 @njit(cache=True)
-def _walk(P, T, a0, a1, b0, b1, rec, record):  # pragma: no cover - numba
+def _box_level(r0x, r0y, r0z, drx, dry, drz, S, lam):  # pragma: no cover - numba
+    """The interval ``[lo, hi]`` of ``s`` in [0, 1] on which ``|r_i(s)| <= lam S_i`` on every
+    axis (``lo > hi``: empty)."""
+    lo = 0.0
+    hi = 1.0
+    for c in range(3):
+        r = r0x if c == 0 else (r0y if c == 1 else r0z)
+        d = drx if c == 0 else (dry if c == 1 else drz)
+        half = lam * S[c]
+        if d == 0.0:
+            if abs(r) > half:
+                return 1.0, 0.0
+            continue
+        s1 = (-half - r) / d
+        s2 = (half - r) / d
+        lo = max(lo, min(s1, s2))
+        hi = min(hi, max(s1, s2))
+    return lo, hi
+
+
+@njit(cache=True)
+def _box_min(r0x, r0y, r0z, drx, dry, drz, S):  # pragma: no cover - numba
+    """(q_min, s at the minimum) of ``q(s) = max_i |r0_i + s dr_i| / S_i`` over [0, 1], by
+    bisection on the level (80 halvings: to the last bits of a double)."""
+    q0 = max(abs(r0x) / S[0], max(abs(r0y) / S[1], abs(r0z) / S[2]))
+    q1 = max(
+        abs(r0x + drx) / S[0], max(abs(r0y + dry) / S[1], abs(r0z + drz) / S[2])
+    )
+    hi = min(q0, q1)
+    s_hi = 0.0 if q0 <= q1 else 1.0
+    lo = 0.0
+    a, b = _box_level(r0x, r0y, r0z, drx, dry, drz, S, 0.0)
+    if a <= b:
+        return 0.0, 0.5 * (a + b)
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        if not (lo < mid < hi):
+            break
+        a, b = _box_level(r0x, r0y, r0z, drx, dry, drz, S, mid)
+        if a <= b:
+            hi = mid
+            s_hi = 0.5 * (a + b)
+        else:
+            lo = mid
+    return hi, s_hi
+
+
+@njit(cache=True)
+def _walk(P, T, a0, a1, b0, b1, rec, record, box, S):  # pragma: no cover - numba
     """Exact minimum distance between two timed polylines over their common flight time.
 
     Rows ``a0:a1`` of ``P`` (N, 3) / ``T`` (N,) are UAV a, rows ``b0:b1`` UAV b (>= 2 rows each,
@@ -37,9 +95,13 @@ def _walk(P, T, a0, a1, b0, b1, rec, record):  # pragma: no cover - numba
     into ``rec`` (t_start, t_end, d_min, t_min, pa xyz and pb xyz at the minimum, b - a at
     t_start and at t_end).
 
+    ``box``: the per-axis separation ``S`` (3,): the measure is ``max(S) q`` (module docstring)
+    instead of the Euclidean distance.
+
     Returns (d_min, t_min, pa_x, pa_y, pa_z, pb_x, pb_y, pb_z, n_rows); d_min is inf when the
     flights do not overlap in time.
     """
+    s_ref = max(S[0], max(S[1], S[2]))
     best = np.inf
     res = np.full(8, np.nan)
     res[0] = np.inf
@@ -95,15 +157,19 @@ def _walk(P, T, a0, a1, b0, b1, rec, record):  # pragma: no cover - numba
         drx = (qb[0] - qa[0]) - r0x
         dry = (qb[1] - qa[1]) - r0y
         drz = (qb[2] - qa[2]) - r0z
-        dd = drx * drx + dry * dry + drz * drz
-        w = 0.0
-        if dd > 0.0:
-            w = -(r0x * drx + r0y * dry + r0z * drz) / dd
-            w = min(max(w, 0.0), 1.0)
-        x = r0x + w * drx
-        y = r0y + w * dry
-        z = r0z + w * drz
-        d = math.sqrt(x * x + y * y + z * z)
+        if box:
+            q, w = _box_min(r0x, r0y, r0z, drx, dry, drz, S)
+            d = s_ref * q
+        else:
+            dd = drx * drx + dry * dry + drz * drz
+            w = 0.0
+            if dd > 0.0:
+                w = -(r0x * drx + r0y * dry + r0z * drz) / dd
+                w = min(max(w, 0.0), 1.0)
+            x = r0x + w * drx
+            y = r0y + w * dry
+            z = r0z + w * drz
+            d = math.sqrt(x * x + y * y + z * z)
         tm = t + w * (e - t)
         if record:
             rec[n, 0] = t
@@ -132,7 +198,7 @@ def _walk(P, T, a0, a1, b0, b1, rec, record):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _pairs_min(P, T, off, pairs):  # pragma: no cover - numba
+def _pairs_min(P, T, off, pairs, box, S):  # pragma: no cover - numba
     """(m, 2) minimum distance and its time for each pair of trajectories (rows of ``off``)."""
     m = pairs.shape[0]
     out = np.empty((m, 2))
@@ -140,7 +206,7 @@ def _pairs_min(P, T, off, pairs):  # pragma: no cover - numba
     for q in range(m):
         a = pairs[q, 0]
         b = pairs[q, 1]
-        res, _ = _walk(P, T, off[a], off[a + 1], off[b], off[b + 1], dummy, False)
+        res, _ = _walk(P, T, off[a], off[a + 1], off[b], off[b + 1], dummy, False, box, S)
         out[q, 0] = res[0]
         out[q, 1] = res[1]
     return out
@@ -210,20 +276,42 @@ def candidate_pairs(trajs: Sequence[Trajectory], gap: float) -> IntArray:
     return pairs
 
 
-def pair_min_distance(a: Trajectory, b: Trajectory) -> tuple[float, float]:
+Axes = tuple[float, float, float] | None
+
+
+def _metric(axes: Axes) -> tuple[bool, FloatArray]:
+    return axes is not None, np.asarray(axes if axes is not None else (1.0, 1.0, 1.0), float)
+
+
+def box_measure(offset: FloatArray, axes: Axes) -> float:
+    """The separation measure of one offset: its length, or for per-axis ``axes`` the scaled
+    Chebyshev ``max(S) max_i |r_i| / S_i`` (below ``max(S)`` exactly inside the box)."""
+    if axes is None:
+        return float(np.linalg.norm(offset))
+    S = np.asarray(axes, dtype=np.float64)
+    return float(S.max() * np.max(np.abs(np.asarray(offset)[:3]) / S))
+
+
+def pair_min_distance(a: Trajectory, b: Trajectory, axes: Axes = None) -> tuple[float, float]:
     """Exact minimum distance between two UAVs over continuous time while both fly, and the
-    time it happens: ``(metres, seconds)``, ``(inf, nan)`` if their flights do not overlap."""
+    time it happens: ``(metres, seconds)``, ``(inf, nan)`` if their flights do not overlap.
+    With per-axis ``axes``: the box measure (:func:`box_measure`)."""
     P, T, off = _pack([a, b])
-    res, _ = _walk(P, T, off[0], off[1], off[1], off[2], np.empty((1, 16)), False)
+    box, S = _metric(axes)
+    res, _ = _walk(P, T, off[0], off[1], off[1], off[2], np.empty((1, 16)), False, box, S)
     return float(res[0]), float(res[1])
 
 
-def pair_encounters(a: Trajectory, b: Trajectory, s2: float) -> list[Violation]:
+def pair_encounters(
+    a: Trajectory, b: Trajectory, s2: float, axes: Axes = None
+) -> list[Violation]:
     """Every close encounter of two UAVs (a run of consecutive common intervals on which they
-    come closer than ``s2 - TOL``), reported at its closest point."""
+    come closer than ``s2 - TOL``), reported at its closest point. With per-axis ``axes``,
+    ``s2`` is ``max(axes)`` and "closer" is the box measure (:func:`box_measure`)."""
     P, T, off = _pack([a, b])
+    box, S = _metric(axes)
     rec = np.empty((len(a.times) + len(b.times) + 2, 16))
-    _, n = _walk(P, T, off[0], off[1], off[1], off[2], rec, True)
+    _, n = _walk(P, T, off[0], off[1], off[1], off[2], rec, True, box, S)
     rows = rec[:n]
     out = []
     k = 0
@@ -236,8 +324,8 @@ def pair_encounters(a: Trajectory, b: Trajectory, s2: float) -> list[Violation]:
         while (
             e + 1 < n
             and rows[e + 1, 2] < s2 - TOL
-            and float(np.linalg.norm(rows[e, 13:16])) < s2 - TOL
-            and float(np.linalg.norm(rows[e + 1, 10:13])) < s2 - TOL
+            and box_measure(rows[e, 13:16], axes) < s2 - TOL
+            and box_measure(rows[e + 1, 10:13], axes) < s2 - TOL
         ):
             e += 1
         run = rows[k : e + 1]
@@ -245,8 +333,16 @@ def pair_encounters(a: Trajectory, b: Trajectory, s2: float) -> list[Violation]:
         d, t = float(run[w, 2]), float(run[w, 3])
         pa = fmt_point(run[w, 4 : 4 + a.dim])
         pb = fmt_point(run[w, 7 : 7 + b.dim])
-        t_in = _crossing(run[0], s2, first=True)
-        t_out = _crossing(run[-1], s2, first=False)
+        t_in = _crossing(run[0], s2, first=True, axes=axes)
+        t_out = _crossing(run[-1], s2, first=False, axes=axes)
+        what = (
+            f"S2 {s2:g} m"
+            if axes is None
+            else "within the box "
+            + "/".join(f"{x:g}" for x in axes)
+            + " m, offset "
+            + fmt_points(run[w, 7:10] - run[w, 4:7])
+        )
         out.append(
             Violation(
                 "separation",
@@ -255,7 +351,7 @@ def pair_encounters(a: Trajectory, b: Trajectory, s2: float) -> list[Violation]:
                 (pa, pb),
                 d,
                 s2,
-                f"{a.id} and {b.id} {fmt_num(d)} m apart at t={t:.3f} s (S2 {s2:g} m; "
+                f"{a.id} and {b.id} {fmt_num(d)} m apart at t={t:.3f} s ({what}; "
                 f"closer from t={t_in:.3f} to {t_out:.3f} s): "
                 f"{a.id} at {fmt_points(pa)}, {b.id} at {fmt_points(pb)}",
             )
@@ -264,13 +360,21 @@ def pair_encounters(a: Trajectory, b: Trajectory, s2: float) -> list[Violation]:
     return out
 
 
-def _crossing(row: FloatArray, s2: float, first: bool) -> float:
+def _crossing(row: FloatArray, s2: float, first: bool, axes: Axes = None) -> float:
     """The time at which the distance of a recorded interval crosses ``s2``: the first time it
     drops below (``first``) or the last time it is below; the interval's end if it never
-    crosses inside it."""
+    crosses inside it. (With ``axes``: when the offset enters or leaves the box.)"""
     t0, t1 = float(row[0]), float(row[1])
     r0 = row[10:13]
     dr = row[13:16] - r0
+    if axes is not None:
+        S = np.asarray(axes, dtype=np.float64)
+        lo, hi = _box_level(
+            r0[0], r0[1], r0[2], dr[0], dr[1], dr[2], S, s2 / float(S.max())
+        )
+        if lo > hi:
+            return t0 if first else t1
+        return t0 + (lo if first else hi) * (t1 - t0)
     qa, qb, qc = float(dr @ dr), 2.0 * float(r0 @ dr), float(r0 @ r0) - s2 * s2
     disc = qb * qb - 4 * qa * qc
     if qa <= 0 or disc < 0:
@@ -293,13 +397,15 @@ class SeparationResult:
 
 
 def check_separation(
-    trajs: Sequence[Trajectory], s2: float, prune: bool = True, exact_min: bool = True
-) -> SeparationResult:
+    trajs: Sequence[Trajectory], s2: float, prune: bool = True, exact_min: bool = True,
+    axes: Axes = None,
+) -> SeparationResult:  # fmt: skip
     """Every pair of UAVs at least ``s2`` apart over continuous time (exact).
 
     Args:
         trajs: the UAVs (times non-decreasing).
-        s2: the required separation, metres.
+        s2: the required separation, metres (with ``axes``: ignored, ``max(axes)``).
+        axes: per-axis separation ``(S_x, S_y, S_z)`` (a box; module docstring), or None.
         prune: skip pairs that cannot come within ``s2`` (see :func:`candidate_pairs`); False
             checks every pair exactly (for tests and benchmarks).
         exact_min: when no checked pair comes within ``s2``, widen the pruning until the fleet's
@@ -312,14 +418,17 @@ def check_separation(
         ``s2``, and the minimum separation with its pair and time.
     """
     n = len(trajs)
+    if axes is not None:
+        s2 = float(max(axes))
     if n < 2:
         return SeparationResult([], 0, math.inf, None, None)
     P, T, off = _pack(trajs)
+    box, S = _metric(axes)
 
     def exact(pairs: IntArray) -> FloatArray:
         if len(pairs) == 0:
             return np.zeros((0, 2))
-        return np.asarray(_pairs_min(P, T, off, np.ascontiguousarray(pairs)))
+        return np.asarray(_pairs_min(P, T, off, np.ascontiguousarray(pairs), box, S))
 
     if prune:
         pairs = candidate_pairs(trajs, s2)
@@ -330,7 +439,7 @@ def check_separation(
     out: list[Violation] = []
     for bad in np.flatnonzero(res[:, 0] < s2 - TOL):
         a, b = trajs[int(pairs[bad, 0])], trajs[int(pairs[bad, 1])]
-        out.extend(pair_encounters(a, b, s2))
+        out.extend(pair_encounters(a, b, s2, axes))
     checked = len(pairs)
     best = float(res[:, 0].min()) if len(res) else math.inf
     if prune and exact_min and not best <= s2:

@@ -453,7 +453,7 @@ def fleet_tasks(
         pattern: ``"crossing"`` (starts along the west/south edges, goals along the east/north
             edges, paired at random so the lines cross) or ``"random"`` (anywhere).
         min_spacing: least distance between two starts, and between two goals, metres; default
-            ``3 * uav.s2``.
+            ``3 * uav.separation_radius`` (``3 * uav.s2`` for a sphere).
         min_length_fraction: least straight start-goal length (x/y), as a fraction of the
             bounds' x/y diagonal.
 
@@ -492,9 +492,13 @@ def fleet_layout(
         raise ValueError(f"unknown fleet pattern {pattern!r} (choose from {', '.join(PATTERNS)})")
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
-    spacing = SPACING_FACTOR * scenario.uav.s2 if min_spacing is None else float(min_spacing)
+    spacing = (
+        SPACING_FACTOR * scenario.uav.separation_radius
+        if min_spacing is None
+        else float(min_spacing)
+    )
     if not (math.isfinite(spacing) and spacing > 0):
-        what = "3 * uav.s2" if min_spacing is None else "min_spacing"
+        what = "3 * the UAV separation radius" if min_spacing is None else "min_spacing"
         raise ValueError(f"min_spacing must be a positive number, got {spacing!r} ({what})")
     if not (0 <= min_length_fraction < 1):
         raise ValueError(f"min_length_fraction must be in [0, 1), got {min_length_fraction!r}")

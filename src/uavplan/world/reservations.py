@@ -22,12 +22,25 @@ and inside the reserved piece's grown box, so that cell holds the reserved piece
 query is proportional to the candidate's own pieces (and the reserved pieces sharing its cells),
 not to the number of UAVs in the table.
 
+**Per-axis separation** (the RSCDWOA paper, Sect. 5: "the minimal distance between UAVs ... is
+[50, 50, 20]^T m"): two UAVs conflict when they are closer than ``S_x`` in x *and* ``S_y`` in y
+*and* ``S_z`` in z, an axis-aligned box. The table then measures the scaled Chebyshev distance
+``S_ref max_i |r_i| / S_i`` with ``S_ref = max_i S_i`` (metres in the widest axes), which is below
+``S_ref`` exactly when the offset is inside the box. Over a common time interval the relative
+offset ``r(s) = r0 + s dr`` is linear, so this distance is convex and piecewise linear in ``s``;
+its minimum lies at an end or at a kink (a zero of some ``r_i``, or where two scaled components
+are equal in magnitude), and is taken exactly over those at most 11 candidates. Cells are grown
+by ``S_ref`` on every axis, which holds the whole box.
+
 A UAV is in the air only between its first and last time (it takes off at its start and lands at
 its goal): before and after it is no hazard. :mod:`uavplan.verify` checks the same
 semantics independently, pair by pair.
 """
 
 from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 from numba import njit, prange
@@ -271,6 +284,55 @@ def _piece_min_dist2(a0, a1, ta0, ta1, b0, b1, tb0, tb1):  # pragma: no cover - 
     return x * x + y * y + z * z
 
 
+@njit(cache=True)
+def _cheb_at(r0x, r0y, r0z, drx, dry, drz, w, s):  # pragma: no cover - numba
+    return max(
+        w[0] * abs(r0x + s * drx), max(w[1] * abs(r0y + s * dry), w[2] * abs(r0z + s * drz))
+    )
+
+
+@njit(cache=True)
+def _piece_min_box(a0, a1, ta0, ta1, b0, b1, tb0, tb1, w):  # pragma: no cover - numba
+    """Minimum over the common time of two linear motions of the scaled Chebyshev distance
+    ``max_i w_i |r_i|`` of their offset, or inf (the per-axis separation; see the module
+    docstring). Exact: the minimum of a convex piecewise-linear function over candidates."""
+    lo = max(ta0, tb0)
+    hi = min(ta1, tb1)
+    if lo > hi:
+        return np.inf
+    fa0 = (lo - ta0) / (ta1 - ta0)
+    fa1 = (hi - ta0) / (ta1 - ta0)
+    fb0 = (lo - tb0) / (tb1 - tb0)
+    fb1 = (hi - tb0) / (tb1 - tb0)
+    r0 = np.empty(3)
+    dr = np.empty(3)
+    for d in range(3):
+        e = a1[d] - a0[d]
+        g = b1[d] - b0[d]
+        r0[d] = (a0[d] + fa0 * e) - (b0[d] + fb0 * g)
+        dr[d] = ((a0[d] + fa1 * e) - (b0[d] + fb1 * g)) - r0[d]
+    best = min(
+        _cheb_at(r0[0], r0[1], r0[2], dr[0], dr[1], dr[2], w, 0.0),
+        _cheb_at(r0[0], r0[1], r0[2], dr[0], dr[1], dr[2], w, 1.0),
+    )
+    for i in range(3):
+        if dr[i] != 0.0:
+            s = -r0[i] / dr[i]
+            if 0.0 < s < 1.0:
+                best = min(best, _cheb_at(r0[0], r0[1], r0[2], dr[0], dr[1], dr[2], w, s))
+        for j in range(i + 1, 3):
+            for sign in (1.0, -1.0):
+                # w_i (r0_i + s dr_i) = sign w_j (r0_j + s dr_j)
+                den = w[i] * dr[i] - sign * w[j] * dr[j]
+                if den != 0.0:
+                    s = (sign * w[j] * r0[j] - w[i] * r0[i]) / den
+                    if 0.0 < s < 1.0:
+                        best = min(
+                            best, _cheb_at(r0[0], r0[1], r0[2], dr[0], dr[1], dr[2], w, s)
+                        )
+    return best
+
+
 @njit(cache=True, parallel=True)
 def _query(
     paths,
@@ -290,10 +352,13 @@ def _query(
     rt1,
     rpad,
     want_min,
+    box,
+    w,
 ):  # pragma: no cover - numba
     """Per path: the smallest distance to a reserved piece found within the searched cells,
     less the piece's pad (inf if none), stopping at the first one below ``sep`` unless
-    ``want_min``."""
+    ``want_min``. ``box``: the scaled Chebyshev distance with weights ``w`` instead of the
+    Euclidean one."""
     P, N, _ = paths.shape
     nx, ny, nz = dims[0], dims[1], dims[2]
     mask = np.int64(tkey.shape[0] - 1)
@@ -332,12 +397,19 @@ def _query(
                                     continue
                                 for e in range(tstart[h], tstart[h] + tcount[h]):
                                     r = e_idx[e]
-                                    d2 = _piece_min_dist2(
-                                        a0, a1, lo, hi, rp0[r], rp1[r], rt0[r], rt1[r]
-                                    )
-                                    if d2 == np.inf:
+                                    if box:
+                                        dist = _piece_min_box(
+                                            a0, a1, lo, hi, rp0[r], rp1[r], rt0[r], rt1[r], w
+                                        )
+                                    else:
+                                        dist = np.sqrt(
+                                            _piece_min_dist2(
+                                                a0, a1, lo, hi, rp0[r], rp1[r], rt0[r], rt1[r]
+                                            )
+                                        )
+                                    if dist == np.inf:
                                         continue
-                                    dist = np.sqrt(d2) - rpad[r]
+                                    dist -= rpad[r]
                                     if dist < best:
                                         best = dist
                                         if best < sep and not want_min:
@@ -361,7 +433,11 @@ class ReservationTable:
     Args:
         lower, upper: (3,) the airspace box in metres (cells outside are clamped to its edge,
             which only makes the search find more, never less).
-        separation: the required distance ``S2`` between UAVs, metres.
+        separation: the required distance ``S2`` between UAVs, metres; or per axis
+            ``(S_x, S_y, S_z)``: the UAVs must not be closer than all three at once (an
+            axis-aligned box, see the module docstring). Distances are then the scaled
+            Chebyshev distance, in metres of the widest axis (:attr:`separation` is
+            ``max(S_i)``, :attr:`axes` the three).
         dt: time bucket, seconds.
         cell: grid cell side, metres (default: ``max(4 separation, 40)``; any value is correct,
             it only changes speed).
@@ -371,15 +447,27 @@ class ReservationTable:
         self,
         lower: FloatArray,
         upper: FloatArray,
-        separation: float,
+        separation: float | Sequence[float],
         dt: float = 1.0,
         cell: float | None = None,
     ) -> None:
-        if not separation > 0 or not dt > 0:
-            raise ValueError(f"separation and dt must be positive, got {separation}, {dt}")
-        self.separation = float(separation)
+        axes = np.asarray(separation, dtype=np.float64).reshape(-1)
+        if axes.size not in (1, 3) or not np.all(axes > 0) or not dt > 0:
+            raise ValueError(
+                f"separation (one number or three per axis) and dt must be positive, "
+                f"got {separation}, {dt}"
+            )
+        #: per-axis minimum distances, or None for a sphere of radius :attr:`separation`
+        self.axes: tuple[float, float, float] | None = (
+            (float(axes[0]), float(axes[1]), float(axes[2])) if axes.size == 3 else None
+        )
+        self.separation = float(axes.max())
+        # scaled Chebyshev weights S_ref / S_i (unused for a sphere)
+        self._w = (
+            self.separation / np.asarray(self.axes) if self.axes is not None else np.ones(3)
+        )
         self.dt = float(dt)
-        self.cell = float(cell if cell is not None else max(4.0 * separation, 40.0))
+        self.cell = float(cell if cell is not None else max(4.0 * self.separation, 40.0))
         lo = np.asarray(lower, dtype=np.float64)[:3]
         hi = np.asarray(upper, dtype=np.float64)[:3]
         self.origin = lo - self.cell
@@ -397,6 +485,25 @@ class ReservationTable:
 
     def __len__(self) -> int:
         return len(self.owners)
+
+    @classmethod
+    def for_uav(
+        cls, lower: FloatArray, upper: FloatArray, uav: Any, margin: float = 0.0,
+        dt: float = 1.0,
+    ) -> ReservationTable:  # fmt: skip
+        """The table for a scenario's UAV: its per-axis separation ``uav.s2_axes`` when it has
+        one, else the sphere ``uav.s2``; ``margin`` metres wider on every axis."""
+        axes = getattr(uav, "s2_axes", None)
+        if axes is not None:
+            return cls(lower, upper, [float(a) + margin for a in axes], dt=dt)
+        return cls(lower, upper, float(uav.s2) + margin, dt=dt)
+
+    @property
+    def radius(self) -> float:
+        """The radius of the smallest sphere that holds the separation region (``S2``, or the
+        half-diagonal ``|(S_x, S_y, S_z)|`` of the box): a planner that keeps this Euclidean
+        distance never conflicts."""
+        return float(np.linalg.norm(self.axes)) if self.axes is not None else self.separation
 
     @property
     def n_pieces(self) -> int:
@@ -422,7 +529,9 @@ class ReservationTable:
             keep, seg_pad = _simplify(pts, ts, float(tolerance), 64)
             pts, ts = np.ascontiguousarray(pts[keep]), np.ascontiguousarray(ts[keep])
         p0, p1, t0, t1, k = _split(pts, ts, self.dt)
-        pad = _piece_pads(ts, seg_pad, t0)
+        # a Euclidean deviation of ``pad`` moves the scaled Chebyshev distance by at most
+        # ``pad max(w)``
+        pad = _piece_pads(ts, seg_pad, t0) * float(self._w.max())
         # A trajectory that takes off (lands) exactly at a bucket boundary shares that instant
         # with the bucket before (after): enter its first (last) piece there too.
         sel = np.arange(len(t0))
@@ -482,6 +591,7 @@ class ReservationTable:
             p, t, self.dt, self.origin, self.cell, self.dims, self.separation,
             self._tkey, self._tstart, self._tcount, self._idx,
             self._p0, self._p1, self._t0, self._t1, self._pad, want_min,
+            self.axes is not None, self._w,
         )  # fmt: skip
         return np.asarray(d)
 
@@ -523,10 +633,33 @@ class ReservationTable:
 
         r0 = at(a0, a1, t0, t1, lo, True) - at(b0, b1, s0, s1, lo, False)
         dr = at(a0, a1, t0, t1, hi, True) - at(b0, b1, s0, s1, hi, False) - r0
-        dd = np.sum(dr * dr, axis=-1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            s = np.where(dd > 0, -np.sum(r0 * dr, axis=-1) / np.where(dd > 0, dd, 1.0), 0.0)
-        s = np.clip(s, 0.0, 1.0)
-        d2 = np.sum((r0 + s[..., None] * dr) ** 2, axis=-1)
-        d = np.sqrt(np.where(overlap, d2, np.inf)) - self._pad[None]
+        if self.axes is not None:
+            dist = _box_min_reference(r0, dr, self._w)
+        else:
+            dd = np.sum(dr * dr, axis=-1)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                s = np.where(dd > 0, -np.sum(r0 * dr, axis=-1) / np.where(dd > 0, dd, 1.0), 0.0)
+            s = np.clip(s, 0.0, 1.0)
+            dist = np.sqrt(np.sum((r0 + s[..., None] * dr) ** 2, axis=-1))
+        d = np.where(overlap, dist, np.inf) - self._pad[None]
         return float(max(np.min(d), 0.0))
+
+
+def _box_min_reference(r0: FloatArray, dr: FloatArray, w: FloatArray) -> FloatArray:
+    """min over s in [0, 1] of max_i w_i |r0_i + s dr_i|, over the leading axes of ``r0``, in
+    NumPy: every candidate (ends, zeros of a component, equal scaled magnitudes of two), clipped
+    to [0, 1], evaluated and the smallest kept."""
+    cands = [np.zeros(r0.shape[:-1]), np.ones(r0.shape[:-1])]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for i in range(3):
+            cands.append(-r0[..., i] / dr[..., i])
+            for j in range(i + 1, 3):
+                for sign in (1.0, -1.0):
+                    cands.append(
+                        (sign * w[j] * r0[..., j] - w[i] * r0[..., i])
+                        / (w[i] * dr[..., i] - sign * w[j] * dr[..., j])
+                    )
+    s = np.stack(cands, axis=-1)
+    s = np.clip(np.where(np.isfinite(s), s, 0.0), 0.0, 1.0)
+    at = np.abs(r0[..., None, :] + s[..., None] * dr[..., None, :]) * w
+    return np.asarray(at.max(axis=-1).min(axis=-1))

@@ -71,6 +71,11 @@ class UAV:
         max_speed: fastest allowed speed, m/s (>= speed; None: ``speed``; see :attr:`v_max`).
         max_climb_angle, max_descent_angle: steepest climb and descent, degrees from the
             horizontal in (0, 90] (None: no limit).
+        s2_axes: the separation between UAVs per axis, ``(S_x, S_y, S_z)`` metres (the
+            RSCDWOA paper's ``[50, 50, 20]``): two UAVs are too close when they are closer than
+            all three at once (an axis-aligned box). When given it replaces the sphere ``s2``
+            in every separation check (the motion validator, the reservation table, the
+            verifier); None: the sphere of radius ``s2``.
 
     Defaults: PPSwarm Sect. 5.1 for speed, s1 and s2 (20 m/s, 15 m, 10 m); no turn, climb or
     minimum-speed limit (the PPSwarm scenario files set the paper's 20 m turn radius).
@@ -85,6 +90,7 @@ class UAV:
     max_speed: float | None = None
     max_climb_angle: float | None = None
     max_descent_angle: float | None = None
+    s2_axes: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
         for name in ("speed", "turn_radius", "s1", "s2", "size", "min_speed"):
@@ -111,6 +117,23 @@ class UAV:
             value = getattr(self, name)
             if value is not None and not (np.isfinite(value) and 0 < value <= 90):
                 raise ValueError(f"uav {name} must be in (0, 90] degrees, got {value!r}")
+
+        if self.s2_axes is not None:
+            axes = tuple(float(a) for a in self.s2_axes)
+            if len(axes) != 3 or not all(np.isfinite(a) and a > 0 for a in axes):
+                raise ValueError(
+                    f"uav s2_axes must be three finite distances > 0 (x, y, z), "
+                    f"got {self.s2_axes!r}"
+                )
+            object.__setattr__(self, "s2_axes", axes)
+
+    @property
+    def separation_radius(self) -> float:
+        """The radius of the smallest sphere holding the separation region: ``s2``, or the
+        half-diagonal of the ``s2_axes`` box (what a planner that reasons with spheres keeps)."""
+        if self.s2_axes is None:
+            return float(self.s2)
+        return float(np.linalg.norm(self.s2_axes))
 
     @property
     def v_max(self) -> float:

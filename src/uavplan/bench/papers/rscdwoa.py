@@ -32,6 +32,18 @@ from uavplan.bench.kinds import register_kind
 from uavplan.bench.plans import Algorithm, ExperimentPlan, RunSpec, Scale, register_plan
 from uavplan.bench.stats import stack_histories
 
+#: RSCDWOA's Table 5 rivals; the WOA family's schedules (a: 2 -> 0) span 100 iterations
+FUNCTION_ALGORITHMS = (
+    Algorithm("rscdwoa", "rscdwoa", {"max_iterations": 100}),
+    Algorithm("rscdwoa-logistic", "rscdwoa", {"max_iterations": 100, "chaos": "logistic"}),
+    Algorithm("woa", "woa", {"max_iterations": 100}),
+    Algorithm("pso", "pso"),
+    Algorithm("ga", "ga"),
+    Algorithm("de", "de"),
+    Algorithm("gwo", "gwo", {"max_iterations": 100}),
+    Algorithm("abc", "abc"),
+)
+
 register_plan(
     ExperimentPlan(
         name="functions",
@@ -40,19 +52,28 @@ register_plan(
             "of RSCDWOA Table 4, 30-D, 30 agents, the evaluations of 100 iterations"
         ),
         scenarios=tuple(f"f{i}" for i in range(1, 10)),
-        algorithms=(
-            Algorithm("rscdwoa", "rscdwoa", {"max_iterations": 100}),
-            Algorithm("rscdwoa-logistic", "rscdwoa", {"max_iterations": 100, "chaos": "logistic"}),
-            Algorithm("woa", "woa", {"max_iterations": 100}),
-            Algorithm("pso", "pso"),
-            Algorithm("ga", "ga"),
-            Algorithm("de", "de"),
-            Algorithm("gwo", "gwo", {"max_iterations": 100}),
-            Algorithm("abc", "abc"),
-        ),
+        algorithms=FUNCTION_ALGORITHMS,
         scales={
             "smoke": Scale(runs=2, iterations=10, pop_size=30, evaluations=330),
             "paper": Scale(runs=30, iterations=100, pop_size=30, evaluations=3030),
+        },
+        kind="function",
+        reference="rscdwoa",
+    )
+)
+
+register_plan(
+    ExperimentPlan(
+        name="functions-iterations",
+        description=(
+            "f1-f9 as `functions`, under the RSCDWOA paper's own protocol: 100 iterations of "
+            "30 agents for every algorithm, whatever the evaluations they take"
+        ),
+        scenarios=tuple(f"f{i}" for i in range(1, 10)),
+        algorithms=FUNCTION_ALGORITHMS,
+        scales={
+            "smoke": Scale(runs=2, iterations=10, pop_size=30),
+            "paper": Scale(runs=30, iterations=100, pop_size=30),
         },
         kind="function",
         reference="rscdwoa",

@@ -202,6 +202,13 @@ class UAVSpec(_Spec):
         None,
         description="Steepest descent, degrees below the horizontal, in (0, 90]; null = no limit.",
     )
+    s2_axes: tuple[PosNum, PosNum, PosNum] | None = Field(
+        None,
+        description="Separation between UAVs per axis [x, y, z], metres (e.g. the RSCDWOA "
+        "paper's [50, 50, 20]): two UAVs are too close when closer than all three at once (an "
+        "axis-aligned box); replaces the sphere s2 in every separation check. null = the "
+        "sphere s2.",
+    )
 
     @field_validator("min_speed")
     @classmethod

@@ -40,6 +40,8 @@ def _uav_data(uav: UAV) -> dict[str, Any]:
         value = getattr(uav, name)
         if value is not None:
             out[name] = value
+    if uav.s2_axes is not None:
+        out["s2_axes"] = list(uav.s2_axes)
     return out
 
 
