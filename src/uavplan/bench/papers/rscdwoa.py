@@ -114,6 +114,32 @@ def deviation(points: np.ndarray, times: np.ndarray, ref: np.ndarray) -> np.ndar
     return np.asarray(np.linalg.norm(xy[:, None, :] - near, axis=2).min(axis=1))
 
 
+#: samples of the curvature profile along the normalized horizontal arc length (Fig. 14)
+PROFILE = 200
+
+
+def curvature_profile(points: np.ndarray, n: int = PROFILE) -> tuple[list[float], list[float]]:
+    """Curvature (1/km) and its derivative along the track (1/km^2) at ``n`` points of the
+    normalized horizontal arc length (the largest value in each of ``n`` equal bins, so that a
+    sharp turn is not averaged away; 0 where a bin holds no interior point)."""
+    from uavplan.planners.apf_fused import curvature
+
+    p = np.asarray(points, dtype=np.float64)[:, :2]
+    k = curvature(p) * 1000.0
+    if k.size < 2:
+        return [0.0] * n, [0.0] * n
+    seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    s = np.concatenate([[0.0], np.cumsum(seg)]) / 1000.0  # km
+    si = s[1:-1]
+    dk = np.abs(np.gradient(k, si)) if np.all(np.diff(si) > 0) else np.zeros_like(k)
+    bins = np.minimum((si / max(s[-1], 1e-12) * n).astype(int), n - 1)
+    kp = np.zeros(n)
+    dp = np.zeros(n)
+    np.maximum.at(kp, bins, k)
+    np.maximum.at(dp, bins, dk)
+    return kp.tolist(), dp.tolist()
+
+
 def _curv_stats(points: np.ndarray) -> tuple[float, float]:
     from uavplan.planners.apf_fused import curvature
 
@@ -152,6 +178,8 @@ def run_rscdwoa(spec: RunSpec) -> dict[str, Any]:
             "mae_km",
             "rmse_km",
             "min_clear_m",
+            "curv_profile",
+            "dcurv_profile",
             "fitness_history",
         )
     }
@@ -173,6 +201,9 @@ def run_rscdwoa(spec: RunSpec) -> dict[str, Any]:
         per["mae_km"].append(float(np.mean(dev)) / 1000)
         per["rmse_km"].append(float(np.sqrt(np.mean(dev**2))) / 1000)
         per["min_clear_m"].append(min(clear) if clear else math.nan)
+        kp, dp = curvature_profile(pts)
+        per["curv_profile"].append(kp)
+        per["dcurv_profile"].append(dp)
         per["fitness_history"].append(list(r.info.get("fitness_history") or []))
     feasible = bool(plan.feasible)
     return {
@@ -271,6 +302,30 @@ def apf_sections(df: pd.DataFrame, plan: str) -> Any:
         ax.legend(fontsize=7)
         fig.tight_layout()
         figs.append(("fitness", "Fig. 16: the smoothing fitness over iterations", fig))
+    if "curv_profile" in u.columns and not u.empty:
+        fig, axes = plt.subplots(1, 2, figsize=(9.0, 3.4))
+        x = (np.arange(PROFILE) + 0.5) / PROFILE
+        for alg, g in u[u["algorithm"].isin(APF_FAMILY)].groupby("algorithm", sort=False):
+            for ax, col in zip(axes, ("curv_profile", "dcurv_profile"), strict=True):
+                M = np.asarray([np.asarray(v, dtype=float) for v in g[col]])
+                ax.plot(x, np.median(M, axis=0), lw=1, label=f"{alg} (median of {len(M)} UAVs)")
+        axes[0].axhline(0.5, color="k", ls=":", lw=0.8, label="1 / turn radius (2 km)")
+        axes[0].set_ylabel("curvature, 1/km (largest per bin)")
+        axes[1].set_ylabel("|d curvature / ds|, 1/km^2")
+        for ax in axes:
+            ax.set_xlabel("horizontal arc length / total")
+            ax.grid(True, alpha=0.3)
+        axes[0].legend(fontsize=6)
+        fig.tight_layout()
+        figs.append(
+            (
+                "curvature",
+                "Fig. 14: curvature and its derivative along the track, before (apf) and after "
+                "smoothing (the fused planners); the APF family only (the Dubins arcs of the "
+                "prioritized rows jump between 0 and 1/R)",
+                fig,
+            )
+        )
     note = (
         "pass_through = UAV flights that reach the target and pass every check as flown / all "
         "UAV flights, with the Wilson 95 % interval; arrived = share that reach it; "
