@@ -377,6 +377,14 @@ def table3_sections(df: pd.DataFrame, plan: str) -> Any:
     return [("Table 3: MAE and RMSE per UAV", note, t)], []
 
 
+def dynamic_sections(df: pd.DataFrame, plan: str) -> Any:
+    """``rscdwoa-dynamic``'s report: pass-through and safety, and Table 3 from the same runs
+    (the same layout and fused planners as ``rscdwoa-table3``)."""
+    sections, figs = apf_sections(df, plan)
+    t3, _ = table3_sections(df[df["algorithm"].isin(APF_FAMILY[1:])], plan)
+    return sections + t3, figs
+
+
 #: the classical APF's iteration is 50 steps; 500 per iteration lets it fly 20,000 steps (400 km)
 #: in the 40 iterations the optimizers get
 _APF = {"steps_per_iteration": 500}
@@ -420,7 +428,7 @@ _apf_plan(
         Algorithm("pso", "pso", {"constraints": "feasibility-first"}),
     ),
     20,
-    apf_sections,
+    dynamic_sections,
 )
 _apf_plan(
     "rscdwoa-table3",
