@@ -47,6 +47,7 @@ BUILTINS = [
     "jacksboro",
     "open",
     "ppswarm1",
+    "ppswarm1-traffic",
     "ppswarm2",
     "ppswarm3",
     "ppswarm4",
