@@ -11,7 +11,8 @@ artificial potential field (Sects. 5.3-5.4, Figs. 12-16, Table 3):
   the least clearance to each moving obstacle over continuous time (flown trajectories), arrival
   times, the least separation between UAVs, curvature before and after the optimizer (the APF's
   flight is "before"), the fitness convergence (Fig. 16); our SPSO and PSO in the prioritized
-  frame as extra rows.
+  frame and PPSwarm as extra rows (RRT* and RGG-PSO+ refuse moving obstacles: their graphs have
+  no time).
 * ``rscdwoa-table3``: MAE and RMSE per UAV (the paper does not define them; ours: of the
   horizontal distance, in km, from every 1 s sample of the flown trajectory to the shortest
   horizontal path around the static obstacles, a visibility graph on their footprints).
@@ -426,6 +427,7 @@ _apf_plan(
         *(Algorithm(a, a) for a in APF_FAMILY[1:]),
         Algorithm("spso", "spso", {"constraints": "feasibility-first"}),
         Algorithm("pso", "pso", {"constraints": "feasibility-first"}),
+        Algorithm("ppswarm", "ppswarm"),
     ),
     20,
     dynamic_sections,
