@@ -53,21 +53,25 @@ def test_pieces_stay_in_one_bucket_and_cover_the_path():
 def test_conflicts_equal_brute_force(dt, cell):
     rng = np.random.default_rng(int(dt * 100) + (0 if cell is None else int(cell)))
     table = ReservationTable(LO, HI, separation=10.0, dt=dt, cell=cell)
-    reserved = []
-    for i in range(12):
-        p = _random_path(rng)
-        t = _times(p, t0=rng.uniform(0, 5))
-        table.add(f"u{i}", p, t)
-        reserved.append((p, t))
-    cands = np.stack([_random_path(rng) for _ in range(60)])
-    times = np.stack([_times(c, t0=rng.uniform(0, 5)) for c in cands])
+    _agrees_with_brute_force(table, rng, _random_path, 12, 20.0)
+
+
+def _agrees_with_brute_force(table, rng, path, n_reserved, speed):
+    """Reserve ``n_reserved`` random timed paths, then check 60 candidates: conflicts and
+    minimum distances equal the brute-force reference's, in a case neither trivial nor
+    saturated."""
+    for i in range(n_reserved):
+        p = path(rng)
+        table.add(f"u{i}", p, _times(p, speed=speed, t0=rng.uniform(0, 5)))
+    cands = np.stack([path(rng) for _ in range(60)])
+    times = np.stack([_times(c, speed=speed, t0=rng.uniform(0, 5)) for c in cands])
     got = table.conflicts(cands, times)
     mind = table.min_distance(cands, times)
     ref = np.array([table.min_distance_reference(c, t) for c, t in zip(cands, times, strict=True)])
-    np.testing.assert_array_equal(got, ref < 10.0)
-    close = ref < 10.0
+    close = ref < table.separation
+    np.testing.assert_array_equal(got, close)
     np.testing.assert_allclose(mind[close], ref[close], rtol=1e-9, atol=1e-9)
-    assert 5 < close.sum() < 55  # the case is neither trivial nor saturated
+    assert 5 < close.sum() < 55
 
 
 def test_exact_distance_agrees_with_dense_sampling():
@@ -206,18 +210,7 @@ def test_box_conflicts_equal_brute_force(dt):
     rng = np.random.default_rng(int(dt * 10))
     table = ReservationTable(LO, HI * [4.0, 4.0, 1.0], separation=AXES, dt=dt)
     assert table.axes == AXES and table.separation == 50.0
-    for i in range(10):
-        p = _box_path(rng)
-        table.add(f"u{i}", p, _times(p, speed=80.0, t0=rng.uniform(0, 5)))
-    cands = np.stack([_box_path(rng) for _ in range(60)])
-    times = np.stack([_times(c, speed=80.0, t0=rng.uniform(0, 5)) for c in cands])
-    got = table.conflicts(cands, times)
-    mind = table.min_distance(cands, times)
-    ref = np.array([table.min_distance_reference(c, t) for c, t in zip(cands, times, strict=True)])
-    np.testing.assert_array_equal(got, ref < 50.0)
-    close = ref < 50.0
-    np.testing.assert_allclose(mind[close], ref[close], rtol=1e-9, atol=1e-9)
-    assert 5 < close.sum() < 55
+    _agrees_with_brute_force(table, rng, _box_path, 10, 80.0)
 
 
 def test_box_measure_agrees_with_dense_sampling():

@@ -419,33 +419,9 @@ def mean_height_batch_reference(H, u, v):  # pragma: no cover - numba
             tsorted = np.sort(ts[:n])
             total = 0.0
             for q in range(n - 1):
-                a = tsorted[q]
-                b = tsorted[q + 1]
-                tm = 0.5 * (a + b)
-                um = u0 + du * tm
-                vm = v0 + dv * tm
-                ci = min(max(int(np.floor(um)), 0), ncx - 1)
-                cj = min(max(int(np.floor(vm)), 0), ncy - 1)
-                h00 = H[cj, ci]
-                bx = H[cj, ci + 1] - h00
-                by = H[cj + 1, ci] - h00
-                cc = h00 - H[cj, ci + 1] - H[cj + 1, ci] + H[cj + 1, ci + 1]
-                # local coordinates s(t) = s0 + su t, r(t) = r0 + rv t; off the grid the
-                # terrain is clamped to the edge (as Terrain.height), so s or r is constant
-                s0 = u0 - ci
-                su = du
-                if um < 0.0 or um > ncx:
-                    s0 = 0.0 if um < 0.0 else 1.0
-                    su = 0.0
-                r0 = v0 - cj
-                rv = dv
-                if vm < 0.0 or vm > ncy:
-                    r0 = 0.0 if vm < 0.0 else 1.0
-                    rv = 0.0
-                qa = h00 + bx * s0 + by * r0 + cc * s0 * r0
-                qb = bx * su + by * rv + cc * (s0 * rv + r0 * su)
-                qc = cc * su * rv
-                total += qa * (b - a) + qb * (b * b - a * a) / 2.0 + qc * (b**3 - a**3) / 3.0
+                total += _interval_mean(
+                    H, ncx, ncy, u0, v0, du, dv, tsorted[q], tsorted[q + 1]
+                )
             if du == 0.0 and dv == 0.0:
                 uc = min(max(u0, 0.0), float(ncx))
                 vc = min(max(v0, 0.0), float(ncy))

@@ -248,14 +248,15 @@ def _lookup(key, tkey, mask):  # pragma: no cover - numba
         h = (h + 1) & mask
 
 
-@njit(cache=True)
-def _piece_min_dist2(a0, a1, ta0, ta1, b0, b1, tb0, tb1):  # pragma: no cover - numba
-    """Squared minimum distance between two linear motions over their common time, or inf
-    (scalar arithmetic: no temporary arrays in the innermost loop)."""
+@njit(cache=True, inline="always")
+def _relative_motion(a0, a1, ta0, ta1, b0, b1, tb0, tb1):  # pragma: no cover - numba
+    """The offset of two linear motions over their common time: ``(ok, r0 (3 floats), dr (3
+    floats))``, the offset at the start and its change to the end (``ok`` False: no common
+    time). Scalar arithmetic: no temporary arrays in the innermost loop."""
     lo = max(ta0, tb0)
     hi = min(ta1, tb1)
     if lo > hi:
-        return np.inf
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     fa0 = (lo - ta0) / (ta1 - ta0)
     fa1 = (hi - ta0) / (ta1 - ta0)
     fb0 = (lo - tb0) / (tb1 - tb0)
@@ -273,6 +274,15 @@ def _piece_min_dist2(a0, a1, ta0, ta1, b0, b1, tb0, tb1):  # pragma: no cover - 
     drx = ((a0[0] + fa1 * ex) - (b0[0] + fb1 * gx)) - r0x
     dry = ((a0[1] + fa1 * ey) - (b0[1] + fb1 * gy)) - r0y
     drz = ((a0[2] + fa1 * ez) - (b0[2] + fb1 * gz)) - r0z
+    return True, r0x, r0y, r0z, drx, dry, drz
+
+
+@njit(cache=True)
+def _piece_min_dist2(a0, a1, ta0, ta1, b0, b1, tb0, tb1):  # pragma: no cover - numba
+    """Squared minimum distance between two linear motions over their common time, or inf."""
+    ok, r0x, r0y, r0z, drx, dry, drz = _relative_motion(a0, a1, ta0, ta1, b0, b1, tb0, tb1)
+    if not ok:
+        return np.inf
     dd = drx * drx + dry * dry + drz * drz
     s = 0.0
     if dd > 0.0:
@@ -296,30 +306,20 @@ def _piece_min_box(a0, a1, ta0, ta1, b0, b1, tb0, tb1, w):  # pragma: no cover -
     """Minimum over the common time of two linear motions of the scaled Chebyshev distance
     ``max_i w_i |r_i|`` of their offset, or inf (the per-axis separation; see the module
     docstring). Exact: the minimum of a convex piecewise-linear function over candidates."""
-    lo = max(ta0, tb0)
-    hi = min(ta1, tb1)
-    if lo > hi:
+    ok, r0x, r0y, r0z, drx, dry, drz = _relative_motion(a0, a1, ta0, ta1, b0, b1, tb0, tb1)
+    if not ok:
         return np.inf
-    fa0 = (lo - ta0) / (ta1 - ta0)
-    fa1 = (hi - ta0) / (ta1 - ta0)
-    fb0 = (lo - tb0) / (tb1 - tb0)
-    fb1 = (hi - tb0) / (tb1 - tb0)
-    r0 = np.empty(3)
-    dr = np.empty(3)
-    for d in range(3):
-        e = a1[d] - a0[d]
-        g = b1[d] - b0[d]
-        r0[d] = (a0[d] + fa0 * e) - (b0[d] + fb0 * g)
-        dr[d] = ((a0[d] + fa1 * e) - (b0[d] + fb1 * g)) - r0[d]
+    r0 = (r0x, r0y, r0z)
+    dr = (drx, dry, drz)
     best = min(
-        _cheb_at(r0[0], r0[1], r0[2], dr[0], dr[1], dr[2], w, 0.0),
-        _cheb_at(r0[0], r0[1], r0[2], dr[0], dr[1], dr[2], w, 1.0),
+        _cheb_at(r0x, r0y, r0z, drx, dry, drz, w, 0.0),
+        _cheb_at(r0x, r0y, r0z, drx, dry, drz, w, 1.0),
     )
     for i in range(3):
         if dr[i] != 0.0:
             s = -r0[i] / dr[i]
             if 0.0 < s < 1.0:
-                best = min(best, _cheb_at(r0[0], r0[1], r0[2], dr[0], dr[1], dr[2], w, s))
+                best = min(best, _cheb_at(r0x, r0y, r0z, drx, dry, drz, w, s))
         for j in range(i + 1, 3):
             for sign in (1.0, -1.0):
                 # w_i (r0_i + s dr_i) = sign w_j (r0_j + s dr_j)
@@ -327,9 +327,7 @@ def _piece_min_box(a0, a1, ta0, ta1, b0, b1, tb0, tb1, w):  # pragma: no cover -
                 if den != 0.0:
                     s = (sign * w[j] * r0[j] - w[i] * r0[i]) / den
                     if 0.0 < s < 1.0:
-                        best = min(
-                            best, _cheb_at(r0[0], r0[1], r0[2], dr[0], dr[1], dr[2], w, s)
-                        )
+                        best = min(best, _cheb_at(r0x, r0y, r0z, drx, dry, drz, w, s))
     return best
 
 

@@ -45,40 +45,33 @@ FUNCTION_ALGORITHMS = (
     Algorithm("abc", "abc"),
 )
 
-register_plan(
-    ExperimentPlan(
-        name="functions",
-        description=(
-            "RSCDWOA (tent map; and the logistic map) vs WOA, PSO, GA, DE, GWO, ABC on f1-f9 "
-            "of RSCDWOA Table 4, 30-D, 30 agents, the evaluations of 100 iterations"
-        ),
-        scenarios=tuple(f"f{i}" for i in range(1, 10)),
-        algorithms=FUNCTION_ALGORITHMS,
-        scales={
-            "smoke": Scale(runs=2, iterations=10, pop_size=30, evaluations=330),
-            "paper": Scale(runs=30, iterations=100, pop_size=30, evaluations=3030),
-        },
-        kind="function",
-        reference="rscdwoa",
+def _functions_plan(name: str, description: str, smoke: Scale, paper: Scale) -> None:
+    register_plan(
+        ExperimentPlan(
+            name=name,
+            description=description,
+            scenarios=tuple(f"f{i}" for i in range(1, 10)),
+            algorithms=FUNCTION_ALGORITHMS,
+            scales={"smoke": smoke, "paper": paper},
+            kind="function",
+            reference="rscdwoa",
+        )
     )
-)
 
-register_plan(
-    ExperimentPlan(
-        name="functions-iterations",
-        description=(
-            "f1-f9 as `functions`, under the RSCDWOA paper's own protocol: 100 iterations of "
-            "30 agents for every algorithm, whatever the evaluations they take"
-        ),
-        scenarios=tuple(f"f{i}" for i in range(1, 10)),
-        algorithms=FUNCTION_ALGORITHMS,
-        scales={
-            "smoke": Scale(runs=2, iterations=10, pop_size=30),
-            "paper": Scale(runs=30, iterations=100, pop_size=30),
-        },
-        kind="function",
-        reference="rscdwoa",
-    )
+
+_functions_plan(
+    "functions",
+    "RSCDWOA (tent map; and the logistic map) vs WOA, PSO, GA, DE, GWO, ABC on f1-f9 of RSCDWOA "
+    "Table 4, 30-D, 30 agents, the evaluations of 100 iterations",
+    Scale(runs=2, iterations=10, pop_size=30, evaluations=330),
+    Scale(runs=30, iterations=100, pop_size=30, evaluations=3030),
+)
+_functions_plan(
+    "functions-iterations",
+    "f1-f9 as `functions`, under the RSCDWOA paper's own protocol: 100 iterations of 30 agents "
+    "for every algorithm, whatever the evaluations they take",
+    Scale(runs=2, iterations=10, pop_size=30),
+    Scale(runs=30, iterations=100, pop_size=30),
 )
 
 
