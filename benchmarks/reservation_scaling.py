@@ -4,7 +4,9 @@ Prioritized planning asks, for every candidate path of every swarm, whether it c
 than S2 to any UAV planned before (PPSwarm Sect. 4.3). The reservation table answers in time
 proportional to the candidate's own pieces; a pairwise check (every candidate against every
 reserved trajectory, exact, vectorized over the reserved pieces) grows with the fleet. Both give
-the same answers (checked here on every query). Prints µs per candidate path and the ratio.
+the same answers (checked here on every query). Prints µs per candidate path and the ratio; and
+the per-axis separation (a box of the same widest axis, (S2, S2, 0.4 S2)) against the sphere on
+the same table and candidates.
 
     python benchmarks/reservation_scaling.py
 """
@@ -61,24 +63,33 @@ def pairwise(cands: np.ndarray, ctimes: np.ndarray, pieces: tuple[np.ndarray, ..
     return out
 
 
+def per_path(
+    table: ReservationTable, cands: np.ndarray, ctimes: np.ndarray, reps: int = 20
+) -> tuple[float, np.ndarray]:
+    """µs per candidate path of ``table.conflicts``, and its answers."""
+    table.conflicts(cands[:2], ctimes[:2])  # compile
+    t0 = time.perf_counter()
+    for _ in range(reps):
+        hits = table.conflicts(cands, ctimes)
+    return (time.perf_counter() - t0) / reps / len(cands) * 1e6, hits
+
+
 def main() -> None:
     rng = np.random.default_rng(0)
     cands, ctimes = random_paths(rng, 300)
     print(
         f"{'reserved UAVs':>14} {'pieces':>8} {'table us/path':>14} {'pairwise us/path':>17} "
-        f"{'ratio':>7} {'conflicts':>9}"
+        f"{'ratio':>7} {'conflicts':>9} {'box us/path':>12} {'box/sphere':>10} {'box hits':>8}"
     )
     for n in (10, 40, 100, 200, 500):
         paths, times = random_paths(np.random.default_rng(n), n)
         table = ReservationTable(LO, HI, S2, dt=1.0)
+        box = ReservationTable(LO, HI, (S2, S2, 0.4 * S2), dt=1.0)
         for i in range(n):
             table.add(str(i), paths[i], times[i])
-        table.conflicts(cands[:2], ctimes[:2])  # compile
-        t0 = time.perf_counter()
-        reps = 20
-        for _ in range(reps):
-            got = table.conflicts(cands, ctimes)
-        t_table = (time.perf_counter() - t0) / reps / len(cands) * 1e6
+            box.add(str(i), paths[i], times[i])
+        t_table, got = per_path(table, cands, ctimes)
+        t_box, got_box = per_path(box, cands, ctimes)
         allp = [split_pieces(paths[i], times[i], 1.0) for i in range(n)]
         pieces = tuple(np.concatenate([p[j] for p in allp]) for j in range(5))
         sub = 30
@@ -88,7 +99,8 @@ def main() -> None:
         assert np.array_equal(ref, got[:sub]), "table and pairwise disagree"
         print(
             f"{n:>14} {table.n_pieces:>8} {t_table:>14.1f} {t_pair:>17.1f} "
-            f"{t_pair / t_table:>7.0f} {int(got.sum()):>9}"
+            f"{t_pair / t_table:>7.0f} {int(got.sum()):>9} {t_box:>12.1f} "
+            f"{t_box / t_table:>10.2f} {int(got_box.sum()):>8}"
         )
 
 
