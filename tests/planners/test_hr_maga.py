@@ -99,6 +99,27 @@ def test_segment_end_moves_to_the_nearest_point_outside_the_area() -> None:
     assert np.array_equal(HRMAGA._admit(outside, [a], lv), outside)
 
 
+@pytest.mark.parametrize("level", [None, 0.0, 0.5, 0.75])
+def test_admitting_points_together_gives_the_numbers_of_one_at_a_time(level) -> None:
+    """The repair's batch of candidate points (:meth:`HRMAGA._admit_all`) against
+    :meth:`HRMAGA._admit` point by point: inside and outside the area, above, in and below the
+    band, off the bounds in z; also with the band absolute and with none."""
+    sc = hills()
+    rng = np.random.default_rng(7)
+    Q = np.column_stack(
+        [rng.uniform(0, 2000, 300), rng.uniform(0, 2000, 300), rng.uniform(-100, 800, 300)]
+    )
+    Q[:20, :2] = rng.uniform(860, 1140, (20, 2))  # inside the area
+    areas = list(sc.uncertain_areas)
+    for world in (
+        hr_level(sc),
+        dataclasses.replace(sc, altitude=AltitudeBand(40.0, 500.0, "absolute")),
+        dataclasses.replace(sc, altitude=None),
+    ):
+        one = np.array([HRMAGA._admit(q, areas, world, level) for q in Q])
+        np.testing.assert_array_equal(HRMAGA._admit_all(Q, areas, world, level), one)
+
+
 def hr_level(sc: Scenario) -> Scenario:
     return HRMAGA()._level_scenario(sc, terrain_pyramid(sc.terrain, 3)[2], 3)
 

@@ -317,6 +317,38 @@ class HRMAGA(Planner):
         return paths[order[0]], np.asarray(num[order[0]])
 
     # ------------------------------------------------------------------ uncertain areas
+    @classmethod
+    def _admit_all(
+        cls, Q: FloatArray, areas: list[UncertainArea], sc: Scenario, level: float | None = None
+    ) -> FloatArray:
+        """:meth:`_admit` of every row of ``Q`` (n, 3), the same numbers: rows inside an area
+        one by one, the others (no move) with the altitude steps on whole arrays."""
+        out = np.array(Q, dtype=np.float64)
+        inside = np.zeros(len(out), dtype=bool)
+        for a in areas:
+            inside |= (
+                (a.x <= out[:, 0]) & (out[:, 0] <= a.x + a.width)
+                & (a.y <= out[:, 1]) & (out[:, 1] <= a.y + a.height)
+            )  # fmt: skip
+        for k in np.flatnonzero(inside):
+            out[k] = cls._admit(out[k], areas, sc, level)
+        rest = ~inside
+        if not rest.any():
+            return out
+        x, y, z = out[rest, 0], out[rest, 1], out[rest, 2].copy()
+        band = sc.altitude
+        if band is not None:
+            base = np.zeros(len(x))
+            if band.reference == "ground" and sc.terrain is not None:
+                base = np.asarray(sc.terrain.lookup(x, y, _lookup(sc)), dtype=np.float64)
+            if level is not None and math.isfinite(band.max):
+                z = base + band.min + level * (band.max - band.min)
+            z = np.minimum(np.maximum(z, base + band.min), base + band.max)
+        elif sc.terrain is not None:
+            z = np.maximum(z, np.asarray(sc.terrain.height(x, y), dtype=np.float64))
+        out[rest, 2] = np.minimum(np.maximum(z, sc.bounds.lo[2]), sc.bounds.hi[2])
+        return out
+
     @staticmethod
     def _admit(
         p: FloatArray, areas: list[UncertainArea], sc: Scenario, level: float | None = None
@@ -551,7 +583,7 @@ class HRMAGA(Planner):
                     continue  # the straight segment: it failed
                 for level in (None, 0.5, 0.75):  # the ends' line, or a share of the band
                     Q = np.column_stack([xy, z])
-                    Q[1:-1] = [self._admit(q, areas, sc, level) for q in Q[1:-1]]
+                    Q[1:-1] = self._admit_all(Q[1:-1], areas, sc, level)
                     Q[0], Q[-1] = A, B
                     cands.append(Q)
         if not cands:
