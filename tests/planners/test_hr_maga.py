@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import math
 
 import numpy as np
 import pytest
@@ -99,25 +100,71 @@ def test_segment_end_moves_to_the_nearest_point_outside_the_area() -> None:
     assert np.array_equal(HRMAGA._admit(outside, [a], lv), outside)
 
 
+def admit_reference(p, areas, sc, level=None):  # type: ignore[no-untyped-def]
+    """Sect. III-C's move and the band, one point at a time in plain Python (the first form of
+    ``HRMAGA._admit``): the reference of :meth:`HRMAGA._admit_all`."""
+    from uavplan.planners.hr_maga import _lookup
+
+    q = p.copy()
+    lo, hi = sc.bounds.lo, sc.bounds.hi
+    for _ in range(len(areas) + 1):
+        inside = [
+            a for a in areas if a.x <= q[0] <= a.x + a.width and a.y <= q[1] <= a.y + a.height
+        ]
+        if not inside:
+            break
+        a = inside[0]
+        cands = [
+            (q[0] - a.x, (a.x - 1.0, q[1])),
+            (a.x + a.width - q[0], (a.x + a.width + 1.0, q[1])),
+            (q[1] - a.y, (q[0], a.y - 1.0)),
+            (a.y + a.height - q[1], (q[0], a.y + a.height + 1.0)),
+        ]
+        cands = [c for c in cands if lo[0] <= c[1][0] <= hi[0] and lo[1] <= c[1][1] <= hi[1]]
+        if not cands:
+            break
+        q[:2] = min(cands)[1]
+    band = sc.altitude
+    if band is not None:
+        base = 0.0
+        if band.reference == "ground" and sc.terrain is not None:
+            base = float(sc.terrain.lookup(q[0], q[1], _lookup(sc)))
+        if level is not None and math.isfinite(band.max):
+            q[2] = base + band.min + level * (band.max - band.min)
+        q[2] = min(max(q[2], base + band.min), base + band.max)
+    elif sc.terrain is not None:
+        q[2] = max(q[2], float(sc.terrain.height(q[0], q[1])))
+    q[2] = min(max(q[2], lo[2]), hi[2])
+    return q
+
+
 @pytest.mark.parametrize("level", [None, 0.0, 0.5, 0.75])
 def test_admitting_points_together_gives_the_numbers_of_one_at_a_time(level) -> None:
-    """The repair's batch of candidate points (:meth:`HRMAGA._admit_all`) against
-    :meth:`HRMAGA._admit` point by point: inside and outside the area, above, in and below the
-    band, off the bounds in z; also with the band absolute and with none."""
+    """The batch (:meth:`HRMAGA._admit_all`) against the point-by-point reference: inside and
+    outside areas (overlapping ones, one at the map's edge, ties between two edges), above, in
+    and below the band, off the bounds in z; with the band over the ground, absolute, none."""
     sc = hills()
     rng = np.random.default_rng(7)
     Q = np.column_stack(
-        [rng.uniform(0, 2000, 300), rng.uniform(0, 2000, 300), rng.uniform(-100, 800, 300)]
+        [rng.uniform(0, 2000, 400), rng.uniform(0, 2000, 400), rng.uniform(-100, 800, 400)]
     )
-    Q[:20, :2] = rng.uniform(860, 1140, (20, 2))  # inside the area
-    areas = list(sc.uncertain_areas)
+    Q[:40, :2] = rng.uniform(860, 1140, (40, 2))  # inside the first area
+    Q[40:60, :2] = rng.uniform(0, 120, (20, 2))  # inside the corner area
+    Q[60] = (1000.0, 1000.0, 100.0)  # the centre: four edges at the same distance
+    Q[61] = (1100.0, 1100.0, 100.0)  # inside both overlapping areas
+    areas = [
+        *sc.uncertain_areas,  # x 850-1150, y 850-1150
+        UncertainArea(1000.0, 1000.0, 400.0, 200.0, revealed=True),  # overlaps it
+        UncertainArea(0.0, 0.0, 150.0, 150.0, revealed=True),  # at the map's corner
+    ]
     for world in (
         hr_level(sc),
         dataclasses.replace(sc, altitude=AltitudeBand(40.0, 500.0, "absolute")),
         dataclasses.replace(sc, altitude=None),
     ):
-        one = np.array([HRMAGA._admit(q, areas, world, level) for q in Q])
+        one = np.array([admit_reference(q, areas, world, level) for q in Q])
         np.testing.assert_array_equal(HRMAGA._admit_all(Q, areas, world, level), one)
+        np.testing.assert_array_equal(HRMAGA._admit(Q[61], areas, world, level), one[61])
 
 
 def hr_level(sc: Scenario) -> Scenario:

@@ -317,25 +317,53 @@ class HRMAGA(Planner):
         return paths[order[0]], np.asarray(num[order[0]])
 
     # ------------------------------------------------------------------ uncertain areas
-    @classmethod
+    @staticmethod
     def _admit_all(
-        cls, Q: FloatArray, areas: list[UncertainArea], sc: Scenario, level: float | None = None
+        Q: FloatArray, areas: list[UncertainArea], sc: Scenario, level: float | None = None
     ) -> FloatArray:
-        """:meth:`_admit` of every row of ``Q`` (n, 3), the same numbers: rows inside an area
-        one by one, the others (no move) with the altitude steps on whole arrays."""
-        out = np.array(Q, dtype=np.float64)
-        inside = np.zeros(len(out), dtype=bool)
-        for a in areas:
-            inside |= (
-                (a.x <= out[:, 0]) & (out[:, 0] <= a.x + a.width)
-                & (a.y <= out[:, 1]) & (out[:, 1] <= a.y + a.height)
-            )  # fmt: skip
-        for k in np.flatnonzero(inside):
-            out[k] = cls._admit(out[k], areas, sc, level)
-        rest = ~inside
-        if not rest.any():
-            return out
-        x, y, z = out[rest, 0], out[rest, 1], out[rest, 2].copy()
+        """Points ``Q`` (n, 3) made admissible on level scenario ``sc``: each moved to the
+        nearest point 1 m outside every known uncertain area it is in (Sect. III-C, Alg. 2 line
+        11; an edge whose outside point leaves the bounds is not a way out; ties go to the
+        smaller x, then y), then its altitude put back into the band over this level's map (a
+        coarse map is higher than the fine one, so a point at the top of the band there may be
+        above it here). ``level``: put the altitude at this share of the band instead (0 its
+        floor, 1 its ceiling). All points at once; the tests compare it with the same rule
+        applied one point at a time."""
+        out = np.array(Q, dtype=np.float64).reshape(-1, 3)
+        lo, hi = sc.bounds.lo, sc.bounds.hi
+        moving = np.ones(len(out), dtype=bool)
+        for _ in range(len(areas) + 1):
+            if not areas or not moving.any():
+                break
+            x, y = out[:, 0], out[:, 1]
+            first = np.full(len(out), -1)  # the first area (in order) holding each point
+            for k in range(len(areas) - 1, -1, -1):
+                a = areas[k]
+                first[(a.x <= x) & (x <= a.x + a.width) & (a.y <= y) & (y <= a.y + a.height)] = k
+            moving &= first >= 0
+            rows = np.flatnonzero(moving)
+            if rows.size == 0:
+                break
+            ax = np.array([areas[k].x for k in first[rows]])
+            ay = np.array([areas[k].y for k in first[rows]])
+            aw = np.array([areas[k].width for k in first[rows]])
+            ah = np.array([areas[k].height for k in first[rows]])
+            px, py = x[rows], y[rows]
+            dist = np.stack([px - ax, ax + aw - px, py - ay, ay + ah - py], axis=1)
+            cx = np.stack([ax - 1.0, ax + aw + 1.0, px, px], axis=1)
+            cy = np.stack([py, py, ay - 1.0, ay + ah + 1.0], axis=1)
+            ok = (lo[0] <= cx) & (cx <= hi[0]) & (lo[1] <= cy) & (cy <= hi[1])
+            # the smallest (distance, x, y) among the edges that stay in bounds
+            d = np.where(ok, dist, np.inf)
+            tie = ok & (d == d.min(axis=1)[:, None])
+            tie &= np.where(tie, cx, np.inf) == np.where(tie, cx, np.inf).min(axis=1)[:, None]
+            pick = np.argmin(np.where(tie, cy, np.inf), axis=1)
+            stuck = ~ok.any(axis=1)
+            r = np.arange(rows.size)
+            go = rows[~stuck]
+            out[go, 0], out[go, 1] = cx[r, pick][~stuck], cy[r, pick][~stuck]
+            moving[rows[stuck]] = False
+        x, y, z = out[:, 0], out[:, 1], out[:, 2].copy()
         band = sc.altitude
         if band is not None:
             base = np.zeros(len(x))
@@ -346,50 +374,15 @@ class HRMAGA(Planner):
             z = np.minimum(np.maximum(z, base + band.min), base + band.max)
         elif sc.terrain is not None:
             z = np.maximum(z, np.asarray(sc.terrain.height(x, y), dtype=np.float64))
-        out[rest, 2] = np.minimum(np.maximum(z, sc.bounds.lo[2]), sc.bounds.hi[2])
+        out[:, 2] = np.minimum(np.maximum(z, lo[2]), hi[2])
         return out
 
-    @staticmethod
+    @classmethod
     def _admit(
-        p: FloatArray, areas: list[UncertainArea], sc: Scenario, level: float | None = None
+        cls, p: FloatArray, areas: list[UncertainArea], sc: Scenario, level: float | None = None
     ) -> FloatArray:
-        """Segment end ``p`` made admissible on level scenario ``sc``: moved to the nearest
-        point 1 m outside every known uncertain area it is in (Sect. III-C, Alg. 2 line 11),
-        then its altitude put back into the band over this level's map (a coarse map is
-        higher than the fine one, so a point at the top of the band there may be above it
-        here). ``level``: put the altitude at this share of the band instead (0 its floor, 1
-        its ceiling)."""
-        q = p.copy()
-        lo, hi = sc.bounds.lo, sc.bounds.hi
-        for _ in range(len(areas) + 1):
-            inside = [
-                a for a in areas if a.x <= q[0] <= a.x + a.width and a.y <= q[1] <= a.y + a.height
-            ]
-            if not inside:
-                break
-            a = inside[0]
-            cands = [
-                (q[0] - a.x, (a.x - 1.0, q[1])),
-                (a.x + a.width - q[0], (a.x + a.width + 1.0, q[1])),
-                (q[1] - a.y, (q[0], a.y - 1.0)),
-                (a.y + a.height - q[1], (q[0], a.y + a.height + 1.0)),
-            ]
-            cands = [c for c in cands if lo[0] <= c[1][0] <= hi[0] and lo[1] <= c[1][1] <= hi[1]]
-            if not cands:
-                break
-            q[:2] = min(cands)[1]
-        band = sc.altitude
-        if band is not None:
-            base = 0.0
-            if band.reference == "ground" and sc.terrain is not None:
-                base = float(sc.terrain.lookup(q[0], q[1], _lookup(sc)))
-            if level is not None and math.isfinite(band.max):
-                q[2] = base + band.min + level * (band.max - band.min)
-            q[2] = min(max(q[2], base + band.min), base + band.max)
-        elif sc.terrain is not None:
-            q[2] = max(q[2], float(sc.terrain.height(q[0], q[1])))
-        q[2] = min(max(q[2], lo[2]), hi[2])
-        return q
+        """One point made admissible (:meth:`_admit_all`)."""
+        return cls._admit_all(np.asarray(p)[None], areas, sc, level)[0]
 
     # ------------------------------------------------------------------ Alg. 2
     def _plan(self, run: Run) -> Outcome:
@@ -444,12 +437,9 @@ class HRMAGA(Planner):
                 for p in paths:  # each kept path of this node
                     # every junction, the previous levels' too (a deterministic move: the
                     # sub-paths meeting there move it alike); never the task's start and goal
-                    pts = [
-                        q
-                        if np.array_equal(q, start) or np.array_equal(q, goal)
-                        else self._admit(q, known, nxt_sc)
-                        for q in p
-                    ]
+                    fixed = np.all(p == start, axis=1) | np.all(p == goal, axis=1)
+                    pts = np.array(p, dtype=np.float64)
+                    pts[~fixed] = self._admit_all(p[~fixed], known, nxt_sc)
                     ends.extend((pts[j], pts[j + 1]) for j in range(len(pts) - 1))
         # bottom-up integration (Alg. 2 line 15) on the finest level's problem reached
         paths3 = self._integrate_up(results, problems[-1], run.tracker)
