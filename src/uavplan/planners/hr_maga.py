@@ -547,7 +547,7 @@ class HRMAGA(Planner):
             if not more:
                 break
             near |= more
-        cands: list[FloatArray] = []
+        ways: list[FloatArray] = []  # (n, 3) each: the way's points at the ends' altitude line
         for chain in chains:
             if len(chain) < 2:
                 continue
@@ -571,9 +571,19 @@ class HRMAGA(Planner):
                 z = A[2] + (B[2] - A[2]) * d / max(d[-1], 1e-12)
                 if len(xy) < 3:
                     continue  # the straight segment: it failed
-                for level in (None, 0.5, 0.75):  # the ends' line, or a share of the band
-                    Q = np.column_stack([xy, z])
-                    Q[1:-1] = self._admit_all(Q[1:-1], areas, sc, level)
+                ways.append(np.column_stack([xy, z]))
+        cands: list[FloatArray] = []
+        if ways:  # every way's inner points admitted at once, per altitude level
+            inner = np.concatenate([w[1:-1] for w in ways])
+            cut = np.cumsum([len(w) - 2 for w in ways])[:-1]
+            levels = [  # the ends' line, or a share of the band
+                np.split(self._admit_all(inner, areas, sc, level), cut)
+                for level in (None, 0.5, 0.75)
+            ]
+            for k, w in enumerate(ways):
+                for admitted in levels:
+                    Q = w.copy()
+                    Q[1:-1] = admitted[k]
                     Q[0], Q[-1] = A, B
                     cands.append(Q)
         if not cands:
