@@ -24,6 +24,7 @@ Canadian DEMs are not available offline; ``hrmaga-spso``, ``hrmaga-jacksboro``,
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from typing import Any
 
 import numpy as np
@@ -59,7 +60,8 @@ def eq13(layers: list[np.ndarray]) -> list[np.ndarray]:
 
 def _mean_curve(histories: pd.Series) -> np.ndarray:
     """The mean over runs of best-so-far curves (infinite values left out per step)."""
-    with np.errstate(all="ignore"):
+    with warnings.catch_warnings():  # a step where no run is feasible yet is NaN, quietly
+        warnings.simplefilter("ignore", RuntimeWarning)
         return np.asarray(np.nanmean(stack_histories(list(histories)), axis=0))
 
 
