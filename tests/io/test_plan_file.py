@@ -177,6 +177,6 @@ def test_export_csv_and_the_infeasible_warning(tmp_path: Path, single_plan, flee
     assert r.exit_code == 2 and "at most one" in r.output
     r = runner.invoke(app, ["export", str(tmp_path / "bad.json"), "-o", str(out), "--smoothed"])
     assert r.exit_code == 2 and "no smoothed path" in r.output
-    r = runner.invoke(app, ["export", str(tmp_path), "--format", "qgc"])
-    assert r.exit_code == 2 and "unknown export format 'qgc'" in r.output
+    r = runner.invoke(app, ["export", str(tmp_path), "--format", "nope"])
+    assert r.exit_code == 2 and "unknown export format 'nope'" in r.output
     assert "csv" in runner.invoke(app, ["export", "--list"]).output

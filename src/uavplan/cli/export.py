@@ -1,14 +1,17 @@
-"""``uavplan export PLAN --format NAME --out PATH``: a plan in a mission format
+"""``uavplan export PLAN [SCENARIO] --format NAME --out PATH``: a plan in a mission format
 (:mod:`uavplan.io.missions`). By default each UAV's flown trajectory, the one the plan declares
 and the verifier checks; ``--polylines`` or ``--smoothed`` export the planned polylines or the
 informative smoothed paths instead, with a warning that they are not what the plan guarantees.
-A plan that is not feasible, or does not say, is still written but the command says so on
-stderr and exits 1."""
+Geodetic formats need the scenario's origin (recorded in the plan, or from SCENARIO, or
+``--origin``); the geofence and the terrain frame need the scenario (SCENARIO, else the plan's
+scenario name when it is a built-in one). A plan that is not feasible, or does not say, is
+still written but the command says so on stderr and exits 1."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -18,8 +21,29 @@ if TYPE_CHECKING:
     from uavplan.io.plan_file import TrajectoryKind
 
 
+def _origin(text: str) -> Any:
+    from uavplan.world.geo import GeoError, GeoOrigin
+
+    parts = text.split(",")
+    try:
+        values = [float(p) for p in parts]
+        if len(values) not in (2, 3):
+            raise ValueError
+        return GeoOrigin(values[0], values[1], values[2] if len(values) == 3 else 0.0,
+                         note="--origin")  # fmt: skip
+    except ValueError as exc:
+        why = str(exc) if isinstance(exc, GeoError) else "give LAT,LON[,ALT] in degrees, metres"
+        raise fail(f"--origin {text!r}: {why}") from None
+
+
 def export(
     plan_file: Annotated[Path | None, typer.Argument(help="A plan.json (or its folder).")] = None,
+    scenario: Annotated[
+        str | None,
+        typer.Argument(
+            help="Its scenario (file or built-in name; default: the plan's, if built in)."
+        ),
+    ] = None,
     fmt: Annotated[str, typer.Option("--format", "-f", help="Export format (--list).")] = "csv",
     out_path: Annotated[
         Path | None, typer.Option("--out", "-o", help="Output file (folder for per-UAV formats).")
@@ -30,12 +54,28 @@ def export(
     polylines: Annotated[
         bool, typer.Option("--polylines", help="Export the planned polylines.")
     ] = False,
+    frame: Annotated[
+        str, typer.Option(help="Mission altitudes: amsl, relative (to home) or terrain.")
+    ] = "amsl",
+    end: Annotated[str, typer.Option(help="After the last waypoint: land, rtl or none.")] = "land",
+    firmware: Annotated[str, typer.Option(help="px4, ardupilot or generic (.plan).")] = "px4",
+    vehicle: Annotated[
+        str, typer.Option(help="auto (fixed-wing if it has a turn radius), fixed-wing, multirotor.")
+    ] = "auto",
+    origin: Annotated[
+        str | None, typer.Option(help="LAT,LON[,ALT]: geodetic origin of the local frame.")
+    ] = None,
+    epoch: Annotated[
+        str, typer.Option(help="UTC time of the plan's t = 0 (KML times), ISO 8601.")
+    ] = "2000-01-01T00:00:00Z",
     list_formats: Annotated[bool, typer.Option("--list", help="List the formats.")] = False,
 ) -> None:
     """Write PLAN_FILE's trajectories in a mission format: each UAV's flown trajectory (the
     one the plan declares and guarantees) unless --polylines or --smoothed."""
-    from uavplan.io.missions import ExportError, exporters, get_exporter
+    from uavplan.io.missions import ExportError, ExportOptions, Mission, exporters, get_exporter
     from uavplan.io.plan_file import PlanFormatError, plan_path, read_plan_file
+    from uavplan.io.scenario_file import ScenarioFileError
+    from uavplan.scenarios import resolve
 
     if list_formats:
         for e in exporters().values():
@@ -46,20 +86,62 @@ def export(
         raise fail("export: give a PLAN_FILE (or --list)")
     if smoothed and polylines:
         raise fail("export: --smoothed and --polylines: give at most one")
+    choices = {"frame": (frame, ("amsl", "relative", "terrain")),
+               "end": (end, ("land", "rtl", "none")),
+               "firmware": (firmware, ("px4", "ardupilot", "generic")),
+               "vehicle": (vehicle, ("auto", "fixed-wing", "multirotor"))}  # fmt: skip
+    for name, (value, allowed) in choices.items():
+        if value not in allowed:
+            raise fail(f"--{name} {value!r}: choose from {', '.join(allowed)}")
     kind: TrajectoryKind = "smoothed" if smoothed else ("planned" if polylines else "flown")
+    geo_origin = _origin(origin) if origin is not None else None
+    notes: list[str] = []
     try:
         exporter = get_exporter(fmt)
         plan = read_plan_file(plan_file)
-        target = out_path or plan_path(plan_file).with_suffix(exporter.suffix)
+        world = None
+        if scenario is not None:
+            try:
+                world = resolve(scenario)
+            except ScenarioFileError as exc:
+                raise fail(exc.problems) from None
+            except (OSError, ValueError) as exc:
+                raise fail(f"{scenario}: {exc}") from None
+        elif plan.scenario is not None:
+            try:
+                world = resolve(plan.scenario)
+            except (ScenarioFileError, OSError, ValueError):
+                notes.append(f"scenario {plan.scenario!r} is not a built-in one: no geofence "
+                             "and no terrain frame (give SCENARIO)")  # fmt: skip
+        if world is not None and world.dim != plan.dim:
+            raise fail(f"{scenario or plan.scenario}: a {world.dim}-D scenario for a "
+                       f"{plan.dim}-D plan")  # fmt: skip
+        if geo_origin is not None:
+            plan = dataclasses.replace(plan, origin=geo_origin)
+        elif plan.origin is None and world is not None and world.origin is not None:
+            plan = dataclasses.replace(plan, origin=world.origin)
+        options = ExportOptions(kind=kind, frame=frame, end=end, firmware=firmware,  # type: ignore[arg-type]
+                                vehicle=vehicle, epoch=epoch)  # type: ignore[arg-type]  # fmt: skip
+        mission = Mission(plan, world, options)
+        shown = plan_path(plan_file)
+        default = shown.parent / fmt if exporter.per_uav else shown.with_suffix(exporter.suffix)
+        target = out_path or default
         if exporter.per_uav:
             target.mkdir(parents=True, exist_ok=True)
-        written = exporter.write(plan, target, kind)
+        written = exporter.write(mission, target)
     except (ExportError, PlanFormatError) as exc:
         raise fail(str(exc).splitlines()[0]) from None
     except OSError as exc:
         raise fail(f"--out {out_path}: cannot write: {exc}") from None
     for p in written:
         out.print(f"wrote {p}")
+    for note in (*notes, *mission.warnings):
+        err.print(f"WARNING: {plan.source}: {note}")
+    if len(plan.uavs) > 1 and exporter.name in ("qgc", "wpl"):
+        err.print(
+            f"WARNING: {plan.source}: the fleet's separation holds only if every UAV "
+            "starts its mission at its planned time and holds the planned speeds"
+        )
     if kind != "flown":
         what = "smoothed paths" if smoothed else "planned polylines"
         err.print(f"WARNING: {plan.source}: exported the {what}, not the flown trajectories "

@@ -46,6 +46,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from uavplan import __version__
 from uavplan.io.atomic import write_json_atomic
+from uavplan.world.geo import GeoError, GeoOrigin
 
 if TYPE_CHECKING:
     from uavplan.planners.fleet_plan import FleetPlan
@@ -160,6 +161,7 @@ def plan_document(plan: FleetPlan) -> dict[str, Any]:
         "version": __version__,
         "python": platform.python_version(),
         "frame": FRAME,
+        **({"origin": plan.scenario.origin.record()} if plan.scenario.origin else {}),
         "feasible": bool(plan.feasible),
         "separation_checked": plan.fleet is not None,
         **({"fleet": fleet_record(plan.fleet)} if plan.fleet is not None else {}),
@@ -258,6 +260,8 @@ class PlanFile:
     uavs: tuple[UAVPlan, ...]
     dim: int
     source: str = "plan"
+    #: the scenario's geodetic origin as the plan recorded it (None: not geo-referenced)
+    origin: GeoOrigin | None = None
 
     def trajectories(self, kind: TrajectoryKind = "flown") -> list[Trajectory]:
         """Every UAV's trajectory of ``kind``; PlanFormatError naming the first UAV without a
@@ -452,6 +456,12 @@ def parse_plan(data: Any, dim: int | None = None, source: str = "plan") -> PlanF
             verdict = all(bool(u.feasible) for u in out)
     seed = data.get("seed")
     fleet_block = data.get("fleet")
+    origin = None
+    if data.get("origin") is not None:
+        try:
+            origin = GeoOrigin.from_record(data["origin"])
+        except GeoError as exc:
+            raise PlanFormatError([f"{source}: {exc}"]) from None
     config = data.get("config")
     return PlanFile(
         format=fmt,
@@ -465,6 +475,7 @@ def parse_plan(data: Any, dim: int | None = None, source: str = "plan") -> PlanF
         uavs=tuple(out),
         dim=d,
         source=source,
+        origin=origin,
     )
 
 
@@ -562,6 +573,18 @@ class FleetSpec(_Spec):
     info: dict[str, Any] = Field(default_factory=dict)
 
 
+class OriginSpec(_Spec):
+    """The scenario's geodetic origin (:class:`uavplan.world.geo.GeoOrigin`)."""
+
+    lat: float
+    lon: float
+    alt: float = 0.0
+    x: float = 0.0
+    y: float = 0.0
+    note: str = ""
+    accuracy: float = 0.0
+
+
 class PlanSpec(_Spec):
     """A uavplan plan file (``plan.json``)."""
 
@@ -573,6 +596,7 @@ class PlanSpec(_Spec):
     version: str | None = None
     python: str | None = None
     frame: str | None = FRAME
+    origin: OriginSpec | None = None
     feasible: bool | None = None
     separation_checked: bool | None = None
     fleet: FleetSpec | None = None

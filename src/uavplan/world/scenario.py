@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.world.dynamic import MovingObstacle
+from uavplan.world.geo import GeoOrigin
 from uavplan.world.geometry import pack_polygons
 from uavplan.world.obstacles import (
     AltitudeBand,
@@ -185,6 +186,8 @@ class Scenario:
     n_waypoints: int = 10
     description: str = ""
     metadata: dict[str, Any] = field(default_factory=dict)
+    #: where the local frame sits on Earth (None: not geo-referenced; mission export needs it)
+    origin: GeoOrigin | None = None
 
     def __post_init__(self) -> None:
         if not self.tasks:

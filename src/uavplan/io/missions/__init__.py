@@ -1,26 +1,240 @@
 """Mission export formats, one module each, found by name (``uavplan export --format NAME``).
 
-An exporter reads a typed plan (:class:`uavplan.io.plan_file.PlanFile`) and writes one file for
-the fleet, or one file per UAV where the format holds a single vehicle, and returns the paths
-written. A new format is a new module here that decorates its function with
-:func:`register_exporter` (every module here is imported).
+An exporter gets a :class:`Mission` (the typed plan file, the scenario when known, the export
+options, and the geodetic conversions of :mod:`uavplan.world.geo`) and writes one file for the
+fleet, or one file per UAV where the format holds a single vehicle, and returns the paths
+written; what the user must know (an approximate georeference, legs outside the verified
+trajectory) it appends to ``mission.warnings`` for the CLI to print. A new format is a new
+module here that decorates its function with :func:`register_exporter` (every module here is
+imported).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, Literal
 
-from uavplan.io.plan_file import PlanFile, TrajectoryKind
+import numpy as np
+from numpy.typing import NDArray
 
-#: ``exporter(plan, out, kind) -> paths written``; ``out`` is a file for a fleet-wide format and
-#: a folder for a per-UAV one; ``kind`` is which trajectory of each UAV is exported.
-ExportFn = Callable[[PlanFile, Path, TrajectoryKind], list[Path]]
+from uavplan.io.plan_file import PlanFile, Trajectory, TrajectoryKind
+from uavplan.world.geo import GeoOrigin
+
+if TYPE_CHECKING:
+    from uavplan.world.scenario import Scenario
+
+FloatArray = NDArray[np.float64]
+#: Altitude reference of exported waypoints: above mean sea level, above the home position
+#: (the ground under the UAV's start), or above the terrain under each point.
+AltitudeFrame = Literal["amsl", "relative", "terrain"]
+#: What a single-vehicle mission does after its last waypoint.
+MissionEnd = Literal["land", "rtl", "none"]
+#: Above this many metres of georeference error (``GeoOrigin.accuracy``) an export warns.
+ACCURACY_WARNING_M = 1.0
 
 
 class ExportError(ValueError):
     """An unknown format, or a plan the format cannot hold."""
+
+
+@dataclass(frozen=True)
+class ExportOptions:
+    """What to export and how: which trajectory (the flown one by default: the one the plan
+    declares and the verifier checks), the altitude frame, the mission's end, the autopilot
+    and vehicle type written into ground-station files, and the UTC time of the plan's t = 0
+    for formats with absolute times (KML)."""
+
+    kind: TrajectoryKind = "flown"
+    frame: AltitudeFrame = "amsl"
+    end: MissionEnd = "land"
+    firmware: Literal["px4", "ardupilot", "generic"] = "px4"
+    vehicle: Literal["auto", "fixed-wing", "multirotor"] = "auto"
+    epoch: str = "2000-01-01T00:00:00Z"
+
+
+@dataclass(eq=False)
+class Mission:
+    """A plan on its way out: the plan file, its scenario (None when unknown: no geofence, no
+    terrain frame), the options and the warnings gathered while writing."""
+
+    plan: PlanFile
+    scenario: Scenario | None = None
+    options: ExportOptions = field(default_factory=ExportOptions)
+    warnings: list[str] = field(default_factory=list)
+    _keep_out: tuple[list[tuple[float, float, float]], list[FloatArray]] | None = field(
+        default=None, init=False, repr=False
+    )
+    _trajectories: list[Trajectory] | None = field(default=None, init=False, repr=False)
+
+    def trajectories(self) -> list[Trajectory]:
+        if self._trajectories is None:
+            self._trajectories = self.plan.trajectories(self.options.kind)
+        return self._trajectories
+
+    @property
+    def origin(self) -> GeoOrigin:
+        """The plan's recorded origin, else its scenario's; ExportError saying how to add one."""
+        origin = self.plan.origin or (self.scenario.origin if self.scenario else None)
+        if origin is None:
+            name = self.plan.scenario or "the plan's scenario"
+            raise ExportError(
+                f"{self.plan.source}: scenario {name!r} has no geodetic origin; add one to the "
+                "scenario file (origin: {lat: DEG, lon: DEG, alt: M_AMSL_OF_Z0}), plan again, "
+                "or pass --origin LAT,LON,ALT"
+            )
+        return origin
+
+    def check_accuracy(self) -> None:
+        """Warn once when the georeference is approximate (a lat/lon DEM laid out flat)."""
+        acc = self.origin.accuracy
+        msg = (f"georeference is approximate: an exported position may lie up to {acc:,.0f} m "
+               f"from where the scenario's terrain puts it ({self.origin.note}); check the "
+               "mission against a real DEM before flight")  # fmt: skip
+        if acc > ACCURACY_WARNING_M and msg not in self.warnings:
+            self.warnings.append(msg)
+
+    def ground(self, xy: FloatArray) -> FloatArray:
+        """Local ground height under (n, 2) points: the terrain, or z = 0 without one."""
+        t = self.scenario.terrain if self.scenario is not None else None
+        if t is None:
+            return np.zeros(len(xy))
+        return np.asarray(t.height(xy[:, 0], xy[:, 1]), dtype=np.float64)
+
+    def geodetic(self, points: FloatArray) -> FloatArray:
+        """(n, 3) ``[lat, lon, alt AMSL]`` of local points (2-D: at the origin's altitude)."""
+        self.check_accuracy()
+        return self.origin.to_geodetic(points)
+
+    def home(self, tr: Trajectory) -> FloatArray:
+        """``[lat, lon, alt AMSL]`` of the ground under the trajectory's start."""
+        p = np.array(tr.points[:1, :2], dtype=np.float64)
+        return self.geodetic(np.column_stack([p, self.ground(p)]))[0]
+
+    def altitudes(self, tr: Trajectory, points: FloatArray | None = None) -> FloatArray:
+        """The points' (default: the trajectory's) altitudes in the options' frame, metres."""
+        P = tr.points if points is None else points
+        if P.shape[1] < 3:
+            raise ExportError(f"{self.plan.source}: a 2-D plan has no altitudes for a mission")
+        z = np.asarray(P[:, 2], dtype=np.float64)
+        if self.options.frame == "amsl":
+            return self.origin.alt + z
+        if self.options.frame == "relative":
+            return z - float(self.ground(tr.points[:1, :2])[0])
+        if self.scenario is None or self.scenario.terrain is None:
+            raise ExportError(
+                f"{self.plan.source}: --frame terrain needs the scenario's terrain (give "
+                "SCENARIO; this plan's scenario has none)"
+            )
+        return z - self.ground(P[:, :2])
+
+    def segment_speeds(self, tr: Trajectory) -> FloatArray:
+        """Speed over each segment, m/s (0 where the UAV waits)."""
+        d = np.linalg.norm(np.diff(tr.points, axis=0), axis=1)
+        dt = np.diff(tr.times)
+        return np.where(dt > 0, d / np.where(dt > 0, dt, 1.0), 0.0)
+
+    def items(self, tr: Trajectory) -> list[MissionItem]:
+        """The MAVLink mission of one UAV after its home: take-off at the start, a speed
+        command where the planned speed changes (by more than 1 %), a waypoint per point of
+        the trajectory (a wait becomes the previous waypoint's hold time), then land at the
+        goal, return to launch, or nothing (``options.end``). Warns that the take-off climb
+        and the landing descent are outside the verified trajectory."""
+        P = np.asarray(tr.points, dtype=np.float64)
+        G = self.geodetic(P)
+        alt = self.altitudes(tr)
+        frame = {"amsl": 0, "relative": 3, "terrain": 10}[self.options.frame]
+        speeds = self.segment_speeds(tr)
+        waits = np.diff(tr.times) * (np.linalg.norm(np.diff(P, axis=0), axis=1) <= 1e-9)
+        nan = float("nan")
+        pitch = 15.0 if self.is_fixed_wing() else 0.0
+        out = [MissionItem(22, frame, (pitch, 0, 0, nan, G[0, 0], G[0, 1], alt[0]))]
+        current = -1.0
+        for k in range(len(P)):
+            if k > 0 and waits[k - 1] > 0:  # a wait: hold at the previous waypoint
+                last = out[-1]
+                held = (last.params[0] + float(waits[k - 1]), *last.params[1:])
+                out[-1] = MissionItem(last.command, last.frame, held)
+                continue
+            if k < len(speeds) and speeds[k] > 0 and abs(speeds[k] - current) > 0.01 * speeds[k]:
+                current = float(speeds[k])
+                out.append(MissionItem(178, 2, (1, current, -1, 0, 0, 0, 0)))
+            out.append(MissionItem(16, frame, (0, 0, 0, nan, G[k, 0], G[k, 1], alt[k])))
+        end = self.options.end
+        if end == "land":
+            ground = float(self.ground(P[-1:, :2])[0])
+            land_alt = {"amsl": self.origin.alt + ground, "relative": ground - float(
+                self.ground(P[:1, :2])[0]), "terrain": 0.0}[self.options.frame]  # fmt: skip
+            out.append(MissionItem(21, frame, (0, 0, 0, nan, G[-1, 0], G[-1, 1], land_alt)))
+        elif end == "rtl":
+            out.append(MissionItem(20, 2, (0, 0, 0, 0, 0, 0, 0)))
+        note = ("the take-off climb and the "
+                + {"land": "landing descent are", "rtl": "return to launch are",
+                   "none": "end of the mission is"}[end]
+                + " outside the verified trajectory (the plan starts at its first point in the "
+                "air and ends at its last)")  # fmt: skip
+        if note not in self.warnings:
+            self.warnings.append(note)
+        return out
+
+    def keep_out(self) -> tuple[list[tuple[float, float, float]], list[FloatArray]]:
+        """The scenario's static obstacles as geofence shapes: exclusion circles
+        ``(lat, lon, radius)`` from cylinders and circles (radius plus margin; a finite
+        cylinder's altitude limits are dropped, which only widens the fence) and exclusion
+        polygons ``(n, 2) [lat, lon]`` from polygons and revealed uncertain areas. Moving
+        obstacles, danger areas (costs, not limits) and unrevealed areas are not fences."""
+        if self._keep_out is not None:
+            return self._keep_out
+        sc = self.scenario
+        circles: list[tuple[float, float, float]] = []
+        polygons: list[FloatArray] = []
+        if sc is None:
+            return circles, polygons
+        discs = self.discs()
+        if discs:
+            C = self.geodetic(np.array([c for c, _ in discs], dtype=np.float64))
+            circles = [(float(g[0]), float(g[1]), r) for g, (_, r) in zip(C, discs, strict=True)]
+        shapes = [np.asarray(p.vertices, dtype=np.float64) for p in sc.polygons]
+        if any(p.margin > 0 for p in sc.polygons):
+            self.warnings.append("polygon margins are not in the geofence (its polygons are "
+                                 "the obstacles' own outlines)")  # fmt: skip
+        for u in sc.uncertain_areas:
+            if u.revealed:
+                x1, y1 = u.x + u.width, u.y + u.height
+                shapes.append(np.array([[u.x, u.y], [x1, u.y], [x1, y1], [u.x, y1]]))
+        for V in shapes:
+            polygons.append(self.geodetic(V)[:, :2])
+        self._keep_out = (circles, polygons)
+        return circles, polygons
+
+    def discs(self) -> list[tuple[tuple[float, float], float]]:
+        """The scenario's cylinders and circles as ``(center, radius + margin)`` (local)."""
+        sc = self.scenario
+        if sc is None:
+            return []
+        out = [(c.center, float(c.radius + c.margin)) for c in sc.cylinders]
+        return out + [(c.center, float(c.radius + c.margin)) for c in sc.circles]
+
+    def is_fixed_wing(self) -> bool:
+        if self.options.vehicle != "auto":
+            return self.options.vehicle == "fixed-wing"
+        return self.scenario is not None and self.scenario.uav.turn_radius > 0
+
+
+@dataclass(frozen=True)
+class MissionItem:
+    """One MAVLink mission item: command (MAV_CMD), frame (MAV_FRAME), its seven parameters
+    (``nan`` where MAVLink means "unchanged")."""
+
+    command: int
+    frame: int
+    params: tuple[float, ...]
+
+
+#: ``exporter(mission, out) -> paths written``; ``out`` is a file for a fleet-wide format and a
+#: folder for a per-UAV one.
+ExportFn = Callable[[Mission, Path], list[Path]]
 
 
 @dataclass(frozen=True)

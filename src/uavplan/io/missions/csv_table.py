@@ -9,17 +9,17 @@ import io
 from pathlib import Path
 
 from uavplan.io.atomic import write_text_atomic
-from uavplan.io.missions import register_exporter
-from uavplan.io.plan_file import PlanFile, TrajectoryKind
+from uavplan.io.missions import Mission, register_exporter
 
 
 @register_exporter("csv", ".csv", "one table of every UAV's timed points (local ENU metres)")
-def write_csv(plan: PlanFile, out: Path, kind: TrajectoryKind) -> list[Path]:
+def write_csv(mission: Mission, out: Path) -> list[Path]:
+    plan = mission.plan
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     axes = ["x_m", "y_m", "z_m"][: plan.dim]
     w.writerow(["uav", "point", "time_s", *axes])
-    for tr in plan.trajectories(kind):
+    for tr in mission.trajectories():
         for k, (t, p) in enumerate(zip(tr.times, tr.points, strict=True)):
             w.writerow([tr.id, k, f"{t:.6f}", *(f"{v:.6f}" for v in p)])
     return [write_text_atomic(out, buf.getvalue())]

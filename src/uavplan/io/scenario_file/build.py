@@ -35,6 +35,8 @@ from uavplan.world import (
     UncertainArea,
 )
 from uavplan.world.fleet_tasks import fleet_layout, layer_record
+from uavplan.world.geo import GeoOrigin
+from uavplan.world.srtm import terrain_from_srtm
 from uavplan.world.terrain import TerrainError
 
 #: Headroom above the highest terrain for the default z bound when there is no altitude band, m.
@@ -45,6 +47,38 @@ DEFAULT_Z_HEADROOM = 500.0
 def builtin_terrain(name: str) -> Terrain:
     """Built-in terrains are immutable (read-only heights), so they are read once per process."""
     return Terrain.builtin(name)
+
+
+def _load_srtm(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Terrain | None:
+    ts = spec.terrain
+    assert ts is not None and ts.srtm is not None
+    if spec.origin is None:
+        problems.add(("terrain", "srtm"), "SRTM tiles need the scenario's origin (lat, lon, alt)")
+        return None
+    if spec.bounds is None:
+        problems.add(("terrain", "srtm"), "SRTM tiles need bounds: the map's extent in metres")
+        return None
+    paths = []
+    for k, name in enumerate(ts.srtm):
+        path = Path(name).expanduser()
+        path = Path(os.path.abspath(path if path.is_absolute() else base_dir / path))
+        if not path.is_file():
+            problems.add(("terrain", "srtm", k), f"SRTM tile not found (or not a file): {path}")
+            return None
+        paths.append(path)
+    lo, hi = spec.bounds.lower, spec.bounds.upper
+    try:
+        terrain, _ = terrain_from_srtm(
+            paths, GeoOrigin(**spec.origin.model_dump()), (lo[0], hi[0], lo[1], hi[1]),
+            ts.cell_size,
+        )  # fmt: skip
+    except TerrainError as exc:
+        problems.add(("terrain", "srtm"), str(exc))
+        return None
+    except (OSError, ValueError) as exc:
+        problems.add(("terrain", "srtm"), f"cannot read the SRTM tiles: {exc}")
+        return None
+    return terrain
 
 
 def _load_terrain(ts: TerrainSpec, problems: Problems, base_dir: Path) -> Terrain | None:
@@ -98,7 +132,10 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
     terrain: Terrain | None = None
     terrain_failed = False
     if spec.terrain is not None:
-        terrain = _load_terrain(spec.terrain, problems, base_dir)
+        if spec.terrain.srtm is not None:
+            terrain = _load_srtm(spec, problems, base_dir)
+        else:
+            terrain = _load_terrain(spec.terrain, problems, base_dir)
         terrain_failed = terrain is None
 
     # ---- dimension
@@ -318,6 +355,7 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
             cost=spec.planning.cost or ("length2d" if dim == 2 else "ppswarm"),
             n_waypoints=spec.planning.n_waypoints,
             description=spec.description,
+            origin=None if spec.origin is None else GeoOrigin(**spec.origin.model_dump()),
             metadata={
                 "source": problems.source,
                 "base_dir": str(base_dir),

@@ -51,10 +51,12 @@ class BoundsSpec(_Spec):
 
 
 class TerrainSpec(_Spec):
-    """A digital elevation model: a built-in map or a DEM file (exactly one of the two)."""
+    """A digital elevation model: a built-in map, a DEM file or SRTM tiles (exactly one)."""
 
     model_config = ConfigDict(
-        json_schema_extra={"oneOf": [{"required": ["builtin"]}, {"required": ["file"]}]}
+        json_schema_extra={
+            "oneOf": [{"required": ["builtin"]}, {"required": ["file"]}, {"required": ["srtm"]}]
+        }
     )
 
     builtin: Literal["spso", "jacksboro", "topobathy", "virtual"] | None = Field(
@@ -66,10 +68,16 @@ class TerrainSpec(_Spec):
         description="DEM file (.tif/.tiff GeoTIFF, .npy, .npz); a relative path is relative to "
         "the scenario file's directory.",
     )
+    srtm: Annotated[list[Annotated[str, Field(min_length=1)]], Field(min_length=1)] | None = Field(
+        None,
+        description="SRTM .hgt tiles (N36W085.hgt, ...; relative to the scenario file), "
+        "mosaicked and resampled onto the local grid over 'bounds' through 'origin' "
+        "(both required); voids are filled high and counted.",
+    )
     cell_size: PosNum | None = Field(
         None,
-        description="Grid spacing in metres (file only). Default: the GeoTIFF pixel scale, the "
-        ".npz dx/dy, else 1.",
+        description="Grid spacing in metres (file or srtm). Default: the GeoTIFF pixel scale, "
+        "the .npz dx/dy, else 1; SRTM: 90 m (3 arc-seconds) or 30 m (1 arc-second).",
     )
     origin: XY = Field(
         default_factory=lambda: [0.0, 0.0],
@@ -84,12 +92,20 @@ class TerrainSpec(_Spec):
 
     @model_validator(mode="after")
     def _one_source(self) -> TerrainSpec:
-        if (self.builtin is None) == (self.file is None):
-            raise ValueError("give exactly one of 'builtin' or 'file'")
+        given = [k for k in ("builtin", "file", "srtm") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError("give exactly one of 'builtin', 'file' or 'srtm'")
         if self.builtin is not None:
             extra = sorted({"cell_size", "origin", "key"} & self.model_fields_set)
             if extra:
                 raise ValueError(f"{', '.join(extra)} only apply to a terrain 'file'")
+        if self.srtm is not None:
+            extra = sorted({"origin", "key"} & self.model_fields_set)
+            if extra:
+                raise ValueError(
+                    f"{', '.join(extra)}: not for SRTM tiles (they are placed by the "
+                    "scenario's origin)"
+                )
         return self
 
 
@@ -231,6 +247,27 @@ class UAVSpec(_Spec):
         return value
 
 
+class OriginSpec(_Spec):
+    """Where the local frame sits on Earth (WGS84): needed to export missions."""
+
+    lat: Annotated[float, Field(gt=-90, lt=90, allow_inf_nan=False)] = Field(
+        description="Latitude of the local point (x, y), degrees (WGS84)."
+    )
+    lon: Annotated[float, Field(ge=-180, le=180, allow_inf_nan=False)] = Field(
+        description="Longitude of the local point (x, y), degrees (WGS84)."
+    )
+    alt: Num = Field(0.0, description="Altitude above mean sea level of the local z = 0, m.")
+    x: Num = Field(0.0, description="Local x of the origin, metres.")
+    y: Num = Field(0.0, description="Local y of the origin, metres.")
+    note: str = Field("", description="Where the origin comes from.")
+    accuracy: NonNegNum = Field(
+        0.0,
+        description="At most this far (m) may an exported position lie from where the "
+        "terrain data puts the local point (a lat/lon DEM laid out flat); exports warn "
+        "above 1 m.",
+    )
+
+
 class TaskSpec(_Spec):
     """One UAV's mission."""
 
@@ -325,6 +362,11 @@ class ScenarioSpec(_Spec):
         "with 'tasks'.",
     )
     planning: PlanningSpec = Field(default_factory=lambda: PlanningSpec.model_validate({}))
+    origin: OriginSpec | None = Field(
+        None,
+        description="Geodetic origin (WGS84 lat/lon of a local point, AMSL of z = 0); "
+        "absent = not geo-referenced (mission export then asks for one).",
+    )
 
     @model_validator(mode="before")
     @classmethod

@@ -114,6 +114,8 @@ def spec_from_scenario(scenario: Scenario) -> ScenarioSpec:
         data["altitude"] = {"min": a.min, "max": a.max, "reference": a.reference}
     if terrain is None:
         del data["terrain"]
+    if s.origin is not None:
+        data["origin"] = s.origin.record()
     return _validated(data, s.name)
 
 

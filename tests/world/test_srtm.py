@@ -1,0 +1,132 @@
+"""SRTM .hgt tiles (issue 16): reading (row 0 north, big-endian, voids), mosaics, resampling
+onto the local frame through the scenario's origin (conservative), and scenario files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from uavplan.cli import app
+from uavplan.io.scenario_file import ScenarioFileError, load_scenario
+from uavplan.world.geo import GeoOrigin
+from uavplan.world.srtm import VOID, mosaic, read_hgt, terrain_from_srtm
+from uavplan.world.terrain import TerrainError
+
+N = 1201  # 3 arc-seconds
+
+
+def height(lat: np.ndarray, lon: np.ndarray) -> np.ndarray:
+    """A smooth landscape in metres AMSL: a ramp plus a hill."""
+    return 300.0 + 800.0 * (lat - 36.0) + 200.0 * np.sin(6.0 * lon)
+
+
+def write_tile(folder: Path, lat: int, lon: int, void: tuple[slice, slice] | None = None) -> Path:
+    name = f"{'N' if lat >= 0 else 'S'}{abs(lat):02d}{'E' if lon >= 0 else 'W'}{abs(lon):03d}.hgt"
+    la = lat + 1 - np.arange(N) / (N - 1)  # row 0 is the northern edge
+    lo = lon + np.arange(N) / (N - 1)
+    H = np.round(height(la[:, None], lo[None, :])).astype(">i2")
+    if void is not None:
+        H[void] = VOID
+    path = folder / name
+    H.tofile(path)
+    return path
+
+
+def test_read_hgt_flips_rows_and_marks_voids(tmp_path: Path) -> None:
+    p = write_tile(tmp_path, 36, -85, (slice(0, 10), slice(0, 10)))
+    t = read_hgt(p)
+    assert (t.lat, t.lon, t.n) == (36, -85, N)
+    assert t.heights[0, 0] == pytest.approx(height(np.array(36.0), np.array(-85.0)), abs=0.5)
+    assert np.isnan(t.heights[-10:, :10]).all()  # the void was at the north-west corner
+    assert np.isfinite(t.heights[:-10]).all()
+
+
+def test_bad_tiles_are_refused_with_the_file_named(tmp_path: Path) -> None:
+    bad = tmp_path / "N36W085.hgt"
+    bad.write_bytes(b"\0" * 1000)
+    with pytest.raises(TerrainError, match=r"N36W085\.hgt.*1000 bytes"):
+        read_hgt(bad)
+    other = tmp_path / "tile.hgt"
+    other.write_bytes(b"\0" * (2 * N * N))
+    with pytest.raises(TerrainError, match="not an SRTM tile name"):
+        read_hgt(other)
+
+
+def test_mosaic_shares_the_edge_and_fills_missing_tiles_with_voids(tmp_path: Path) -> None:
+    a = read_hgt(write_tile(tmp_path, 36, -85))
+    b = read_hgt(write_tile(tmp_path, 37, -84))
+    lats, lons, H = mosaic([a, b])
+    assert H.shape == (2 * (N - 1) + 1, 2 * (N - 1) + 1)
+    assert lats[0] == 36 and lats[-1] == pytest.approx(38) and lons[0] == -85
+    assert np.isnan(H[N + 5, 5]) and np.isnan(H[5, N + 5])  # N37W085 and N36W084 missing
+    assert H[5, 5] == a.heights[5, 5]
+
+
+def test_resampled_terrain_is_conservative_and_fills_voids_high(tmp_path: Path) -> None:
+    west = write_tile(tmp_path, 36, -85, (slice(600, 620), slice(1100, 1120)))
+    east = write_tile(tmp_path, 36, -84)
+    origin = GeoOrigin(36.5, -84.0, 100.0)  # on the tiles' shared meridian
+    terrain, filled = terrain_from_srtm([west, east], origin, (-20e3, 20e3, -15e3, 15e3))
+    assert terrain.dx == 90.0 and filled > 0
+    ys = terrain.y0 + terrain.dy * np.arange(terrain.shape[0])
+    xs = terrain.x0 + terrain.dx * np.arange(terrain.shape[1])
+    Y, X = np.meshgrid(ys, xs, indexing="ij")
+    G = origin.to_geodetic(np.column_stack([X.ravel(), Y.ravel()]))
+    truth = height(G[:, 0], G[:, 1]).reshape(terrain.shape) - origin.alt
+    Z = np.asarray(terrain.heights)
+    # the void: rows 600-620 from the north, columns 1100-1120 of N36W085 (and one sample round)
+    la, lo = G[:, 0].reshape(Z.shape), G[:, 1].reshape(Z.shape)
+    in_void = (la > 37 - 621 / 1200) & (la < 37 - 599 / 1200)
+    in_void &= (lo > -85 + 1099 / 1200) & (lo < -85 + 1121 / 1200)
+    assert in_void.sum() > 0 and np.isfinite(Z).all()
+    # never below the landscape at a node outside the void (int16 rounding: 0.5 m), and not
+    # far above it (one source cell's rise at most)
+    assert (Z[~in_void] >= truth[~in_void] - 0.5 - 1e-9).all()
+    assert (Z - truth)[~in_void].max() < 5.0
+    # in the void: the highest valid height around, so never far below the landscape there
+    assert (np.abs(Z[in_void] - truth[in_void]) < 20.0).all()
+    assert terrain.georef["voids_filled"] == filled
+
+
+def test_a_map_beyond_the_tiles_names_the_missing_tile(tmp_path: Path) -> None:
+    west = write_tile(tmp_path, 36, -85)
+    with pytest.raises(TerrainError, match=r"add N36W084\.hgt"):
+        terrain_from_srtm([west], GeoOrigin(36.5, -84.2), (-5e3, 30e3, -5e3, 5e3))
+
+
+def _scenario(tmp_path: Path, **over: object) -> Path:
+    write_tile(tmp_path, 36, -85)
+    data = {
+        "name": "srtm-test",
+        "bounds": {"lower": [-5000, -5000, 0], "upper": [5000, 5000, 3000]},
+        "terrain": {"srtm": ["N36W085.hgt"]},
+        "origin": {"lat": 36.5, "lon": -84.5, "alt": 0},
+        "tasks": [{"start": [-4000, -4000, 2000], "goal": [4000, 4000, 2000]}],
+    }
+    data.update(over)
+    path = tmp_path / "s.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def test_a_scenario_file_on_srtm_tiles(tmp_path: Path) -> None:
+    sc = load_scenario(_scenario(tmp_path))
+    assert sc.terrain is not None and sc.origin is not None
+    assert sc.terrain.height(0.0, 0.0) == pytest.approx(
+        height(np.array(36.5), np.array(-84.5)), abs=2
+    )
+
+
+def test_srtm_needs_an_origin_said_clearly(tmp_path: Path) -> None:
+    path = _scenario(tmp_path, origin=None)
+    with pytest.raises(ScenarioFileError, match=r"terrain\.srtm.*origin"):
+        load_scenario(path)
+    r = CliRunner().invoke(app, ["scenario", "check", str(path)])
+    assert r.exit_code == 2 and "origin" in r.output and "Traceback" not in r.output
+    path = _scenario(tmp_path, terrain={"srtm": ["N99W085.hgt"]})
+    with pytest.raises(ScenarioFileError, match="not found"):
+        load_scenario(path)
