@@ -18,13 +18,18 @@ if TYPE_CHECKING:
 
 
 def write_plan(plan: FleetPlan, out: str | Path, figure: bool = True) -> list[Path]:
-    """Write ``out/plan.json`` (atomically) and ``out/plan.png``; returns the paths."""
-    from uavplan.io.plan_file import write_plan_file
+    """Write ``out/plan.json`` (atomically), ``out/plan.png`` and ``out/plan.html`` (the
+    viewer page); returns the paths."""
+    from uavplan.io.atomic import write_text_atomic
+    from uavplan.io.plan_file import parse_plan, plan_document, write_plan_file
+    from uavplan.viz.viewer import viewer_html
 
     d = Path(out)
     d.mkdir(parents=True, exist_ok=True)
     written = [write_plan_file(plan, d / "plan.json")]
     if figure:
+        page = viewer_html(parse_plan(plan_document(plan)), plan.scenario)
+        written.append(write_text_atomic(d / "plan.html", page))
         from uavplan.viz.figures import save_plan_figure
 
         title = f"{plan.scenario.name}: {plan.algorithm}, seed {plan.seed}"
@@ -181,7 +186,8 @@ def _summary(plan: Any, elapsed: float, out_dir: Path) -> None:
     )
     evals = sum(int(r.evaluations) for r in plan.results)
     out.print(
-        f"wrote {out_dir / 'plan.json'} and {out_dir / 'plan.png'} ({evals} cost evaluations, "
+        f"wrote {out_dir / 'plan.json'}, {out_dir / 'plan.png'} and {out_dir / 'plan.html'} "
+        f"({evals} cost evaluations, "
         f"{elapsed:.1f} s)"
     )
     if not plan.feasible:
