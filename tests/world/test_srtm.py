@@ -3,6 +3,7 @@ onto the local frame through the scenario's origin (conservative), and scenario 
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +14,7 @@ from typer.testing import CliRunner
 from uavplan.cli import app
 from uavplan.io.scenario_file import ScenarioFileError, load_scenario
 from uavplan.world.geo import GeoOrigin
-from uavplan.world.srtm import VOID, mosaic, read_hgt, terrain_from_srtm
+from uavplan.world.srtm import VOID, mosaic, points_over_voids, read_hgt, terrain_from_srtm
 from uavplan.world.terrain import TerrainError
 
 N = 1201  # 3 arc-seconds
@@ -90,6 +91,12 @@ def test_resampled_terrain_is_conservative_and_fills_voids_high(tmp_path: Path) 
     # in the void: the highest valid height around, so never far below the landscape there
     assert (np.abs(Z[in_void] - truth[in_void]) < 20.0).all()
     assert terrain.georef["voids_filled"] == filled
+    inner = (la > 37 - 619 / 1200) & (la < 37 - 600 / 1200)
+    inner &= (lo > -85 + 1100 / 1200) & (lo < -85 + 1119 / 1200)
+    over = np.column_stack([X[inner], Y[inner]])
+    assert len(over) > 0 and points_over_voids(terrain, over) == len(over)
+    assert points_over_voids(terrain, np.column_stack([X[~in_void], Y[~in_void]])[::7][:50]) < 50
+    assert points_over_voids(terrain, np.array([[-19e3, -14e3]])) == 0
 
 
 def test_a_map_beyond_the_tiles_names_the_missing_tile(tmp_path: Path) -> None:
@@ -130,3 +137,43 @@ def test_srtm_needs_an_origin_said_clearly(tmp_path: Path) -> None:
     path = _scenario(tmp_path, terrain={"srtm": ["N99W085.hgt"]})
     with pytest.raises(ScenarioFileError, match="not found"):
         load_scenario(path)
+
+
+def _feature(kind: str, coordinates: object) -> dict[str, object]:
+    return {
+        "type": "Feature",
+        "properties": {},
+        "geometry": {"type": kind, "coordinates": coordinates},
+    }
+
+
+def test_tasks_in_wgs84_and_geojson_no_fly_zones(tmp_path: Path) -> None:
+    """Starts and goals as lat/lon/alt, and no-fly polygons from a GeoJSON file, through the
+    origin; a saved copy elsewhere still finds its files."""
+    o = GeoOrigin(36.5, -84.5, 0.0)
+    ring = o.to_geodetic([[-1000, -1000], [1000, -1000], [1000, 1000], [-1000, 1000]])
+    coords = [[float(g[1]), float(g[0])] for g in [*ring, ring[0]]]
+    gj = {"type": "FeatureCollection", "features": [_feature("Polygon", [coords])]}
+    (tmp_path / "zones.geojson").write_text(json.dumps(gj))
+    start = o.to_geodetic([[-4000, -4000, 2000]])[0].tolist()
+    path = _scenario(
+        tmp_path, no_fly=["zones.geojson"],
+        tasks=[{"frame": "wgs84", "start": start, "goal": [36.53, -84.47, 2100]}],
+    )  # fmt: skip
+    sc = load_scenario(path)
+    assert sc.tasks[0].start == pytest.approx((-4000, -4000, 2000), abs=1e-6)
+    square = np.array([[-1000, -1000], [1000, -1000], [1000, 1000], [-1000, 1000]])
+    assert np.asarray(sc.polygons[0].vertices) == pytest.approx(square, abs=1e-6)
+    from uavplan.io.scenario_file import save_scenario
+
+    (tmp_path / "elsewhere").mkdir()
+    copy = save_scenario(sc, tmp_path / "elsewhere" / "copy.yaml")
+    again = load_scenario(copy)
+    assert len(again.polygons) == 1 and again.terrain is not None
+    bad = {"type": "FeatureCollection", "features": [_feature("Point", [0, 0])]}
+    (tmp_path / "bad.geojson").write_text(json.dumps(bad))
+    with pytest.raises(ScenarioFileError, match=r"features\[0\] is 'Point'"):
+        load_scenario(_scenario(tmp_path, no_fly=["bad.geojson"]))
+    with pytest.raises(ScenarioFileError, match="wgs84 needs the scenario's origin"):
+        task = {"frame": "wgs84", "start": [36.5, -84.5, 1], "goal": [36.6, -84.5, 1]}
+        load_scenario(_scenario(tmp_path, origin=None, terrain=None, tasks=[task]))

@@ -184,6 +184,16 @@ def _summary(plan: Any, elapsed: float, out_dir: Path) -> None:
         f"polylines {kinds['polyline']}); flown length {flown:.1f} m, "
         f"{flown / planned if planned > 0 else 1.0:.3f} x planned"
     )
+    terrain = plan.scenario.terrain
+    if terrain is not None and terrain.georef.get("voids_filled"):
+        from uavplan.world.srtm import points_over_voids
+
+        for r in plan.results:
+            k = points_over_voids(terrain, r.flown_trajectory()[0])
+            if k:
+                err.print(f"WARNING: {r.uav_id}: {k} points of its flown trajectory are over "
+                          "SRTM voids filled with the highest height nearby (the terrain there "
+                          "is a guess, not a measurement)")  # fmt: skip
     evals = sum(int(r.evaluations) for r in plan.results)
     out.print(
         f"wrote {out_dir / 'plan.json'}, {out_dir / 'plan.png'} and {out_dir / 'plan.html'} "

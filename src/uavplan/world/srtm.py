@@ -156,8 +156,23 @@ def terrain_from_srtm(
     with warnings.catch_warnings():  # all four corners void: NaN, filled below
         warnings.simplefilter("ignore", RuntimeWarning)
         Z = np.nanmax(corners, axis=0).reshape(ny, nx) - origin.alt
+    void = np.isnan(corners).any(axis=0).reshape(ny, nx)  # a node that used a void sample
     filled = _fill_high(Z)
     names = [Path(p).name for p in paths]
-    georef = {"srtm": names, "origin": origin.record(), "voids_filled": filled,
+    georef = {"srtm": names, "origin": origin.record(), "voids_filled": filled, "void_mask": void,
               "resampling": "max of the four source samples (conservative)"}  # fmt: skip
     return Terrain(Z, xmin, ymin, d, d, "+".join(names), georef), filled
+
+
+def points_over_voids(terrain: Terrain, points: FloatArray) -> int:
+    """How many of ``points`` (n, >=2) lie in a terrain cell with a corner filled over an SRTM
+    void (0 for a terrain without voids)."""
+    mask = terrain.georef.get("void_mask")
+    if mask is None or not np.any(mask):
+        return 0
+    P = np.asarray(points, dtype=np.float64)
+    ny, nx = mask.shape
+    j = np.clip(np.floor((P[:, 0] - terrain.x0) / terrain.dx).astype(int), 0, nx - 2)
+    i = np.clip(np.floor((P[:, 1] - terrain.y0) / terrain.dy).astype(int), 0, ny - 2)
+    hit = mask[i, j] | mask[i + 1, j] | mask[i, j + 1] | mask[i + 1, j + 1]
+    return int(hit.sum())

@@ -5,6 +5,7 @@ obstacles, tasks (generated for a ``fleet``), with every problem found.
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import os
 from functools import cache
@@ -79,6 +80,52 @@ def _load_srtm(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Terrai
         problems.add(("terrain", "srtm"), f"cannot read the SRTM tiles: {exc}")
         return None
     return terrain
+
+
+def _no_fly_polygons(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> list[Polygon]:
+    """The ``no_fly`` GeoJSON files' polygons in the local frame (through the origin)."""
+    if not spec.no_fly:
+        return []
+    if spec.origin is None:
+        problems.add(("no_fly",), "GeoJSON no-fly zones need the scenario's origin (lat, lon)")
+        return []
+    geo = GeoOrigin(**spec.origin.model_dump())
+    out: list[Polygon] = []
+    for k, name in enumerate(spec.no_fly):
+        path = Path(name).expanduser()
+        path = Path(os.path.abspath(path if path.is_absolute() else base_dir / path))
+        try:
+            doc = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            problems.add(("no_fly", k), f"cannot read GeoJSON {path}: {exc}")
+            continue
+        features = None
+        if isinstance(doc, dict):
+            features = [doc] if doc.get("type") == "Feature" else doc.get("features")
+        if not isinstance(features, list):
+            problems.add(("no_fly", k), f"{path}: not a GeoJSON FeatureCollection or Feature")
+            continue
+        for j, f in enumerate(features):
+            g = f.get("geometry") if isinstance(f, dict) else None
+            kind = g.get("type") if isinstance(g, dict) else None
+            if kind not in ("Polygon", "MultiPolygon"):
+                problems.add(("no_fly", k), f"{path}: features[{j}] is {kind!r}, not a Polygon "
+                             "or MultiPolygon")  # fmt: skip
+                continue
+            assert isinstance(g, dict)
+            polys = [g["coordinates"]] if kind == "Polygon" else g["coordinates"]
+            for rings in polys:
+                try:
+                    ring = np.asarray(rings[0], dtype=np.float64)[:, :2]  # [lon, lat]
+                    if len(ring) > 1 and (ring[0] == ring[-1]).all():
+                        ring = ring[:-1]
+                    local = geo.to_local(
+                        np.column_stack([ring[:, 1], ring[:, 0], np.zeros(len(ring))])
+                    )
+                    out.append(Polygon(tuple((float(x), float(y)) for x, y, _ in local)))
+                except (ValueError, TypeError, IndexError, KeyError) as exc:
+                    problems.add(("no_fly", k), f"{path}: features[{j}]: {exc}")
+    return out
 
 
 def _load_terrain(ts: TerrainSpec, problems: Problems, base_dir: Path) -> Terrain | None:
@@ -255,6 +302,7 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
             polygons.append(Polygon(tuple((v[0], v[1]) for v in pg.vertices), pg.margin))
         except ValueError as exc:
             problems.add(("polygons", i, "vertices"), str(exc))
+    polygons += _no_fly_polygons(spec, problems, base_dir)
 
     dangers: list[DangerArea] = []
     for i, d in enumerate(spec.danger_areas):
@@ -295,6 +343,7 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
             problems.add(("moving_obstacles", i), str(exc), NO_VALUE)
 
     # ---- tasks
+    geo = None if spec.origin is None else GeoOrigin(**spec.origin.model_dump())
     tasks: list[Task] = []
     checks: list[tuple[int, str, tuple[float, ...]]] = []  # (spec index, which, point)
     seen: dict[str, int] = {}
@@ -310,6 +359,16 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
         points: dict[str, tuple[float, ...]] = {}
         for which in ("start", "goal"):
             v = [float(c) for c in getattr(t, which)]
+            if t.frame == "wgs84":
+                if geo is None:
+                    problems.add(("tasks", i, which), "frame: wgs84 needs the scenario's origin")
+                    continue
+                if not (-90 < v[0] < 90 and -180 <= v[1] <= 180):
+                    problems.add(("tasks", i, which), "is not [lat, lon(, alt)] in degrees", v)
+                    continue
+                x, y, _ = geo.to_local([[v[0], v[1], geo.alt]])[0]
+                z = [] if len(v) < 3 else [v[2] if spec.task_z == "ground" else v[2] - geo.alt]
+                v = [float(x), float(y), *z]
             if dim is not None and len(v) != dim:
                 problems.add(
                     ("tasks", i, which),

@@ -277,6 +277,12 @@ class TaskSpec(_Spec):
     start: Point = Field(description="Start [x, y] or [x, y, z], metres (z: see task_z).")
     goal: Point = Field(description="Goal, same form as start, metres.")
     start_time: NonNegNum = Field(0.0, description="Departure time, seconds.")
+    frame: Literal["local", "wgs84"] = Field(
+        "local",
+        description="local: start and goal in metres; wgs84: [lat, lon] or [lat, lon, alt] "
+        "(degrees; alt AMSL, or above ground with task_z: ground), converted through the "
+        "scenario's origin (required).",
+    )
 
 
 class PlanningSpec(_Spec):
@@ -362,6 +368,12 @@ class ScenarioSpec(_Spec):
         "with 'tasks'.",
     )
     planning: PlanningSpec = Field(default_factory=lambda: PlanningSpec.model_validate({}))
+    no_fly: list[Annotated[str, Field(min_length=1)]] = Field(
+        default_factory=list,
+        description="GeoJSON files (RFC 7946, relative to the scenario file) whose Polygon and "
+        "MultiPolygon features are no-fly polygons (exterior rings; a hole is no-fly too); "
+        "needs 'origin'.",
+    )
     origin: OriginSpec | None = Field(
         None,
         description="Geodetic origin (WGS84 lat/lon of a local point, AMSL of z = 0); "

@@ -174,18 +174,28 @@ def dumps_scenario(data: Mapping[str, Any], fmt: Literal["yaml", "json"]) -> str
     return _HEADER + body
 
 
-def _rebase_terrain_file(data: dict[str, Any], from_dir: Path, to_dir: Path) -> None:
-    terrain = data.get("terrain")
-    if not isinstance(terrain, dict) or not terrain.get("file"):
-        return
-    f = Path(terrain["file"]).expanduser()
+def _rebase(name: str, from_dir: Path, to_dir: Path) -> str:
+    f = Path(name).expanduser()
     if f.is_absolute():
-        return
+        return name
     target = (from_dir / f).resolve()
     try:
-        terrain["file"] = Path(os.path.relpath(target, to_dir.resolve())).as_posix()
+        return Path(os.path.relpath(target, to_dir.resolve())).as_posix()
     except ValueError:  # another drive (Windows)
-        terrain["file"] = str(target)
+        return str(target)
+
+
+def _rebase_terrain_file(data: dict[str, Any], from_dir: Path, to_dir: Path) -> None:
+    """The files a scenario names (DEM, SRTM tiles, GeoJSON no-fly zones), relative to
+    ``from_dir``, made relative to ``to_dir`` where the scenario is written."""
+    terrain = data.get("terrain")
+    if isinstance(terrain, dict):
+        if terrain.get("file"):
+            terrain["file"] = _rebase(terrain["file"], from_dir, to_dir)
+        if terrain.get("srtm"):
+            terrain["srtm"] = [_rebase(n, from_dir, to_dir) for n in terrain["srtm"]]
+    if data.get("no_fly"):
+        data["no_fly"] = [_rebase(n, from_dir, to_dir) for n in data["no_fly"]]
 
 
 def _atomic_write(path: Path, text: str) -> None:
