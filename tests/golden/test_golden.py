@@ -30,3 +30,10 @@ def test_evaluation_counts_allow_a_tie_flipped_by_an_ulp_and_nothing_more() -> N
     assert differences(want, {"run": {"evaluations": 20366, "iterations": 30}}) == []
     assert differences(want, {"run": {"evaluations": 20300, "iterations": 30}})
     assert differences(want, {"run": {"evaluations": 20366, "iterations": 31}})
+
+
+def test_evaluation_histories_take_the_same_tolerance_and_costs_do_not() -> None:
+    want = {"run": {"evaluations_history": [17489.0], "history": [1.0]}}
+    assert differences(want, {"run": {"evaluations_history": [17495.0], "history": [1.0]}}) == []
+    assert differences(want, {"run": {"evaluations_history": [17600.0], "history": [1.0]}})
+    assert differences(want, {"run": {"evaluations_history": [17489.0], "history": [1.0001]}})

@@ -177,3 +177,38 @@ def test_tasks_in_wgs84_and_geojson_no_fly_zones(tmp_path: Path) -> None:
     with pytest.raises(ScenarioFileError, match="wgs84 needs the scenario's origin"):
         task = {"frame": "wgs84", "start": [36.5, -84.5, 1], "goal": [36.6, -84.5, 1]}
         load_scenario(_scenario(tmp_path, origin=None, terrain=None, tasks=[task]))
+
+
+def _geotiff(path: Path, epsg: int, geographic: bool = False) -> None:
+    import tifffile
+
+    H = np.add.outer(np.arange(200.0), np.arange(300.0)).astype(np.float32)
+    key = 2048 if geographic else 3072
+    keys = (1, 1, 0, 1, key, 0, 1, epsg)
+    scale = (0.001, 0.001, 0.0) if geographic else (30.0, 30.0, 0.0)
+    tie = (0, 0, 0, -84.5, 36.6, 0) if geographic else (0, 0, 0, 500000.0, 4000000.0, 0)
+    tifffile.imwrite(path, H, extratags=[(33550, "d", 3, scale, False),
+                                         (33922, "d", 6, tie, False),
+                                         (34735, "H", len(keys), keys, False)])  # fmt: skip
+
+
+def test_a_projected_geotiff_places_itself_on_earth(tmp_path: Path) -> None:
+    """UTM 17N (EPSG:32617): the origin comes from the file; its error (the projection's scale
+    factor and grid convergence over a 9 km x 6 km DEM) is measured, metres, not kilometres."""
+    from pyproj import Transformer
+
+    _geotiff(tmp_path / "dem.tif", 32617)
+    data = {"name": "utm", "terrain": {"file": "dem.tif"},
+            "tasks": [{"start": [100, 100, 500], "goal": [8000, 5000, 600]}]}  # fmt: skip
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump(data))
+    sc = load_scenario(tmp_path / "s.yaml")
+    o = sc.origin
+    assert o is not None and "EPSG:32617" in o.note and 0 < o.accuracy < 10
+    centre = Transformer.from_crs(32617, 4326, always_xy=True).transform(
+        500000 + 150 * 30.0, 4000000 - 100 * 30.0)  # fmt: skip
+    assert (o.lon, o.lat) == pytest.approx(centre, abs=1e-9)
+    _geotiff(tmp_path / "geo.tif", 4326, geographic=True)
+    data["terrain"] = {"file": "geo.tif"}
+    (tmp_path / "g.yaml").write_text(yaml.safe_dump(data))
+    with pytest.raises(ScenarioFileError, match="geographic coordinates"):
+        load_scenario(tmp_path / "g.yaml")

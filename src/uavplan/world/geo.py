@@ -124,3 +124,43 @@ class GeoOrigin:
             rec["lat"], rec["lon"], rec.get("alt", 0.0), rec.get("x", 0.0), rec.get("y", 0.0),
             str(rec.get("note", "")), rec.get("accuracy", 0.0),
         )  # fmt: skip
+
+
+def origin_for_projected_grid(
+    epsg: int,
+    tiepoint: list[float],
+    pixel_scale: list[float],
+    shape: tuple[int, int],
+    local_x0: float,
+    local_y0: float,
+    name: str,
+) -> GeoOrigin:
+    """The origin of a DEM in a projected CRS (a GeoTIFF's EPSG code, tie point and pixel
+    scale; ``shape`` its rows and columns, row 0 north), placed at its centre node, whose local
+    position is ``(local_x0 + c * sx, local_y0 + r * sy)`` with the rows flipped south first.
+    The DEM's metres are the projection's (a UTM metre is 0.9996 to 1.001 true metres) and its
+    axes follow the projection's grid north, so ``accuracy`` is the largest distance, over the
+    corners and edge midpoints, between where the DEM puts a node and where the origin does."""
+    from pyproj import CRS, Geod, Transformer
+
+    rows, cols = shape
+    sx, sy = float(pixel_scale[0]), float(pixel_scale[1])
+    ti, tj, _, X, Y = (float(v) for v in tiepoint[:5])
+
+    def crs_xy(c: np.ndarray, r_local: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        r = rows - 1 - r_local  # GeoTIFF row
+        return X + (c - ti + 0.5) * sx, Y - (r - tj + 0.5) * sy
+
+    to_wgs = Transformer.from_crs(CRS.from_epsg(epsg), CRS.from_epsg(4326), always_xy=True)
+    cc, rc = np.array([(cols - 1) / 2]), np.array([(rows - 1) / 2])
+    lon, lat = to_wgs.transform(*crs_xy(cc, rc))
+    base = GeoOrigin(float(lat[0]), float(lon[0]), 0.0, local_x0 + cc[0] * sx,
+                     local_y0 + rc[0] * sy)  # fmt: skip
+    c = np.array([0, cols - 1, 0, cols - 1, (cols - 1) / 2, (cols - 1) / 2, 0, cols - 1])
+    r = np.array([0, 0, rows - 1, rows - 1, 0, rows - 1, (rows - 1) / 2, (rows - 1) / 2])
+    tlon, tlat = to_wgs.transform(*crs_xy(c, r))
+    G = base.to_geodetic(np.column_stack([local_x0 + c * sx, local_y0 + r * sy]))
+    _, _, miss = Geod(ellps="WGS84").inv(tlon, tlat, G[:, 1], G[:, 0])
+    return GeoOrigin(base.lat, base.lon, 0.0, base.x, base.y,
+                     f"the DEM's centre ({name}, EPSG:{epsg}; heights AMSL)",
+                     float(np.ceil(np.max(miss) * 100) / 100))  # fmt: skip

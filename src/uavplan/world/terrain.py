@@ -358,6 +358,23 @@ def _read_tiff(path: Path) -> tuple[np.ndarray, dict[int, Any]]:
     return np.asarray(arr, dtype=np.float64), tags
 
 
+def _geokey_epsg(keys: Any) -> tuple[int, bool] | None:
+    """The EPSG code in a GeoKeyDirectory (tag 34735) and whether it is geographic: the
+    ProjectedCSTypeGeoKey (3072) or else the GeographicTypeGeoKey (2048); None without one
+    (or a user-defined 32767)."""
+    if keys is None:
+        return None
+    k = [int(v) for v in keys]
+    found: dict[int, int] = {}
+    for i in range(4, 4 + 4 * k[3] if len(k) >= 4 else 4, 4):
+        if i + 3 < len(k) and k[i + 1] == 0:  # the value is in the directory itself
+            found[k[i]] = k[i + 3]
+    for key, geographic in ((3072, False), (2048, True)):
+        if key in found and 0 < found[key] < 32767:
+            return found[key], geographic
+    return None
+
+
 def _load_geotiff(path: Path, cell_size: float | None, origin: tuple[float, float]) -> Terrain:
     arr, tags = _read_tiff(path)
     scale = tags.get(33550)
@@ -370,6 +387,12 @@ def _load_geotiff(path: Path, cell_size: float | None, origin: tuple[float, floa
         georef["tiepoint"] = [float(t) for t in tie]
     if 34737 in tags:
         georef["crs"] = str(tags[34737]).split("|")[0]
+    epsg = _geokey_epsg(tags.get(34735))
+    if epsg is not None:
+        georef["epsg"], georef["geographic"] = epsg
+    if scale is not None:
+        georef["pixel_scale"] = [float(v) for v in scale[:2]]
+    georef["shape"] = list(arr.shape)
     arr = arr[::-1].copy()  # GeoTIFF row 0 is north
     return Terrain(arr, origin[0], origin[1], dx, dy, path.name, georef)
 

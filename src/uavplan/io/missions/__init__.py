@@ -79,10 +79,14 @@ class Mission:
         origin = self.plan.origin or (self.scenario.origin if self.scenario else None)
         if origin is None:
             name = self.plan.scenario or "the plan's scenario"
+            t = self.scenario.terrain if self.scenario is not None else None
+            dem = ""
+            if t is not None and "epsg" not in t.georef and "srtm" not in t.georef:
+                dem = f" (its DEM {t.name!r} has no georeference of its own)"
             raise ExportError(
-                f"{self.plan.source}: scenario {name!r} has no geodetic origin; add one to the "
-                "scenario file (origin: {lat: DEG, lon: DEG, alt: M_AMSL_OF_Z0}), plan again, "
-                "or pass --origin LAT,LON,ALT"
+                f"{self.plan.source}: scenario {name!r} has no geodetic origin{dem}; add one to "
+                "the scenario file (origin: {lat: DEG, lon: DEG, alt: M_AMSL_OF_Z0}), plan "
+                "again, or pass --origin LAT,LON,ALT"
             )
         return origin
 

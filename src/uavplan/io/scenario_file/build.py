@@ -36,7 +36,7 @@ from uavplan.world import (
     UncertainArea,
 )
 from uavplan.world.fleet_tasks import fleet_layout, layer_record
-from uavplan.world.geo import GeoOrigin
+from uavplan.world.geo import GeoOrigin, origin_for_projected_grid
 from uavplan.world.srtm import terrain_from_srtm
 from uavplan.world.terrain import TerrainError
 
@@ -128,6 +128,33 @@ def _no_fly_polygons(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> 
     return out
 
 
+def _dem_origin(spec: ScenarioSpec, terrain: Terrain, problems: Problems) -> GeoOrigin | None:
+    """The origin a georeferenced GeoTIFF gives when the scenario names none (projected CRS:
+    its centre, with the layout's error as ``accuracy``); a geographic one without
+    ``cell_size`` is refused (its pixel scale is in degrees, not metres)."""
+    g = terrain.georef
+    if "epsg" not in g:
+        return None
+    if g.get("geographic"):
+        if spec.terrain is not None and spec.terrain.cell_size is None:
+            why = (f"{g.get('file')} is in geographic coordinates (EPSG:{g['epsg']}, degrees): "
+                   "reproject it to a projected CRS (e.g. gdalwarp -t_srs EPSG:326NN) or use "
+                   "SRTM tiles (terrain: srtm)")  # fmt: skip
+            problems.add(("terrain", "file"), why)
+        return None
+    if spec.origin is not None or "tiepoint" not in g or "pixel_scale" not in g:
+        return None
+    if spec.terrain is not None and spec.terrain.cell_size is not None:
+        return None  # the user's own spacing: the projection's metres no longer apply
+    try:
+        return origin_for_projected_grid(int(g["epsg"]), g["tiepoint"], g["pixel_scale"],
+                                         tuple(g["shape"]), terrain.x0, terrain.y0,
+                                         str(g.get("file")))  # fmt: skip
+    except Exception as exc:  # an EPSG code pyproj does not know, say
+        problems.add(("terrain", "file"), f"cannot place the DEM on Earth: {exc}")
+        return None
+
+
 def _load_terrain(ts: TerrainSpec, problems: Problems, base_dir: Path) -> Terrain | None:
     if ts.builtin is not None:
         try:
@@ -178,12 +205,15 @@ def _dim_reason(spec: ScenarioSpec, dim: int) -> str:
 def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Scenario:
     terrain: Terrain | None = None
     terrain_failed = False
+    dem_origin: GeoOrigin | None = None
     if spec.terrain is not None:
         if spec.terrain.srtm is not None:
             terrain = _load_srtm(spec, problems, base_dir)
         else:
             terrain = _load_terrain(spec.terrain, problems, base_dir)
         terrain_failed = terrain is None
+        if terrain is not None and spec.terrain.file is not None:
+            dem_origin = _dem_origin(spec, terrain, problems)
 
     # ---- dimension
     dim: int | None
@@ -414,7 +444,7 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
             cost=spec.planning.cost or ("length2d" if dim == 2 else "ppswarm"),
             n_waypoints=spec.planning.n_waypoints,
             description=spec.description,
-            origin=None if spec.origin is None else GeoOrigin(**spec.origin.model_dump()),
+            origin=GeoOrigin(**spec.origin.model_dump()) if spec.origin is not None else dem_origin,
             metadata={
                 "source": problems.source,
                 "base_dir": str(base_dir),
