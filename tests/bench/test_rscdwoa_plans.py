@@ -4,9 +4,10 @@ curvature profile."""
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 
-from uavplan.bench.papers.rscdwoa import PROFILE, curvature_profile, deviation, wilson
+from uavplan.bench.papers.rscdwoa import PROFILE, _uav_frame, curvature_profile, deviation, wilson
 
 
 def test_wilson_interval_brackets_the_rate() -> None:
@@ -38,3 +39,16 @@ def test_deviation_from_a_reference_polyline() -> None:
     d = deviation(pts, np.array([0.0, 20.0]), ref)
     assert d.shape == (20,)
     np.testing.assert_allclose(d, 30.0)
+
+
+def test_per_uav_columns_missing_from_older_runs_are_nan() -> None:
+    """Runs stored before a per-UAV column existed (None or NaN in the merged table) give NaN
+    for their UAVs instead of breaking the report."""
+    df = pd.DataFrame({
+        "status": ["ok", "ok", "ok"], "algorithm": ["apf", "apf", "ppswarm"], "run_index": [0, 1, 0],
+        "uav_uav": [np.array(["a", "b"]), np.array(["a", "b"]), np.array(["a", "b"])],
+        "uav_plan_s": [None, np.nan, np.array([1.0, 2.0])],
+    })  # fmt: skip
+    u = _uav_frame(df)
+    assert len(u) == 6
+    assert u["plan_s"].isna().sum() == 4 and u["plan_s"].dropna().tolist() == [1.0, 2.0]

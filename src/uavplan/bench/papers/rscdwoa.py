@@ -235,18 +235,15 @@ def wilson(k: int, n: int, z: float = 1.959964) -> tuple[float, float]:
 
 
 def _uav_frame(df: pd.DataFrame) -> pd.DataFrame:
+    """One row per UAV of every finished run; a per-UAV column that a run does not have (runs
+    made before the column existed) is NaN for its UAVs."""
     ok = df[df["status"] == "ok"]
     rows = []
     for _, r in ok.iterrows():
+        cols = {k[4:]: r[k] for k in r.index if k.startswith("uav_") and k != "uav_uav"}
         for i, u in enumerate(r["uav_uav"]):
-            rows.append(
-                {
-                    "algorithm": r["algorithm"],
-                    "run": r["run_index"],
-                    "uav": u,
-                    **{k[4:]: r[k][i] for k in r.index if k.startswith("uav_") and k != "uav_uav"},
-                }
-            )
+            per_uav = {k: (v[i] if hasattr(v, "__len__") else np.nan) for k, v in cols.items()}
+            rows.append({"algorithm": r["algorithm"], "run": r["run_index"], "uav": u, **per_uav})
     return pd.DataFrame(rows)
 
 
