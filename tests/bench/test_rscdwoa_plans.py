@@ -45,7 +45,8 @@ def test_per_uav_columns_missing_from_older_runs_are_nan() -> None:
     """Runs stored before a per-UAV column existed (None or NaN in the merged table) give NaN
     for their UAVs instead of breaking the report."""
     df = pd.DataFrame({
-        "status": ["ok", "ok", "ok"], "algorithm": ["apf", "apf", "ppswarm"], "run_index": [0, 1, 0],
+        "status": ["ok", "ok", "ok"], "algorithm": ["apf", "apf", "ppswarm"],
+        "run_index": [0, 1, 0],
         "uav_uav": [np.array(["a", "b"]), np.array(["a", "b"]), np.array(["a", "b"])],
         "uav_plan_s": [None, np.nan, np.array([1.0, 2.0])],
     })  # fmt: skip
