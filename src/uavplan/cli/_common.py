@@ -1,11 +1,15 @@
-"""What the command groups share: error exits without a traceback, ``--param`` parsing."""
+"""What the command groups share: error exits without a traceback, ``--param`` parsing, loading
+a scenario named on the command line."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import typer
 from rich.console import Console
+
+if TYPE_CHECKING:
+    from uavplan.world.scenario import Scenario
 
 #: messages stay one line each (no wrapping at the terminal's width), also when piped
 err = Console(stderr=True, soft_wrap=True, highlight=False)
@@ -36,3 +40,22 @@ def parse_params(params: list[str]) -> dict[str, Any]:
             value = v.lower() == "true"
         parsed[k.strip()] = value
     return parsed
+
+
+def load_world(name: str, quiet: bool = False) -> Scenario | None:
+    """The scenario a command names (built-in, generated or file); its problems end the command
+    with exit code 2, or, with ``quiet``, give None (a plan's own scenario name that is not a
+    built-in one)."""
+    from uavplan.io.scenario_file import ScenarioFileError
+    from uavplan.scenarios import resolve
+
+    try:
+        return resolve(name)
+    except ScenarioFileError as exc:
+        if quiet:
+            return None
+        raise fail(exc.problems) from None
+    except (OSError, ValueError) as exc:
+        if quiet:
+            return None
+        raise fail(f"{name}: {exc}") from None

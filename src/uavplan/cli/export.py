@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from uavplan.cli._common import err, fail, out
+from uavplan.cli._common import err, fail, load_world, out
 
 if TYPE_CHECKING:
     from uavplan.io.plan_file import TrajectoryKind
@@ -74,8 +74,6 @@ def export(
     one the plan declares and guarantees) unless --polylines or --smoothed."""
     from uavplan.io.missions import ExportError, ExportOptions, Mission, exporters, get_exporter
     from uavplan.io.plan_file import PlanFormatError, plan_path, read_plan_file
-    from uavplan.io.scenario_file import ScenarioFileError
-    from uavplan.scenarios import resolve
 
     if list_formats:
         for e in exporters().values():
@@ -101,16 +99,10 @@ def export(
         plan = read_plan_file(plan_file)
         world = None
         if scenario is not None:
-            try:
-                world = resolve(scenario)
-            except ScenarioFileError as exc:
-                raise fail(exc.problems) from None
-            except (OSError, ValueError) as exc:
-                raise fail(f"{scenario}: {exc}") from None
+            world = load_world(scenario)
         elif plan.scenario is not None:
-            try:
-                world = resolve(plan.scenario)
-            except (ScenarioFileError, OSError, ValueError):
+            world = load_world(plan.scenario, quiet=True)
+            if world is None:
                 notes.append(f"scenario {plan.scenario!r} is not a built-in one: no geofence "
                              "and no terrain frame (give SCENARIO)")  # fmt: skip
         if world is not None and world.dim != plan.dim:

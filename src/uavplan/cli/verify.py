@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 from rich.console import Console
 
-from uavplan.cli._common import fail
+from uavplan.cli._common import fail, load_world
 
 if TYPE_CHECKING:
     from uavplan.io.plan_file import TrajectoryKind
@@ -107,8 +107,6 @@ def verify(
     By default each UAV's flown trajectory (its planned polyline where the plan declares none).
     Exit 0 if all pass, 1 on any violation, 2 on bad input."""
     from uavplan.io.plan_file import PlanFormatError, load_plan_json, parse_plan, plan_path
-    from uavplan.io.scenario_file import ScenarioFileError
-    from uavplan.scenarios import resolve
     from uavplan.verify import verify_trajectories
     from uavplan.verify.verifier import TRAJECTORIES
 
@@ -119,12 +117,8 @@ def verify(
         data = load_plan_json(plan_file)
     except PlanFormatError as exc:
         raise fail(exc.problems[0]) from None
-    try:
-        world = resolve(scenario)
-    except ScenarioFileError as exc:
-        raise fail(exc.problems) from None
-    except (OSError, ValueError) as exc:
-        raise fail(f"{scenario}: {exc}") from None
+    world = load_world(scenario)
+    assert world is not None
     shown = plan_path(plan_file)
     try:
         pf = parse_plan(data, world.dim, source=str(shown))

@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from uavplan.cli._common import fail, out
+from uavplan.cli._common import fail, load_world, out
 
 
 def view(
@@ -25,25 +25,14 @@ def view(
     """Write PLAN_FILE as an HTML page with the terrain, obstacles, paths and a time slider."""
     from uavplan.io.atomic import write_text_atomic
     from uavplan.io.plan_file import PlanFormatError, plan_path, read_plan_file
-    from uavplan.io.scenario_file import ScenarioFileError
-    from uavplan.scenarios import resolve
     from uavplan.viz.viewer import viewer_html
 
     try:
         plan = read_plan_file(plan_file)
     except PlanFormatError as exc:
         raise fail(exc.problems[0]) from None
-    world = None
     name = scenario or plan.scenario
-    if name is not None:
-        try:
-            world = resolve(name)
-        except ScenarioFileError as exc:
-            if scenario is not None:
-                raise fail(exc.problems) from None
-        except (OSError, ValueError) as exc:
-            if scenario is not None:
-                raise fail(f"{scenario}: {exc}") from None
+    world = None if name is None else load_world(name, quiet=scenario is None)
     if world is not None and world.dim != plan.dim:
         raise fail(f"{name}: a {world.dim}-D scenario for a {plan.dim}-D plan")
     target = out_path or plan_path(plan_file).with_suffix(".html")

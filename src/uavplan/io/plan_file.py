@@ -46,6 +46,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from uavplan import __version__
 from uavplan.io.atomic import write_json_atomic
+from uavplan.io.scenario_file.schema import OriginSpec
 from uavplan.world.geo import GeoError, GeoOrigin
 
 if TYPE_CHECKING:
@@ -571,18 +572,6 @@ class FleetSpec(_Spec):
     restart_costs: list[Number] = Field(default_factory=list)
     wall_time: float | None = None
     info: dict[str, Any] = Field(default_factory=dict)
-
-
-class OriginSpec(_Spec):
-    """The scenario's geodetic origin (:class:`uavplan.world.geo.GeoOrigin`)."""
-
-    lat: float
-    lon: float
-    alt: float = 0.0
-    x: float = 0.0
-    y: float = 0.0
-    note: str = ""
-    accuracy: float = 0.0
 
 
 class PlanSpec(_Spec):
