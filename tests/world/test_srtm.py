@@ -207,8 +207,24 @@ def test_a_projected_geotiff_places_itself_on_earth(tmp_path: Path) -> None:
     centre = Transformer.from_crs(32617, 4326, always_xy=True).transform(
         500000 + 150 * 30.0, 4000000 - 100 * 30.0)  # fmt: skip
     assert (o.lon, o.lat) == pytest.approx(centre, abs=1e-9)
+
+
+def test_a_geographic_geotiff_is_resampled_onto_metres(tmp_path: Path) -> None:
+    """EPSG:4326 pixels of 0.001 degrees from 36.6 N, 84.5 W: resampled like SRTM tiles onto
+    the largest local box inside the DEM, about 111 m cells, never below the DEM at a node."""
     _geotiff(tmp_path / "geo.tif", 4326, geographic=True)
-    data["terrain"] = {"file": "geo.tif"}
+    data = {"name": "geo", "terrain": {"file": "geo.tif"},
+            "tasks": [{"start": [0, 0, 900], "goal": [5000, 3000, 900]}]}  # fmt: skip
     (tmp_path / "g.yaml").write_text(yaml.safe_dump(data))
-    with pytest.raises(ScenarioFileError, match="geographic coordinates"):
-        load_scenario(tmp_path / "g.yaml")
+    sc = load_scenario(tmp_path / "g.yaml")
+    t, o = sc.terrain, sc.origin
+    assert t is not None and o is not None and "EPSG:4326" in o.note
+    assert t.dx == 111.0 and o.lat == pytest.approx(36.6 - 0.1, abs=1e-3)
+    xs = t.x0 + t.dx * np.arange(t.shape[1])
+    ys = t.y0 + t.dy * np.arange(t.shape[0])
+    X, Y = np.meshgrid(xs, ys)
+    G = o.to_geodetic(np.column_stack([X.ravel(), Y.ravel()]))
+    # the file's heights are row + column (row 0 north): h = (36.6 - lat) / d + (lon + 84.5) / d
+    truth = ((36.6 - G[:, 0]) / 0.001 - 0.5) + ((G[:, 1] + 84.5) / 0.001 - 0.5)
+    Z = np.asarray(t.heights).ravel()
+    assert (Z >= truth - 1e-6).all() and (Z - truth).max() <= 2.0 + 1e-6

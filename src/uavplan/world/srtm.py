@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 import re
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -112,43 +112,46 @@ def _fill_high(Z: FloatArray) -> int:
     return count
 
 
-def terrain_from_srtm(
-    paths: Sequence[str | Path],
+def _srtm_tile_name(lat: float, lon: float) -> str:
+    return (f"{'N' if lat >= 0 else 'S'}{abs(math.floor(lat)):02d}"
+            f"{'E' if lon >= 0 else 'W'}{abs(math.floor(lon)):03d}.hgt")  # fmt: skip
+
+
+def resample_latlon(
+    lats: FloatArray,
+    lons: FloatArray,
+    H: FloatArray,
     origin: GeoOrigin,
     bounds: tuple[float, float, float, float],
-    cell_size: float | None = None,
+    cell: float,
+    name: str,
+    beyond: Callable[[float, float], str] = lambda la, lo: "",
 ) -> tuple[Terrain, int]:
-    """The terrain on the local grid over ``bounds = (xmin, xmax, ymin, ymax)`` with
-    ``cell_size`` metres (default: the tiles' spacing north-south, 30 or 90 m), heights in the
-    local frame (``AMSL - origin.alt``); and the number of nodes filled over voids.
-
-    Raises:
-        TerrainError: a tile is unreadable, or the map reaches beyond the tiles given (naming
-            the tile that is missing).
-    """
-    tiles = [read_hgt(p) for p in paths]
-    lats, lons, H = mosaic(tiles)
-    step_deg = 1.0 / (tiles[0].n - 1)
-    d = float(cell_size) if cell_size else 30.0 * SIZES[tiles[0].n]  # 90 m or 30 m
+    """A regular latitude/longitude grid of heights AMSL (``H`` (m, k), rows south first, NaN
+    = void) on the local grid over ``bounds = (xmin, xmax, ymin, ymax)`` with ``cell`` metres,
+    heights ``AMSL - origin.alt``: each node the highest of the four samples around it, voids
+    filled high; the number of filled nodes. ``beyond(lat, lon)`` says what to add when the map
+    reaches past the grid."""
+    dlat, dlon = float(lats[1] - lats[0]), float(lons[1] - lons[0])
     xmin, xmax, ymin, ymax = bounds
-    nx = math.floor((xmax - xmin) / d + 1e-9) + 1
-    ny = math.floor((ymax - ymin) / d + 1e-9) + 1
+    nx = math.floor((xmax - xmin) / cell + 1e-9) + 1
+    ny = math.floor((ymax - ymin) / cell + 1e-9) + 1
     if nx < 2 or ny < 2:
         size = f"{xmax - xmin:g} x {ymax - ymin:g} m"
-        raise TerrainError(f"the map ({size}) is under 2 cells of {d:g} m")
-    X, Y = np.meshgrid(xmin + d * np.arange(nx), ymin + d * np.arange(ny))
+        raise TerrainError(f"the map ({size}) is under 2 cells of {cell:g} m")
+    X, Y = np.meshgrid(xmin + cell * np.arange(nx), ymin + cell * np.arange(ny))
     G = origin.to_geodetic(np.column_stack([X.ravel(), Y.ravel()]))
     la, lo = G[:, 0], G[:, 1]
-    fi = (la - lats[0]) / step_deg
-    fj = (lo - lons[0]) / step_deg
-    outside = (fi < 0) | (fj < 0) | (fi > len(lats) - 1) | (fj > len(lons) - 1)
+    fi = (la - lats[0]) / dlat
+    fj = (lo - lons[0]) / dlon
+    outside = (
+        (fi < -1e-9) | (fj < -1e-9) | (fi > len(lats) - 1 + 1e-9) | (fj > len(lons) - 1 + 1e-9)
+    )
     if outside.any():
         k = int(np.argmax(outside))
-        tile = (f"{'N' if la[k] >= 0 else 'S'}{abs(math.floor(la[k])):02d}"
-                f"{'E' if lo[k] >= 0 else 'W'}{abs(math.floor(lo[k])):03d}.hgt")  # fmt: skip
         raise TerrainError(
             f"the map reaches {la[k]:.5f}, {lo[k]:.5f} (local {X.ravel()[k]:g}, "
-            f"{Y.ravel()[k]:g} m), beyond the SRTM tiles given: add {tile}"
+            f"{Y.ravel()[k]:g} m), beyond the elevation data of {name}{beyond(la[k], lo[k])}"
         )
     i0 = np.clip(np.floor(fi).astype(int), 0, len(lats) - 2)
     j0 = np.clip(np.floor(fj).astype(int), 0, len(lons) - 2)
@@ -158,10 +161,37 @@ def terrain_from_srtm(
         Z = np.nanmax(corners, axis=0).reshape(ny, nx) - origin.alt
     void = np.isnan(corners).any(axis=0).reshape(ny, nx)  # a node that used a void sample
     filled = _fill_high(Z)
+    georef = {
+        "source": name, "origin": origin.record(), "voids_filled": filled, "void_mask": void,
+        "resampling": "max of the four samples around (conservative)",
+    }  # fmt: skip
+    return Terrain(Z, xmin, ymin, cell, cell, name, georef), filled
+
+
+def terrain_from_srtm(
+    paths: Sequence[str | Path],
+    origin: GeoOrigin,
+    bounds: tuple[float, float, float, float],
+    cell_size: float | None = None,
+) -> tuple[Terrain, int]:
+    """The tiles' terrain on the local grid over ``bounds = (xmin, xmax, ymin, ymax)`` with
+    ``cell_size`` metres (default: the tiles' spacing north-south, 30 or 90 m), heights in the
+    local frame (``AMSL - origin.alt``); and the number of nodes filled over voids.
+
+    Raises:
+        TerrainError: a tile is unreadable, or the map reaches beyond the tiles given (naming
+            the tile that is missing).
+    """
+    tiles = [read_hgt(p) for p in paths]
+    lats, lons, H = mosaic(tiles)
+    d = float(cell_size) if cell_size else 30.0 * SIZES[tiles[0].n]  # 90 m or 30 m
     names = [Path(p).name for p in paths]
-    georef = {"srtm": names, "origin": origin.record(), "voids_filled": filled, "void_mask": void,
-              "resampling": "max of the four source samples (conservative)"}  # fmt: skip
-    return Terrain(Z, xmin, ymin, d, d, "+".join(names), georef), filled
+    terrain, filled = resample_latlon(
+        lats, lons, H, origin, bounds, d, "+".join(names),
+        lambda la, lo: f" (the SRTM tiles given): add {_srtm_tile_name(la, lo)}",
+    )  # fmt: skip
+    terrain.georef["srtm"] = names
+    return terrain, filled
 
 
 def points_over_voids(terrain: Terrain, points: FloatArray) -> int:
@@ -176,3 +206,33 @@ def points_over_voids(terrain: Terrain, points: FloatArray) -> int:
     i = np.clip(np.floor((P[:, 1] - terrain.y0) / terrain.dy).astype(int), 0, ny - 2)
     hit = mask[i, j] | mask[i + 1, j] | mask[i, j + 1] | mask[i + 1, j + 1]
     return int(hit.sum())
+
+
+def geographic_grid(
+    tiepoint: list[float], pixel_scale: list[float], shape: tuple[int, int]
+) -> tuple[FloatArray, FloatArray]:
+    """The latitudes (ascending: rows flipped south first) and longitudes of a geographic
+    GeoTIFF's pixel centres (tie point at a pixel's corner, PixelIsArea)."""
+    rows, cols = shape
+    ti, tj, _, lon0, lat0 = (float(v) for v in tiepoint[:5])
+    dlon, dlat = float(pixel_scale[0]), float(pixel_scale[1])
+    lons = lon0 + (np.arange(cols) - ti + 0.5) * dlon
+    lats = lat0 - (np.arange(rows)[::-1] - tj + 0.5) * dlat
+    return lats.astype(np.float64), lons.astype(np.float64)
+
+
+def inner_box(
+    origin: GeoOrigin, lats: FloatArray, lons: FloatArray
+) -> tuple[float, float, float, float]:
+    """The largest local box ``(xmin, xmax, ymin, ymax)`` inside a lat/lon grid's edges."""
+
+    def local(la: FloatArray, lo: FloatArray) -> FloatArray:
+        return origin.to_local(np.column_stack([la, lo, np.full(len(la), origin.alt)]))
+
+    west = local(lats, np.full(len(lats), lons[0]))
+    east = local(lats, np.full(len(lats), lons[-1]))
+    south = local(np.full(len(lons), lats[0]), lons)
+    north = local(np.full(len(lons), lats[-1]), lons)
+    eps = 1e-6
+    return (float(west[:, 0].max()) + eps, float(east[:, 0].min()) - eps,
+            float(south[:, 1].max()) + eps, float(north[:, 1].min()) - eps)  # fmt: skip

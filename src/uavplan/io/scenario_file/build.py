@@ -37,7 +37,7 @@ from uavplan.world import (
 )
 from uavplan.world.fleet_tasks import fleet_layout, layer_record
 from uavplan.world.geo import GeoOrigin, origin_for_projected_grid
-from uavplan.world.srtm import terrain_from_srtm
+from uavplan.world.srtm import geographic_grid, inner_box, resample_latlon, terrain_from_srtm
 from uavplan.world.terrain import TerrainError
 
 #: Headroom above the highest terrain for the default z bound when there is no altitude band, m.
@@ -128,31 +128,48 @@ def _no_fly_polygons(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> 
     return out
 
 
-def _dem_origin(spec: ScenarioSpec, terrain: Terrain, problems: Problems) -> GeoOrigin | None:
-    """The origin a georeferenced GeoTIFF gives when the scenario names none (projected CRS:
-    its centre, with the layout's error as ``accuracy``); a geographic one without
-    ``cell_size`` is refused (its pixel scale is in degrees, not metres)."""
+def _placed_dem(
+    spec: ScenarioSpec, terrain: Terrain, problems: Problems
+) -> tuple[Terrain | None, GeoOrigin | None]:
+    """A georeferenced GeoTIFF placed on Earth: a projected one keeps its grid and gives the
+    origin (its centre) when the scenario names none, with the layout's error as
+    ``accuracy``; a geographic one (degrees) is resampled onto the local grid like SRTM tiles
+    (origin: the scenario's, else the DEM's centre; extent: the scenario's bounds, else the
+    largest box inside the DEM; cell: ``cell_size``, else its north-south spacing)."""
     g = terrain.georef
-    if "epsg" not in g:
-        return None
-    if g.get("geographic"):
-        if spec.terrain is not None and spec.terrain.cell_size is None:
-            why = (f"{g.get('file')} is in geographic coordinates (EPSG:{g['epsg']}, degrees): "
-                   "reproject it to a projected CRS (e.g. gdalwarp -t_srs EPSG:326NN) or use "
-                   "SRTM tiles (terrain: srtm)")  # fmt: skip
-            problems.add(("terrain", "file"), why)
-        return None
-    if spec.origin is not None or "tiepoint" not in g or "pixel_scale" not in g:
-        return None
-    if spec.terrain is not None and spec.terrain.cell_size is not None:
-        return None  # the user's own spacing: the projection's metres no longer apply
+    if "epsg" not in g or "tiepoint" not in g or "pixel_scale" not in g:
+        return terrain, None
+    shape = (int(g["shape"][0]), int(g["shape"][1]))
+    name = str(g.get("file"))
     try:
-        return origin_for_projected_grid(int(g["epsg"]), g["tiepoint"], g["pixel_scale"],
-                                         tuple(g["shape"]), terrain.x0, terrain.y0,
-                                         str(g.get("file")))  # fmt: skip
+        if not g.get("geographic"):
+            if spec.origin is not None or (spec.terrain and spec.terrain.cell_size is not None):
+                return terrain, None  # the user's own placement or spacing
+            origin = origin_for_projected_grid(int(g["epsg"]), g["tiepoint"], g["pixel_scale"],
+                                               shape, terrain.x0, terrain.y0, name)  # fmt: skip
+            return terrain, origin
+        lats, lons = geographic_grid(g["tiepoint"], g["pixel_scale"], shape)
+        if spec.origin is not None:
+            origin = GeoOrigin(**spec.origin.model_dump())
+        else:
+            note = f"the DEM's centre ({name}, EPSG:{g['epsg']}; heights AMSL)"
+            origin = GeoOrigin(float(lats.mean()), float(lons.mean()), 0.0, note=note)
+        if spec.bounds is not None:
+            lo, hi = spec.bounds.lower, spec.bounds.upper
+            box = (lo[0], hi[0], lo[1], hi[1])
+        else:
+            box = inner_box(origin, lats, lons)
+        cell = (spec.terrain.cell_size if spec.terrain and spec.terrain.cell_size
+                else max(1.0, round(abs(float(g["pixel_scale"][1])) * 111_320.0)))  # fmt: skip
+        H = np.where(np.asarray(terrain.heights) <= -32767, np.nan, np.asarray(terrain.heights))
+        placed, _ = resample_latlon(lats, lons, H, origin, box, float(cell), name)
+        placed.georef.update(epsg=g["epsg"], file=name)
+        return placed, (origin if spec.origin is None else None)
+    except TerrainError as exc:
+        problems.add(("terrain", "file"), str(exc))
     except Exception as exc:  # an EPSG code pyproj does not know, say
         problems.add(("terrain", "file"), f"cannot place the DEM on Earth: {exc}")
-        return None
+    return None, None
 
 
 def _load_terrain(ts: TerrainSpec, problems: Problems, base_dir: Path) -> Terrain | None:
@@ -213,7 +230,8 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
             terrain = _load_terrain(spec.terrain, problems, base_dir)
         terrain_failed = terrain is None
         if terrain is not None and spec.terrain.file is not None:
-            dem_origin = _dem_origin(spec, terrain, problems)
+            terrain, dem_origin = _placed_dem(spec, terrain, problems)
+            terrain_failed = terrain is None
 
     # ---- dimension
     dim: int | None
