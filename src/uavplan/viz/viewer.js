@@ -3,6 +3,8 @@
 "use strict";
 const errors = [];
 window.addEventListener("error", (e) => errors.push(String(e.message)));
+const consoleError = console.error.bind(console);
+console.error = (...args) => { errors.push(args.map(String).join(" ")); consoleError(...args); };
 const cv = document.getElementById("view");
 const ctx = cv.getContext("2d");
 const slider = document.getElementById("time");
