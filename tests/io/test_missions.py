@@ -157,6 +157,9 @@ def test_wpl_reads_back_with_pymavlink(tmp_path: Path) -> None:
         if tr.id == "uav1":
             assert [w.param1 for w in wps][1] == pytest.approx(5.0)
             assert speeds == pytest.approx([20.0, 15.0], rel=1e-6)
+            # each speed right after the waypoint its leg starts from: WP0 20 WP1(hold) 15 WP2
+            cmds = [it.command for it in items[1:]]
+            assert cmds[:6] == [22, 16, 178, 16, 178, 16]
         else:
             assert speeds == pytest.approx([20.0], rel=1e-6)
 

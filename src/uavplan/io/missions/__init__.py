@@ -140,9 +140,10 @@ class Mission:
         return np.where(dt > 0, d / np.where(dt > 0, dt, 1.0), 0.0)
 
     def items(self, tr: Trajectory) -> list[MissionItem]:
-        """The MAVLink mission of one UAV after its home: take-off at the start, a speed
-        command where the planned speed changes (by more than 1 %), a waypoint per point of
-        the trajectory (a wait becomes the previous waypoint's hold time), then land at the
+        """The MAVLink mission of one UAV after its home: take-off at the start, a waypoint per
+        point of the trajectory (a wait becomes the waypoint's hold time), each followed by a
+        speed command where the next leg's planned speed differs (by more than 1 %) from the
+        last one commanded (MAVLink runs it on reaching that waypoint), then land at the
         goal, return to launch, or nothing (``options.end``). Warns that the take-off climb
         and the landing descent are outside the verified trajectory."""
         P = np.asarray(tr.points, dtype=np.float64)
@@ -156,15 +157,16 @@ class Mission:
         out = [MissionItem(22, frame, (pitch, 0, 0, nan, G[0, 0], G[0, 1], alt[0]))]
         current = -1.0
         for k in range(len(P)):
-            if k > 0 and waits[k - 1] > 0:  # a wait: hold at the previous waypoint
+            if k > 0 and waits[k - 1] > 0:  # a wait: the previous waypoint holds (no new point)
                 last = out[-1]
                 held = (last.params[0] + float(waits[k - 1]), *last.params[1:])
                 out[-1] = MissionItem(last.command, last.frame, held)
-                continue
+            else:
+                out.append(MissionItem(16, frame, (0, 0, 0, nan, G[k, 0], G[k, 1], alt[k])))
+            # a speed command acts from the waypoint before it: the speed of the leg from k
             if k < len(speeds) and speeds[k] > 0 and abs(speeds[k] - current) > 0.01 * speeds[k]:
                 current = float(speeds[k])
                 out.append(MissionItem(178, 2, (1, current, -1, 0, 0, 0, 0)))
-            out.append(MissionItem(16, frame, (0, 0, 0, nan, G[k, 0], G[k, 1], alt[k])))
         end = self.options.end
         if end == "land":
             ground = float(self.ground(P[-1:, :2])[0])
