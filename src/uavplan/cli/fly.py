@@ -16,7 +16,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated, Any
 
-import numpy as np
 import typer
 
 from uavplan.cli._common import err, fail, out, parse_params
@@ -44,6 +43,8 @@ def _from_plan(
 ) -> tuple[Any, Any, str, dict[str, Any], Any, int | None]:
     """(scenario, task, planner name, its options, the initial PlanResult, the plan's seed) of
     a plan file; ``fail`` naming the file and field otherwise."""
+    import numpy as np
+
     from uavplan.io.plan_file import PlanFormatError, read_plan_file
     from uavplan.io.scenario_file import ScenarioFileError
     from uavplan.planners import PlanResult

@@ -7,18 +7,19 @@ with code 2 (no traceback).
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated, TypeVar
+from typing import TYPE_CHECKING, Annotated, TypeVar
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
-from uavplan.io.scenario_file import ScenarioFileError, save_scenario, schema
-from uavplan.world import Scenario
+if TYPE_CHECKING:
+    from uavplan.io.scenario_file import ScenarioFileError
+    from uavplan.world import Scenario
 
 scenario_app = typer.Typer(help="Built-in scenarios and scenario files.", no_args_is_help=True)
 
@@ -32,6 +33,8 @@ def _fail(exc: ScenarioFileError) -> typer.Exit:
 
 
 def _run(fn: Callable[[], T]) -> T:
+    from uavplan.io.scenario_file import ScenarioFileError
+
     try:
         return fn()
     except ScenarioFileError as exc:
@@ -44,7 +47,7 @@ def _console() -> Console:
 
 def _n(v: float) -> str:
     """A number for people: at most 2 decimals, no trailing zeros."""
-    if not np.isfinite(v):
+    if not math.isfinite(v):
         return "inf" if v > 0 else "-inf"
     text = f"{v:.2f}".rstrip("0").rstrip(".")
     return "0" if text == "-0" else text
@@ -166,6 +169,8 @@ def export_cmd(
     from uavplan.scenarios import resolve
 
     scenario = _run(lambda: resolve(name))
+    from uavplan.io.scenario_file import save_scenario
+
     written = _run(lambda: save_scenario(scenario, file))
     typer.echo(f"wrote {written}")
 
@@ -173,6 +178,8 @@ def export_cmd(
 @scenario_app.command("schema")
 def schema_cmd() -> None:
     """Print the JSON Schema of scenario files."""
+    from uavplan.io.scenario_file import schema
+
     typer.echo(json.dumps(schema(), indent=2))
 
 
