@@ -180,3 +180,11 @@ def test_export_csv_and_the_infeasible_warning(tmp_path: Path, single_plan, flee
     r = runner.invoke(app, ["export", str(tmp_path), "--format", "nope"])
     assert r.exit_code == 2 and "unknown export format 'nope'" in r.output
     assert "csv" in runner.invoke(app, ["export", "--list"]).output
+
+
+@pytest.mark.parametrize("flag", ["--iterations", "--pop-size", "--waypoints"])
+@pytest.mark.parametrize("value", ["0", "-3"])
+def test_plan_refuses_budgets_below_one(tmp_path: Path, flag: str, value: str) -> None:
+    r = runner.invoke(app, ["plan", "simple2d", flag, value, "--out", str(tmp_path / "o")])
+    assert r.exit_code == 2 and f"{flag} {value}: must be at least 1" in r.output
+    assert not (tmp_path / "o").exists()

@@ -55,6 +55,10 @@ def _run_plan(
     from uavplan.planners.fleet_plan import plan_all
     from uavplan.scenarios import resolve
 
+    for flag, value in (("--iterations", iterations), ("--pop-size", pop_size),
+                        ("--waypoints", waypoints)):  # fmt: skip
+        if value is not None and value < 1:
+            raise fail(f"{flag} {value}: must be at least 1")
     try:
         scenario = resolve(scenario_ref)
     except ScenarioFileError as exc:
