@@ -188,3 +188,10 @@ def test_plan_refuses_budgets_below_one(tmp_path: Path, flag: str, value: str) -
     r = runner.invoke(app, ["plan", "simple2d", flag, value, "--out", str(tmp_path / "o")])
     assert r.exit_code == 2 and f"{flag} {value}: must be at least 1" in r.output
     assert not (tmp_path / "o").exists()
+
+
+def test_plan_help_lists_every_planner() -> None:
+    r = runner.invoke(app, ["plan", "--help"])
+    assert r.exit_code == 0
+    for name in available_planners():
+        assert name in r.output

@@ -18,6 +18,7 @@ from uavplan.cli.export import export as export_command
 from uavplan.cli.fly import fly as fly_command
 from uavplan.cli.plan import demo as demo_command
 from uavplan.cli.plan import plan as plan_command
+from uavplan.cli.planners import PlannerListInHelp
 from uavplan.cli.planners import planners as planners_command
 from uavplan.cli.scenario import scenario_app
 from uavplan.cli.schema import schema as schema_command
@@ -31,7 +32,7 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-app.command("plan")(plan_command)
+app.command("plan", cls=PlannerListInHelp)(plan_command)
 app.command("demo")(demo_command)
 app.add_typer(scenario_app, name="scenario")
 app.add_typer(bench_app, name="bench")

@@ -3,12 +3,31 @@ from its config: defaults, ranges, what each does)."""
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from rich.table import Table
 
 from uavplan.cli._common import fail, out
+
+
+class PlannerListInHelp(typer.core.TyperCommand):
+    """A command whose ``--help`` ends with every registered planner, a line each (the registry
+    is imported only when that help is asked for, so ``uavplan --help`` stays quick)."""
+
+    def format_help(self, ctx: Any, formatter: Any) -> None:
+        from uavplan.planners import available_planners, planner_entry
+
+        super().format_help(ctx, formatter)
+        table = Table(title="planners (-a NAME; `uavplan planners NAME` shows its options)",
+                      title_justify="left", box=None, pad_edge=False)  # fmt: skip
+        table.add_column("name", no_wrap=True)
+        table.add_column("kind", no_wrap=True)
+        table.add_column("what it is")
+        for n in available_planners():
+            e = planner_entry(n)
+            table.add_row(n, "fleet" if e.fleet else "single UAV", e.summary)
+        out.print(table)
 
 
 def planners(
