@@ -227,7 +227,7 @@ def write_report(folder: str | Path) -> tuple[Path, Path]:
         "runs planned": manifest.get("total_runs", ""),
         "runs finished": n,
         "runs failed": n_err,
-        "compute time (s)": float(df["wall_time"].sum()) if n else 0.0,
+        "compute time (s)": f"{float(df['wall_time'].sum()):,.1f}" if n else "0",
     }
     for col in ("version", "git_commit", "host", "cpu", "python"):
         if col in df and n:
