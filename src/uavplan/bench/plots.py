@@ -154,7 +154,7 @@ def best_paths_figure(df: pd.DataFrame) -> Figure | None:
             paths.append(
                 SimpleNamespace(waypoints=w, uav_id=str(alg), feasible=bool(best["feasible"]))
             )
-        draw_top(ax, scenario, paths)
+        draw_top(ax, scenario, paths, colorbar=False)
         ax.set_title(f"{sc}: best run per algorithm")
     fig.tight_layout()
     return fig

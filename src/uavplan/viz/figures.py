@@ -33,6 +33,75 @@ def _terrain_xy(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     return xs, ys, t.heights
 
 
+#: past this extent (m) the axes are labelled in km
+KM_FROM = 5000.0
+
+
+def _in_km(scenario: Scenario) -> bool:
+    lo, hi = scenario.bounds.lo, scenario.bounds.hi
+    return bool(max(hi[0] - lo[0], hi[1] - lo[1]) > KM_FROM)
+
+
+def _label_axes(ax: Any, scenario: Scenario, zlabel: bool = False) -> None:
+    """x, y (and z) labels in m, or in km with km ticks past :data:`KM_FROM`."""
+    from matplotlib.ticker import FuncFormatter
+
+    km = _in_km(scenario)
+    unit = "km" if km else "m"
+    if km:
+        fmt = FuncFormatter(lambda v, _: f"{v / 1000:g}")
+        ax.xaxis.set_major_formatter(fmt)
+        ax.yaxis.set_major_formatter(fmt)
+    ax.set_xlabel(f"x ({unit})")
+    ax.set_ylabel(f"y ({unit})")
+    if zlabel:
+        ax.set_zlabel("z (m)")
+
+
+def _flown(r: Any) -> tuple[np.ndarray, bool]:
+    """A result's trajectory as flown (declared; the planned polyline otherwise) and whether
+    it passes every check."""
+    fn = getattr(r, "flown_trajectory", None)
+    pts = np.asarray(fn()[0]) if callable(fn) else np.asarray(r.waypoints)
+    return pts, bool(getattr(r, "flown_feasible", r.feasible))
+
+
+def _legend(ax: Axes, scenario: Scenario, results: Sequence[Any]) -> None:
+    """Every kind of thing drawn: the UAVs (a line each up to 10), planned vs flown, starts and
+    goals, and the obstacle and area kinds present; below the axes."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    handles: list[Any] = []
+    if len(results) <= 10:
+        color = _colors(len(results))
+        for k, r in enumerate(results):
+            ok = _flown(r)[1]
+            label = f"{r.uav_id}" + ("" if ok else " (FAILS a check)")
+            handles.append(Line2D([], [], color=color(k), lw=1.6 if ok else 3, label=label))
+    elif results:
+        bad = sum(not _flown(r)[1] for r in results)
+        label = f"{len(results)} UAVs" + (f", {bad} failing (red edge)" if bad else "")
+        handles.append(Line2D([], [], color="tab:blue", lw=1, label=label))
+    if results:
+        handles.append(Line2D([], [], color="k", lw=1.6, label="flown trajectory"))
+        handles.append(Line2D([], [], color="k", lw=0.8, ls="--", label="planned polyline"))
+    handles.append(Line2D([], [], ls="", marker="o", color="green", mec="k", label="start"))
+    handles.append(Line2D([], [], ls="", marker="*", color="red", mec="k", ms=10, label="goal"))
+    kinds = [(scenario.cylinders, Patch(color="tab:red", alpha=0.45, label="cylinder")),
+             (scenario.circles, Patch(color="tab:purple", alpha=0.6, label="circle")),
+             (scenario.polygons, Patch(color="tab:purple", alpha=0.6, label="polygon")),
+             (scenario.danger_areas, Patch(color="gold", alpha=0.45, label="danger area")),
+             (scenario.uncertain_areas,
+              Patch(fc="tab:purple", alpha=0.35, hatch="//", label="uncertain area")),
+             (scenario.moving_obstacles,
+              Line2D([], [], color="tab:gray", ls=":", marker="o", mfc="none",
+                     label="moving obstacle (track)"))]  # fmt: skip
+    handles += [h for objs, h in kinds if objs]
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=4,
+              fontsize=7, frameon=False)  # fmt: skip
+
+
 def _colors(n: int) -> Any:
     """A colour per path: tab10 for a few, a continuous map for a fleet."""
     if n <= 10:
@@ -42,15 +111,20 @@ def _colors(n: int) -> Any:
     return lambda k: cmap(k / max(n - 1, 1))
 
 
-def draw_top(ax: Axes, scenario: Scenario, results: Sequence[Any] = ()) -> None:
-    """Top view: terrain shading and contours, obstacles and areas, paths, starts and goals.
+def draw_top(
+    ax: Axes, scenario: Scenario, results: Sequence[Any] = (), colorbar: bool = True
+) -> None:
+    """Top view: terrain shading and contours (with a colour bar), obstacles and areas, each
+    UAV's flown trajectory (solid; a UAV that fails a check thick, with a red edge) over its
+    planned polyline (dashed), starts and goals, and a legend of all of them.
 
-    ``results``: objects with ``waypoints`` (n, dim), ``uav_id`` and ``feasible`` (PlanResult).
+    ``results``: objects with ``waypoints`` (n, dim), ``uav_id`` and ``feasible`` (PlanResult,
+    whose flown trajectory is drawn when it declares one).
     """
     txy = _terrain_xy(scenario)
     if txy is not None:
         xs, ys, H = txy
-        ax.imshow(
+        im = ax.imshow(
             H,
             origin="lower",
             extent=(xs[0], xs[-1], ys[0], ys[-1]),
@@ -59,6 +133,8 @@ def draw_top(ax: Axes, scenario: Scenario, results: Sequence[Any] = ()) -> None:
             aspect="equal",
         )
         ax.contour(xs, ys, H, levels=12, colors="k", linewidths=0.4, alpha=0.5)
+        if colorbar:
+            ax.figure.colorbar(im, ax=ax, fraction=0.04, pad=0.02, label="terrain height (m)")
     for c in scenario.cylinders:
         ax.add_patch(CirclePatch(c.center, c.radius, color="tab:red", alpha=0.45, lw=0))
         if c.margin:
@@ -88,25 +164,23 @@ def draw_top(ax: Axes, scenario: Scenario, results: Sequence[Any] = ()) -> None:
         ax.add_patch(
             CirclePatch((m.positions[0, 0], m.positions[0, 1]), m.radius, fill=False, ec="tab:gray")
         )
+    from matplotlib import patheffects
+
     color = _colors(len(results))
     many = len(results) > 10
     for k, r in enumerate(results):
         w = np.asarray(r.waypoints)
-        sm = getattr(r, "smoothed", None)
-        ax.plot(
-            w[:, 0],
-            w[:, 1],
-            "-",
-            color=color(k),
-            lw=0.7 if many else 1.6,
-            alpha=0.5 if sm is not None else 1.0,
-            label=f"{r.uav_id} ({'feasible' if r.feasible else 'infeasible'})",
-        )
-        if sm is not None:  # PPSwarm Fig. 11: solid planned path, dashed Dubins-smoothed one
-            sm = np.asarray(sm)
-            ax.plot(sm[:, 0], sm[:, 1], "--", color=color(k), lw=0.7 if many else 1.2)
+        flown, ok = _flown(r)
+        col = color(k)
+        halo = [] if ok else [patheffects.withStroke(linewidth=4.5, foreground="red")]
+        if flown.shape != w.shape or not np.allclose(flown, w):
+            ax.plot(w[:, 0], w[:, 1], "--", color=col, lw=0.6 if many else 0.9, alpha=0.8)
+        ax.plot(flown[:, 0], flown[:, 1], "-", color=col, lw=0.8 if many else 1.6,
+                path_effects=halo)  # fmt: skip
         if not many:
-            ax.plot(w[1:-1, 0], w[1:-1, 1], ".", color=color(k), ms=4)
+            ax.plot(w[1:-1, 0], w[1:-1, 1], ".", color=col, ms=4)
+            at = (float(w[0, 0]), float(w[0, 1]))
+            ax.annotate(str(r.uav_id), at, xytext=(4, 4), textcoords="offset points", fontsize=7)
     ms = 3 if len(scenario.tasks) > 40 else 7
     for t in scenario.tasks:
         ax.plot(*t.start[:2], "o", color="green", ms=ms, mec="k", mew=0.5)
@@ -115,10 +189,8 @@ def draw_top(ax: Axes, scenario: Scenario, results: Sequence[Any] = ()) -> None:
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_aspect("equal")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    if results and len(results) <= 10:
-        ax.legend(loc="upper left", fontsize=7)
+    _label_axes(ax, scenario)
+    _legend(ax, scenario, results)
 
 
 def draw_3d(ax: Any, scenario: Scenario, results: Sequence[PlanResult] = ()) -> None:
@@ -135,7 +207,7 @@ def draw_3d(ax: Any, scenario: Scenario, results: Sequence[PlanResult] = ()) -> 
             Y,
             H[::sy, ::sx],
             cmap="terrain",
-            alpha=0.6,
+            alpha=0.35,  # the paths stay visible through it
             linewidth=0,
             antialiased=False,
         )
@@ -156,15 +228,28 @@ def draw_3d(ax: Any, scenario: Scenario, results: Sequence[PlanResult] = ()) -> 
             ax.plot(cx, cy, z, color="tab:red", lw=0.8)
         for k in range(0, len(theta), 5):
             ax.plot([cx[k], cx[k]], [cy[k], cy[k]], [float(z0), float(z1)], color="tab:red", lw=0.4)
+    outlines = [np.asarray(p.array) for p in scenario.polygons]
+    outlines += [np.column_stack([c.center[0] + c.radius * np.cos(theta),
+                                  c.center[1] + c.radius * np.sin(theta)])
+                 for c in scenario.circles]  # fmt: skip
+    for V in outlines:
+        V = np.vstack([V, V[:1]])
+        g0 = float(np.min(scenario.ground(V[:, 0], V[:, 1])))
+        for z in (g0, top):
+            ax.plot(V[:, 0], V[:, 1], np.full(len(V), z), color="tab:purple", lw=0.8)
+        for v in V[:: max(1, len(V) // 8)]:
+            ax.plot([v[0], v[0]], [v[1], v[1]], [g0, top], color="tab:purple", lw=0.4)
     color = _colors(len(results))
     for k, r in enumerate(results):
-        sm = getattr(r, "smoothed", None)
-        w = np.asarray(sm if sm is not None else r.waypoints)
+        w, ok = _flown(r)
         zs = w[:, 2] if w.shape[1] == 3 else np.zeros(len(w))
-        ax.plot(w[:, 0], w[:, 1], zs, "-", color=color(k), lw=2 if len(results) <= 10 else 0.8)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.set_zlabel("z (m)")
+        lw = (2 if len(results) <= 10 else 0.8) * (1 if ok else 1.8)
+        ax.plot(w[:, 0], w[:, 1], zs, "-", color=color(k) if ok else "red", lw=lw)
+    for t in scenario.tasks[:200]:
+        if len(t.start) == 3:
+            ax.scatter(*t.start, color="green", s=12, edgecolors="k", linewidths=0.4)
+            ax.scatter(*t.goal, color="red", marker="*", s=30, edgecolors="k", linewidths=0.4)
+    _label_axes(ax, scenario, zlabel=True)
 
 
 def plan_figure(scenario: Scenario, results: Sequence[PlanResult], title: str = "") -> Figure:
@@ -189,6 +274,6 @@ def save_plan_figure(
 ) -> Path:
     fig = plan_figure(scenario, results, title)
     out = Path(path)
-    fig.savefig(out, dpi=110)
+    fig.savefig(out, dpi=110, bbox_inches="tight")  # nothing clipped: labels, legend, colour bar
     plt.close(fig)
     return out
