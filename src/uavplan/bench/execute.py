@@ -61,19 +61,46 @@ def host_info() -> dict[str, str]:
     return {"host": platform.node(), "cpu": cpu, "python": platform.python_version()}
 
 
-@functools.cache
-def git_commit() -> str | None:
-    """The commit of the uavplan source tree, if it is a git checkout."""
-    src = Path(__file__).resolve().parents[3]
-    if not (src / ".git").exists():
+def _rev_parse(folder: Path) -> str | None:
+    if not (folder / ".git").exists():
         return None
     try:
         out = subprocess.run(
-            ["git", "rev-parse", "HEAD"], cwd=src, capture_output=True, text=True, timeout=5
+            ["git", "rev-parse", "HEAD"], cwd=folder, capture_output=True, text=True, timeout=5
         )
         return out.stdout.strip() or None
     except Exception:
         return None
+
+
+@functools.cache
+def git_commit() -> str | None:
+    """The commit of the uavplan source: the checkout this module runs from; else, for a
+    package installed by pip, the commit its install record names (PEP 610
+    ``direct_url.json``: ``vcs_info.commit_id`` for ``pip install git+URL``, or the HEAD of the
+    local checkout it was installed from, if that is still there: the install's own commit
+    unless the checkout has moved since); None when nothing says."""
+    here = _rev_parse(Path(__file__).resolve().parents[3])
+    if here is not None:
+        return here
+    try:
+        import json
+        from importlib.metadata import distribution
+        from urllib.parse import unquote, urlparse
+
+        text = distribution("uavplan").read_text("direct_url.json")
+        if not text:
+            return None
+        info = json.loads(text)
+        commit = (info.get("vcs_info") or {}).get("commit_id")
+        if commit:
+            return str(commit)
+        url = urlparse(str(info.get("url", "")))
+        if url.scheme == "file":
+            return _rev_parse(Path(unquote(url.path)))
+    except Exception:
+        return None
+    return None
 
 
 def _status_mb(field: str) -> float | None:
