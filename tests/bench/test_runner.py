@@ -251,3 +251,16 @@ def test_cli_only_refuses_an_unknown_configuration(tmp_path: Path) -> None:
     assert res.exit_code == 2
     assert "--only: plan 'ppswarm-table4' has no configuration 'ppswarm-r9'" in res.output
     assert "ppswarm-r5-flown" in res.output and not (tmp_path / "runs").exists()
+
+
+def test_cli_does_not_print_an_overhead_figure_for_a_short_sweep(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from uavplan.cli import app
+
+    res = CliRunner().invoke(
+        app, ["bench", "run", "functions", "--only", "pso", "--runs", "1", "--out", str(tmp_path),
+              "--executor", "serial", "--no-report"],
+    )  # fmt: skip
+    assert res.exit_code == 0, res.output
+    assert "runner overhead: not measured" in res.output and "%" not in res.output

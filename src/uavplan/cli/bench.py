@@ -15,6 +15,10 @@ err = Console(stderr=True)
 out = Console()
 
 
+#: below this much run time a sweep's overhead figure is mostly process start and compilation
+OVERHEAD_FROM_S = 60.0
+
+
 def _fail(msg: str, code: int = 2) -> typer.Exit:
     err.print(msg, markup=False, highlight=False)
     return typer.Exit(code)
@@ -125,7 +129,11 @@ def run(
         f"{summary.executor} worker(s); results in {folder}"
     )
     if summary.overhead is not None and summary.executed:
-        out.print(f"runner overhead: {100 * summary.overhead:.1f} % of the runs' compute time")
+        if summary.run_time >= OVERHEAD_FROM_S:
+            out.print(f"runner overhead: {100 * summary.overhead:.1f} % of the runs' compute time")
+        else:  # worker start, imports and kernel compilation are most of so short a sweep
+            out.print(f"runner overhead: not measured (the runs took {summary.run_time:.1f} s in "
+                      f"all, under {OVERHEAD_FROM_S:.0f} s)")  # fmt: skip
     for line in summary.failures[:20]:
         err.print(f"failed: {line}", markup=False, highlight=False)
     if len(summary.failures) > 20:
