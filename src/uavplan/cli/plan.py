@@ -236,7 +236,7 @@ def plan(
     cost: Annotated[str | None, typer.Option(help="Cost preset (default: the scenario's).")] = None,
     param: Annotated[list[str] | None, typer.Option(help="Planner parameter NAME=VALUE.")] = None,
 ) -> None:
-    """Plan every task of SCENARIO; write OUT/plan.json and OUT/plan.png."""
+    """Plan every task of SCENARIO; write OUT/plan.json, OUT/plan.png and OUT/plan.html."""
     result, elapsed = _run_plan(
         scenario, algorithm, seed, out_dir, iterations, pop_size, waypoints, cost, param or []
     )
@@ -251,6 +251,7 @@ def demo(
     ),
     seed: Annotated[int, typer.Option(help="Root random seed.")] = 0,
 ) -> None:
-    """Plan the built-in SPSO benchmark with PSO at SPSO's budget (500 x 200) and show it."""
+    """Plan the built-in SPSO benchmark with PSO at SPSO's budget (500 x 200); write OUT/plan.json,
+    OUT/plan.png (the figure) and OUT/plan.html (open it in a browser), and print a summary."""
     result, elapsed = _run_plan("spso", "pso", seed, out_dir, 200, 500, None, None, [])
     _summary(result, elapsed, out_dir)
