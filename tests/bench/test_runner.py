@@ -264,3 +264,17 @@ def test_cli_does_not_print_an_overhead_figure_for_a_short_sweep(tmp_path: Path)
     )  # fmt: skip
     assert res.exit_code == 0, res.output
     assert "runner overhead: not measured" in res.output and "%" not in res.output
+
+
+def test_bench_list_piped_gives_whole_descriptions() -> None:
+    from typer.testing import CliRunner
+
+    from uavplan.bench.catalog import available_plans, get_plan
+    from uavplan.cli import app
+
+    res = CliRunner().invoke(app, ["bench", "list"])
+    assert res.exit_code == 0
+    lines = res.output.splitlines()
+    for name in available_plans():
+        line = next(x for x in lines if x.startswith(f"{name}: "))
+        assert line.endswith(get_plan(name).description)

@@ -6,13 +6,12 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from uavplan.cli._common import err, out
+
 bench_app = typer.Typer(help="Experiments: the papers' plans, run resumably.", no_args_is_help=True)
-err = Console(stderr=True)
-out = Console()
 
 
 #: below this much run time a sweep's overhead figure is mostly process start and compilation
@@ -26,19 +25,26 @@ def _fail(msg: str, code: int = 2) -> typer.Exit:
 
 @bench_app.command("list")
 def list_plans() -> None:
-    """The experiment plans and their scales."""
+    """The experiment plans and their scales (a table on a terminal, a line per plan when piped)."""
     from uavplan.bench.catalog import available_plans, get_plan
 
-    table = Table(title="experiment plans")
-    for col in ("plan", "scenarios x algorithms", "smoke runs", "paper runs", "description"):
-        table.add_column(col)
+    rows = []
     for name in available_plans():
         p = get_plan(name)
         smoke, paper = len(p.runs("smoke")), len(p.runs("paper"))
         n_sc = len(p.scales["paper"].scenarios or p.scenarios)
-        table.add_row(
-            name, f"{n_sc} x {len(p.algorithms)}", str(smoke), f"{paper:,}", p.description
-        )
+        rows.append((name, f"{n_sc} x {len(p.algorithms)}", str(smoke), f"{paper:,}",
+                     p.description))  # fmt: skip
+    if not out.is_terminal:  # piped: whole descriptions, one line each
+        for name, grid, smoke_n, paper_n, text in rows:
+            out.print(f"{name}: {grid} scenarios x algorithms, {smoke_n} smoke runs, {paper_n} "
+                      f"paper runs; {text}", markup=False, highlight=False)  # fmt: skip
+        return
+    table = Table(title="experiment plans")
+    for col in ("plan", "scenarios x algorithms", "smoke runs", "paper runs", "description"):
+        table.add_column(col)
+    for row in rows:
+        table.add_row(*row)
     out.print(table)
 
 
