@@ -195,3 +195,10 @@ def test_plan_help_lists_every_planner() -> None:
     assert r.exit_code == 0
     for name in available_planners():
         assert name in r.output
+
+
+def test_plan_summary_is_not_cut_when_piped(tmp_path: Path) -> None:
+    r = runner.invoke(app, ["plan", "jacksboro", "-a", "pso", "--iterations", "3",
+                            "--out", str(tmp_path / "o")])  # fmt: skip
+    assert r.exit_code in (0, 1)
+    assert "flight s" in r.output and "cpu s" in r.output and "…" not in r.output

@@ -16,6 +16,21 @@ err = Console(stderr=True, soft_wrap=True, highlight=False)
 out = Console(soft_wrap=True)
 
 
+def print_table(table: Any) -> None:
+    """A table whole: as wide as it needs when the output is not a terminal (a file or a pipe
+    has no width to keep to), cells folded rather than cut on a terminal."""
+    if out.is_terminal:
+        for col in table.columns:
+            col.overflow = "fold"
+        out.print(table)
+        return
+    from rich.measure import Measurement
+
+    need = Measurement.get(out, out.options.update_width(10_000), table).maximum
+    wide = Console(file=out.file, width=max(out.width, need), soft_wrap=True, highlight=False)
+    wide.print(table)
+
+
 def fail(lines: list[str] | str, code: int = 2) -> typer.Exit:
     """Print problem lines to stderr and return the Exit to raise (no traceback)."""
     for line in [lines] if isinstance(lines, str) else lines:

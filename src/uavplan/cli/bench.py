@@ -9,7 +9,7 @@ import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from uavplan.cli._common import err, out
+from uavplan.cli._common import err, out, print_table
 
 bench_app = typer.Typer(help="Experiments: the papers' plans, run resumably.", no_args_is_help=True)
 
@@ -45,7 +45,7 @@ def list_plans() -> None:
         table.add_column(col)
     for row in rows:
         table.add_row(*row)
-    out.print(table)
+    print_table(table)
 
 
 @bench_app.command("run")

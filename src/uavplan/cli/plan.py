@@ -11,7 +11,7 @@ import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from uavplan.cli._common import err, fail, out, parse_params
+from uavplan.cli._common import err, fail, out, parse_params, print_table
 
 if TYPE_CHECKING:
     from uavplan.planners.fleet_plan import FleetPlan
@@ -150,7 +150,7 @@ def _summary(plan: Any, elapsed: float, out_dir: Path) -> None:
             f"{ft[-1] - ft[0]:.1f}",
             f"{r.wall_time:.2f}",
         )
-    out.print(table)
+    print_table(table)
     if len(shown) < len(plan.results):
         out.print(f"... and {len(plan.results) - len(shown)} more UAVs in plan.json")
     n = len(plan.results)
