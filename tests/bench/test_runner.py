@@ -278,3 +278,18 @@ def test_bench_list_piped_gives_whole_descriptions() -> None:
     for name in available_plans():
         line = next(x for x in lines if x.startswith(f"{name}: "))
         assert line.endswith(get_plan(name).description)
+
+
+def test_convergence_figure_says_when_nothing_is_finite() -> None:
+    import numpy as np
+    import pandas as pd
+
+    from uavplan.bench.plots import convergence_figure
+
+    df = pd.DataFrame({"status": ["ok", "ok"], "scenario": ["s", "s"], "algorithm": ["a", "b"],
+                       "history": [np.full(5, np.inf), np.full(5, np.inf)]})  # fmt: skip
+    fig = convergence_figure(df)
+    assert fig is not None
+    ax = fig.axes[0]
+    assert ax.get_legend() is None and not ax.lines
+    assert any("every run infeasible" in t.get_text() for t in ax.texts)

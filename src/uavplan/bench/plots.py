@@ -84,6 +84,8 @@ def convergence_figure(
                 med = np.nanmedian(np.where(np.isfinite(H), H, np.nan), axis=0)
                 q1 = np.nanpercentile(np.where(np.isfinite(H), H, np.nan), 25, axis=0)
                 q3 = np.nanpercentile(np.where(np.isfinite(H), H, np.nan), 75, axis=0)
+            if not np.isfinite(med).any():  # every run infeasible throughout: no line to draw
+                continue
             positive = positive or bool(np.any(med > 0))
             line = ax.plot(x, med, lw=1.6, label=f"{alg} (n={len(H)})")[0]
             ax.fill_between(x, q1, q3, color=line.get_color(), alpha=0.2, lw=0)
@@ -94,6 +96,9 @@ def convergence_figure(
             ax.set_yscale("log")
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize=7)
+        else:
+            ax.text(0.5, 0.5, "no finite value in any run\n(every run infeasible)",
+                    ha="center", va="center", transform=ax.transAxes, color="#555")  # fmt: skip
         ax.grid(alpha=0.3)
     fig.suptitle(
         "Convergence, median and 25-75 % over runs" + (" (normalized)" if normalized else "")

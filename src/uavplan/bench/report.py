@@ -31,6 +31,7 @@ th,td{border:1px solid #ccc;padding:3px 8px;text-align:right}
 th{background:#f2f2f2} td:first-child,th:first-child{text-align:left}
 img{max-width:100%;border:1px solid #ddd;margin:0.5em 0}
 .note{color:#555;font-size:13px} code{background:#f5f5f5;padding:0 3px}
+.scroll{overflow-x:auto;max-width:100%}
 """
 
 
@@ -61,7 +62,7 @@ def _html_table(df: pd.DataFrame) -> str:
         "<tr>" + "".join(f"<td>{html.escape(_fmt(v))}</td>" for v in r) + "</tr>"
         for r in d.itertuples(index=False)
     )
-    return f"<table><tr>{head}</tr>{rows}</table>"
+    return f"<div class='scroll'><table><tr>{head}</tr>{rows}</table></div>"  # wide: it scrolls
 
 
 def _md_table(df: pd.DataFrame) -> str:
