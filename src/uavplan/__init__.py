@@ -2,13 +2,37 @@
 
 Layers (see docs/architecture.md): ``world`` (what is out there), ``problems`` (how good is a
 batch of paths), ``optimizers`` and ``planners`` (how to find better ones), and the CLI.
+
+Numba's compiled kernels are cached beside the package (``cache=True``); where the package's
+folder is not writable (a system-wide or read-only install), they go to a user cache folder
+instead (``$XDG_CACHE_HOME/uavplan/numba``, else ``~/.cache/uavplan/numba``), so that they are
+compiled once, not at every start. ``NUMBA_CACHE_DIR``, when set, is left as it is.
 """
 
+import os
 from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
 
 try:
     __version__ = version("uavplan")
 except PackageNotFoundError:  # pragma: no cover - running from a source tree without install
     __version__ = "0.0.0+unknown"
 
-__all__ = ["__version__"]
+
+def numba_cache_dir(package: Path, env: dict[str, str], writable: bool | None = None) -> str | None:
+    """Where Numba should cache: None (its default, beside the package) when
+    ``NUMBA_CACHE_DIR`` is set or the package folder is writable (``writable``: as tested by
+    ``os.access`` unless given); else the user cache folder."""
+    if writable is None:
+        writable = os.access(package, os.W_OK)
+    if env.get("NUMBA_CACHE_DIR") or writable:
+        return None
+    base = env.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return str(Path(base) / "uavplan" / "numba")
+
+
+_cache = numba_cache_dir(Path(__file__).resolve().parent, dict(os.environ))
+if _cache is not None:
+    os.environ["NUMBA_CACHE_DIR"] = _cache
+
+__all__ = ["__version__", "numba_cache_dir"]
