@@ -18,3 +18,24 @@ def test_read_only_package_caches_in_the_user_folder(tmp_path: Path) -> None:
     assert numba_cache_dir(tmp_path, {}, writable=False) == str(
         Path.home() / ".cache" / "uavplan" / "numba"
     )
+
+
+def test_first_run_is_told_that_kernels_compile(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    import uavplan
+    from uavplan.cli import _common
+
+    pkg = tmp_path / "uavplan"
+    pkg.mkdir()
+    monkeypatch.setattr(uavplan, "__file__", str(pkg / "__init__.py"))
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    printed: list[str] = []
+    monkeypatch.setattr(_common.err, "print", lambda text, **kw: printed.append(text))
+    _common.compile_notice()
+    assert printed and "compiling kernels once" in printed[0]
+    for rel in _common._KERNEL_MODULES:
+        folder = (pkg / rel).parent / "__pycache__"
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / f"{Path(rel).stem}.kernel-1.py311.nbi").write_bytes(b"")
+    printed.clear()
+    _common.compile_notice()
+    assert printed == []

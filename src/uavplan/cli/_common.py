@@ -16,6 +16,42 @@ err = Console(stderr=True, soft_wrap=True, highlight=False)
 out = Console(soft_wrap=True)
 
 
+#: modules whose Numba kernels every plan uses (their cache tells a first run)
+_KERNEL_MODULES = (
+    "world/geometry.py",
+    "world/_terrain_kernels.py",
+    "problems/_validity_kernels.py",
+)
+
+
+def kernels_cached() -> bool:
+    """Whether Numba's cache holds kernels of the modules every plan uses (beside the package,
+    or under ``NUMBA_CACHE_DIR``)."""
+    import os
+    from pathlib import Path
+
+    import uavplan
+
+    root = Path(uavplan.__file__).resolve().parent
+    cache = os.environ.get("NUMBA_CACHE_DIR")
+    for rel in _KERNEL_MODULES:
+        stem = Path(rel).stem
+        folder = (root / rel).parent / "__pycache__"
+        found = list(folder.glob(f"{stem}.*.nbi")) if folder.is_dir() else []
+        if not found and cache:
+            found = list(Path(cache).rglob(f"{stem}.*.nbi"))
+        if not found:
+            return False
+    return True
+
+
+def compile_notice() -> None:
+    """One line on stderr before the first plan on this machine: the kernels compile once."""
+    if not kernels_cached():
+        err.print("compiling kernels once (about 30-60 s; later runs reuse them)",
+                  markup=False, highlight=False)  # fmt: skip
+
+
 def print_table(table: Any) -> None:
     """A table whole: as wide as it needs when the output is not a terminal (a file or a pipe
     has no width to keep to), cells folded rather than cut on a terminal."""

@@ -11,7 +11,7 @@ import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from uavplan.cli._common import err, fail, out, parse_params, print_table
+from uavplan.cli._common import compile_notice, err, fail, out, parse_params, print_table
 
 if TYPE_CHECKING:
     from uavplan.planners.fleet_plan import FleetPlan
@@ -59,6 +59,7 @@ def _run_plan(
                         ("--waypoints", waypoints)):  # fmt: skip
         if value is not None and value < 1:
             raise fail(f"{flag} {value}: must be at least 1")
+    compile_notice()
     try:
         scenario = resolve(scenario_ref)
     except ScenarioFileError as exc:
