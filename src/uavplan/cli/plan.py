@@ -39,7 +39,7 @@ def write_plan(plan: FleetPlan, out: str | Path, figure: bool = True) -> list[Pa
 
 def _run_plan(
     scenario_ref: str,
-    algorithm: str,
+    algorithm: str | None,
     seed: int,
     out_dir: Path,
     iterations: int | None,
@@ -64,6 +64,12 @@ def _run_plan(
         scenario = resolve(scenario_ref)
     except ScenarioFileError as exc:
         raise fail(getattr(exc, "problems", None) or [str(exc)]) from None
+    if algorithm is None:
+        from uavplan.planners.defaults import default_planner
+
+        algorithm, kind, why = default_planner(scenario)
+        out.print(f"planner: {algorithm} (the default for a {kind}: {why}; docs/results.md; "
+                  "-a NAME for another)")  # fmt: skip
     options: dict[str, Any] = parse_params(params)
     if pop_size is not None:
         options["pop_size"] = pop_size
@@ -228,7 +234,14 @@ def plan(
             "a generated fleet of N UAVs."
         ),
     ],
-    algorithm: Annotated[str, typer.Option("--algorithm", "-a", help="Planner name.")] = "pso",
+    algorithm: Annotated[
+        str | None,
+        typer.Option(
+            "--algorithm", "-a",
+            help="Planner name (default: the best for the scenario's kind by our results: "
+            "spso for one UAV, 2-D or 3-D; ppswarm for a fleet).",
+        ),
+    ] = None,
     seed: Annotated[int, typer.Option(help="Root random seed.")] = 0,
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Output folder.")] = Path("out"),
     iterations: Annotated[int | None, typer.Option(help="Iteration budget (default 200).")] = None,
@@ -252,7 +265,8 @@ def demo(
     ),
     seed: Annotated[int, typer.Option(help="Root random seed.")] = 0,
 ) -> None:
-    """Plan the built-in SPSO benchmark with PSO at SPSO's budget (500 x 200); write OUT/plan.json,
+    """Plan the built-in SPSO benchmark with the default planner for it (SPSO) at SPSO's budget
+    (500 x 200); write OUT/plan.json,
     OUT/plan.png (the figure) and OUT/plan.html (open it in a browser), and print a summary."""
-    result, elapsed = _run_plan("spso", "pso", seed, out_dir, 200, 500, None, None, [])
+    result, elapsed = _run_plan("spso", None, seed, out_dir, 200, 500, None, None, [])
     _summary(result, elapsed, out_dir)

@@ -1,0 +1,47 @@
+"""The planner a user gets without ``-a``: the one our own results show best for the kind of
+scenario (``docs/results.md``).
+
+* **2-D scene** (one UAV): ``spso``. On the RGG-PSO+ paper's 1,000 scenes (``rggpso-rq1``, 10
+  runs each) its paths are the shortest of the six methods: 1.009 times the reference shortest
+  path on average, against RGG-PSO+'s 1.102, and shorter than RGG-PSO+'s in 980 of 1,000
+  scenes; on ``simple2d`` it returns 134.6 m (RGG-PSO+ 142.9 m; the straight line, blocked,
+  127 m).
+* **3-D world, one UAV**: ``spso``. On the SPSO benchmark it reaches the SPSO paper's cost
+  (median 4,780 at the authors' budget, ``spso-scenario``); in the HR-MAGA comparison
+  (``hrmaga-compare``, same budget) it is feasible in 159 of 160 runs and has the lowest median
+  loss on three maps of four (HR-MAGA and P-MAGA are better on ``hrmaga-spso``).
+* **Several UAVs**: ``ppswarm``. Every UAV's flown trajectory is checked while planning and
+  reserved for the others; 40 of 40 UAVs verified as flown on the PPSwarm scenarios and among
+  ten moving obstacles (``ppswarm1-traffic``).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from uavplan.world.scenario import Scenario
+
+#: scenario kind -> (planner, why in one line)
+DEFAULTS = {
+    "2-D scene": ("spso", "the shortest paths on the RGG-PSO+ paper's 1,000 scenes"),
+    "3-D single UAV": (
+        "spso",
+        "the SPSO paper's cost on its benchmark; 159/160 feasible on the HR-MAGA maps",
+    ),
+    "fleet": ("ppswarm", "every UAV's flight checked while planning: 40/40 verified as flown"),
+}
+
+
+def scenario_kind(scenario: Scenario) -> str:
+    """``2-D scene``, ``3-D single UAV`` or ``fleet`` (more than one task)."""
+    if len(scenario.tasks) > 1:
+        return "fleet"
+    return "2-D scene" if scenario.dim == 2 else "3-D single UAV"
+
+
+def default_planner(scenario: Scenario) -> tuple[str, str, str]:
+    """``(planner name, scenario kind, why)`` for a scenario planned without ``-a``."""
+    kind = scenario_kind(scenario)
+    name, why = DEFAULTS[kind]
+    return name, kind, why
