@@ -42,6 +42,9 @@ app.command("fly")(fly_command)
 app.command("export")(export_command)
 app.command("view")(view_command)
 app.command("planners")(planners_command)
+app.command("algorithms", help="The same as `planners`: every planner, or NAME's options.")(
+    planners_command
+)
 app.command("schema")(schema_command)
 
 
