@@ -54,3 +54,12 @@ def test_the_default_plan_is_feasible_without_loops(
     assert not _crosses(P)
     straight = float(np.linalg.norm(P[-1] - P[0]))
     assert doc["uavs"][0]["length"] < 1.6 * straight  # no detour of a loop's size
+
+
+def test_first_sentence_keeps_abbreviations() -> None:
+    from uavplan.planners.registry import first_sentence
+
+    doc = "P-MAGA (HR-MAGA Alg. 1): agents,\n    crossover. More here.\n\nOther paragraph."
+    assert first_sentence(doc) == "P-MAGA (HR-MAGA Alg. 1): agents, crossover."
+    assert first_sentence("RRT* as a planner; see the module docstring") == "RRT* as a planner"
+    assert first_sentence("One line, no stop") == "One line, no stop"

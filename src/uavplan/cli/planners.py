@@ -8,7 +8,7 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table
 
-from uavplan.cli._common import fail, out
+from uavplan.cli._common import fail, out, print_table
 
 
 class PlannerListInHelp(typer.core.TyperCommand):
@@ -27,7 +27,7 @@ class PlannerListInHelp(typer.core.TyperCommand):
         for n in available_planners():
             e = planner_entry(n)
             table.add_row(n, "fleet" if e.fleet else "single UAV", e.summary)
-        out.print(table)
+        print_table(table)
 
 
 def planners(
@@ -52,7 +52,7 @@ def planners(
         for n in available_planners():
             e = planner_entry(n)
             table.add_row(n, "fleet" if e.fleet else "single UAV", e.summary)
-        out.print(table)
+        print_table(table)
         return
     try:
         p = get_planner(name)
@@ -72,4 +72,4 @@ def planners(
         doc = (optimizers.get(opt).__doc__ or "").strip().split("\n")[0]
         for f in fields(cfg):
             table.add_row(f.name, repr(getattr(cfg, f.name)), "", f"{opt}: {doc}")
-    out.print(table)
+    print_table(table)

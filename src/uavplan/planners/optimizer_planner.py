@@ -21,7 +21,12 @@ from uavplan.optimizers.base import fit_schedule
 from uavplan.optimizers.constraints import RULES, Constrained
 from uavplan.planners.base import Planner
 from uavplan.planners.options import PlannerConfig, option
-from uavplan.planners.registry import add_provider, is_registered, register_planner
+from uavplan.planners.registry import (
+    add_provider,
+    first_sentence,
+    is_registered,
+    register_planner,
+)
 from uavplan.planners.run import Run
 from uavplan.problems.encoding import ENCODINGS
 
@@ -89,8 +94,7 @@ class OptimizerPlanner(Planner):
 def _summary(name: str) -> str:
     cls = optimizers.get(name)
     doc = cls.__doc__ or sys.modules[cls.__module__].__doc__ or name
-    first = doc.strip().split("\n")[0].replace(" (see the module docstring)", "")
-    return f"{first} (optimizer over waypoints)"
+    return f"{first_sentence(doc)} (optimizer over waypoints)"
 
 
 def _provide() -> None:

@@ -37,6 +37,19 @@ _PROVIDERS: list[Callable[[], None]] = []
 P = TypeVar("P", bound=type[Planner])
 
 
+def first_sentence(doc: str) -> str:
+    """A docstring's first sentence on one line (up to the first full stop followed by a space
+    or the end of its paragraph), without "(see the module docstring)" remarks."""
+    import re
+
+    para = " ".join(doc.strip().split("\n\n")[0].split())
+    # a full stop ends the sentence unless it ends an abbreviation (Alg. 1, Sect. 5, e.g. ...)
+    end = re.search(r"(?<!\bAlg)(?<!\bAlgs)(?<!\bSect)(?<!\bEq)(?<!\bEqs)(?<!\bFig)(?<!\bFigs)"
+                    r"(?<!\be\.g)(?<!\bi\.e)(?<!\bvs)\.(\s|$)", para)  # fmt: skip
+    text = para if end is None else para[: end.start() + 1]
+    return text.replace(" (see the module docstring)", "").replace("; see the module docstring", "")
+
+
 @typing.overload
 def register_planner(cls: P, /) -> P: ...
 
@@ -56,7 +69,7 @@ def register_planner(
     key = (name or cls.name).lower()
     if key in _REGISTRY and (_REGISTRY[key].cls is not cls or _REGISTRY[key].options != options):
         raise PlannerError(f"planner {key!r} is already registered")
-    doc = summary or (cls.__doc__ or "").strip().split("\n")[0]
+    doc = summary or first_sentence(cls.__doc__ or "")
     entry = PlannerEntry(key, cls, dict(options), doc)
     entry()  # a bad configuration fails here, at import, not at its first use
     _REGISTRY[key] = entry
