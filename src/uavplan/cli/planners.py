@@ -8,7 +8,7 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table
 
-from uavplan.cli._common import fail, out, print_table
+from uavplan.cli._common import fail, print_table
 
 
 class PlannerListInHelp(typer.core.TyperCommand):
