@@ -63,3 +63,33 @@ def test_first_sentence_keeps_abbreviations() -> None:
     assert first_sentence(doc) == "P-MAGA (HR-MAGA Alg. 1): agents, crossover."
     assert first_sentence("RRT* as a planner; see the module docstring") == "RRT* as a planner"
     assert first_sentence("One line, no stop") == "One line, no stop"
+
+
+def test_polish_shortens_by_line_of_sight_and_never_costs_more() -> None:
+    from uavplan.planners import get_planner
+
+    sc = resolve("spso")
+    planner = get_planner("spso", pop_size=60)
+    raw = planner.plan(sc, budget=30, seed=3)
+    pol = planner.plan(sc, budget=30, seed=3, polish=True)
+    assert np.array_equal(raw.waypoints[0], pol.waypoints[0])
+    assert np.array_equal(raw.waypoints[-1], pol.waypoints[-1])
+    note = pol.info.get("polished")
+    assert note  # this seed's path has corners to cut (12 points -> 4)
+    assert len(pol.waypoints) < len(raw.waypoints) and pol.feasible
+    assert pol.cost <= raw.cost + 1e-9 and note["cost"][0] == pytest.approx(raw.cost)
+    assert "polished" not in raw.info
+
+
+def test_plan_raw_keeps_the_optimizers_path(tmp_path: Path) -> None:
+    r = CliRunner().invoke(app, ["plan", "simple2d", "--raw", "--out", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    doc = json.loads((tmp_path / "plan.json").read_text())
+    assert "polished" not in doc["uavs"][0]["info"]
+    r = CliRunner().invoke(app, ["plan", "simple2d", "--out", str(tmp_path / "p")])
+    doc2 = json.loads((tmp_path / "p" / "plan.json").read_text())
+    assert (
+        doc2["uavs"][0]["info"]["polished"]["points"][1]
+        < doc2["uavs"][0]["info"]["polished"]["points"][0]
+    )
+    assert doc2["uavs"][0]["cost"] <= doc["uavs"][0]["cost"]

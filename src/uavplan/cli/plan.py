@@ -48,6 +48,7 @@ def _run_plan(
     cost: str | None,
     params: list[str],
     figure: bool = True,
+    raw: bool = False,
 ) -> Any:
     from uavplan.io.scenario_file import ScenarioFileError
     from uavplan.optimizers.base import Budget, OptimizerError
@@ -104,7 +105,7 @@ def _run_plan(
 
         t0 = time.perf_counter()
         try:
-            plan = plan_all(scenario, planner, budget, seed, make_cb)
+            plan = plan_all(scenario, planner, budget, seed, make_cb, polish=not raw)
         except ValueError as exc:
             raise fail(f"{scenario_ref}: {exc}") from None
         elapsed = time.perf_counter() - t0
@@ -249,11 +250,18 @@ def plan(
     waypoints: Annotated[int | None, typer.Option(help="Free waypoints per path.")] = None,
     cost: Annotated[str | None, typer.Option(help="Cost preset (default: the scenario's).")] = None,
     param: Annotated[list[str] | None, typer.Option(help="Planner parameter NAME=VALUE.")] = None,
+    raw: Annotated[
+        bool,
+        typer.Option(help="Keep the optimizer's path as found (no line-of-sight shortcut)."),
+    ] = False,
 ) -> None:
-    """Plan every task of SCENARIO; write OUT/plan.json, OUT/plan.png and OUT/plan.html."""
+    """Plan every task of SCENARIO; write OUT/plan.json, OUT/plan.png and OUT/plan.html. A
+    single UAV's path is shortened by line of sight where that stays feasible and costs no
+    more, unless --raw (the experiments use the raw paths)."""
     result, elapsed = _run_plan(
-        scenario, algorithm, seed, out_dir, iterations, pop_size, waypoints, cost, param or []
-    )
+        scenario, algorithm, seed, out_dir, iterations, pop_size, waypoints, cost, param or [],
+        raw=raw,
+    )  # fmt: skip
     _summary(result, elapsed, out_dir)
     if not result.feasible:
         raise typer.Exit(1)

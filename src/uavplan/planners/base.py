@@ -261,11 +261,17 @@ class Planner(ABC):
         seed: int | None = None,
         callback: ProgressCallback | None = None,
         reservations: ReservationTable | None = None,
+        polish: bool = False,
     ) -> PlanResult:
         """Plan ``task`` (default: the first) of ``scenario`` within ``budget`` (an int:
         iterations; default :attr:`default_iterations`) from ``seed``; ``callback(iteration,
         best)`` after every iteration may return True to stop. ``reservations``: other UAVs'
         flights to keep S2 from (planners with :attr:`supports_reservations` only).
+        ``polish``: the found path is then shortened by line of sight (the motion validator's
+        :func:`~uavplan.problems.validity.greedy_shortcut`) and the shorter one kept when it is
+        feasible and its cost is not higher (``info["polished"]`` says what changed); not for
+        planners that step in time, nor with reservations. The CLI polishes unless ``--raw``;
+        the experiments never do (the papers' numbers are the optimizers' own).
 
         The result declares its flight (:mod:`uavplan.planners.flight`): the polyline itself,
         or with a turn radius its Dubins-smoothed version, checked as it will be flown."""
@@ -291,6 +297,11 @@ class Planner(ABC):
         if path is None:  # nothing found: the straight segment, infeasible
             path = np.stack([problem.start, problem.goal])
             reasons = reasons or ("no_path",)
+        info = dict(outcome.info)
+        if polish and not reasons and reservations is None and not self.steps_in_time:
+            path, note = _polished(problem, np.asarray(path, dtype=np.float64))
+            if note:
+                info["polished"] = note
         result = make_result(
             problem,
             path,
@@ -303,7 +314,7 @@ class Planner(ABC):
             config=self.describe(),
             seed=seed,
             reasons=reasons,
-            info=outcome.info,
+            info=info,
         )
         flight = fly(
             scenario, t, result.waypoints, result.times, reservations, as_planned=self.steps_in_time
@@ -358,6 +369,21 @@ def separated_problem(
         lookup="bilinear",
         name=f"{preset}+separation",
     )
+
+
+def _polished(problem: PathProblem, path: FloatArray) -> tuple[FloatArray, dict[str, Any]]:
+    """``path`` shortened by line of sight when the shorter one is feasible and costs no more
+    (else ``path`` itself, and an empty note)."""
+    from uavplan.problems.validity import greedy_shortcut
+
+    short, _, _ = greedy_shortcut(problem.validator, path)
+    if len(short) >= len(path):
+        return path, {}
+    before, after = problem.evaluate(path[None]), problem.evaluate(short[None])
+    c0, c1 = float(before.cost[0]), float(after.cost[0])
+    if not bool(after.feasible[0]) or (bool(before.feasible[0]) and c1 > c0):
+        return path, {}
+    return short, {"points": [len(path), len(short)], "cost": [c0, c1]}
 
 
 def _task(scenario: Scenario, task: str | int | None) -> Task:
@@ -456,9 +482,10 @@ class FleetPlanner(Planner):
         seed: int | None = None,
         callback: ProgressCallback | None = None,
         reservations: ReservationTable | None = None,
+        polish: bool = False,
     ) -> PlanResult:
         """A fleet of one: ``task`` alone (fleet planners keep clear of each other's UAVs
-        themselves, not of flights reserved outside)."""
+        themselves, not of flights reserved outside; ``polish`` does not apply)."""
         if reservations is not None:
             raise ValueError(f"planner {self.name!r} does not keep clear of reserved flights")
         t = task if isinstance(task, Task) else _task(scenario, task)

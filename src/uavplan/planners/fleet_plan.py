@@ -53,11 +53,15 @@ def plan_all(
     seed: int | None,
     progress: Callable[[str], ProgressCallback | None] | None = None,
     tasks: Sequence[str] | None = None,
+    polish: bool = False,
 ) -> FleetPlan:
     """Plan every task (or those named in ``tasks``): one with any planner; several together,
     with a :class:`FleetPlanner` (``progress`` then gets the key ``"fleet"``) or with a
     single-UAV planner in the prioritized frame (refused, naming the planners that can, for a
-    planner whose search cannot keep clear of other UAVs). Never several UAVs planned alone."""
+    planner whose search cannot keep clear of other UAVs). Never several UAVs planned alone.
+    ``polish``: a single UAV's path is shortened by line of sight where that keeps it feasible
+    and costs no more (:meth:`Planner.plan`); fleets are not polished (their timing is
+    checked against each other as planned)."""
     if isinstance(planner, FleetPlanner):
         cb = progress("fleet") if progress else None
         fr = planner.plan_fleet(scenario, budget, seed, cb, tuple(tasks) if tasks else None)
@@ -67,7 +71,7 @@ def plan_all(
         raise PlannerError(f"none of the tasks {list(tasks or [])} is in {scenario.name!r}")
     if len(chosen) == 1:
         cb = progress(chosen[0].id) if progress else None
-        r = planner.plan(scenario, chosen[0], budget, task_seeds(seed, 1)[0], cb)
+        r = planner.plan(scenario, chosen[0], budget, task_seeds(seed, 1)[0], cb, polish=polish)
         return FleetPlan(scenario, planner.name, planner.describe(), seed, (r,))
     sc = dataclasses.replace(scenario, tasks=chosen)
     fr = plan_sequentially(planner, sc, budget, seed, progress)
