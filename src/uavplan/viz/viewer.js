@@ -48,6 +48,14 @@ function at(times, pts, t) {  // position at time t (held before the start and a
   return pts[a].map((v, i) => v + f * (pts[b][i] - v));
 }
 
+function groundAt(x, y) {  // the shown terrain's height at (x, y) (nearest node), else 0
+  const T = DATA.terrain;
+  if (!T) return 0;
+  const i = Math.min(T.h.length - 1, Math.max(0, Math.round((y - T.y0) / T.dy)));
+  const j = Math.min(T.h[0].length - 1, Math.max(0, Math.round((x - T.x0) / T.dx)));
+  return T.h[i][j];
+}
+
 function line(pts, style, width, dash) {
   ctx.strokeStyle = style; ctx.lineWidth = width; ctx.setLineDash(dash || []);
   ctx.beginPath();
@@ -96,6 +104,18 @@ function draw() {
   for (const P of DATA.polygons || []) {
     for (const z of P.z) line([...P.v, P.v[0]].map((v) => [v[0], v[1], z]), "#8e44ad", 1.5);
   }
+  // areas lie on the ground: each outline point at the terrain's height there
+  const onGround = (pts) => pts.map((p) => [p[0], p[1], groundAt(p[0], p[1])]);
+  for (const d of DATA.danger || []) line(onGround(ring(d.c, d.r, 0, 48)), "#d4a017", 2);
+  for (const u of DATA.uncertain || []) {
+    const edge = [];
+    const v = [...u.v, u.v[0]];
+    for (let k = 0; k + 1 < v.length; k++) {
+      for (let f = 0; f < 1; f += 0.05) edge.push([v[k][0] + f * (v[k + 1][0] - v[k][0]), v[k][1] + f * (v[k + 1][1] - v[k][1])]);
+    }
+    edge.push(v[v.length - 1]);
+    line(onGround(edge), "#8e44ad", 2, u.known ? [] : [6, 4]);
+  }
   DATA.uavs.forEach((u, k) => {
     const col = u.ok === false ? "#e00000" : palette[k % palette.length];
     line(u.planned, "#888", 1, [4, 4]);
@@ -130,6 +150,8 @@ function legend() {
   if (bad) rows.push(`<span style='color:#e00000'>&#9473;</span> ${bad} UAV(s) failing a check`);
   if ((DATA.cylinders || []).length) rows.push("<span style='color:#c0392b'>&#9711;</span> cylinders / circles");
   if ((DATA.polygons || []).length) rows.push("<span style='color:#8e44ad'>&#9645;</span> polygons");
+  if ((DATA.danger || []).length) rows.push("<span style='color:#d4a017'>&#9711;</span> danger areas");
+  if ((DATA.uncertain || []).length) rows.push("<span style='color:#8e44ad'>&#9633;</span> uncertain areas (dashed: unknown at take-off)");
   if ((DATA.moving || []).length) rows.push("<span style='color:#e67e22'>&#9679;</span> moving obstacles");
   if (DATA.terrain) rows.push(`terrain ${Math.round(lo[2])}-${Math.round(hi[2])} m${zx > 1 ? `, heights x${zx}` : ""}`);
   rows.push("drag: turn; wheel: zoom");

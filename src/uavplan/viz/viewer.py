@@ -80,6 +80,12 @@ def viewer_data(plan: PlanFile, scenario: Scenario | None) -> dict[str, Any]:
         disc = [{"c": _r(c.center), "r": c.radius, "z": [zlo, zhi]} for c in scenario.circles]
         data["cylinders"] = cyl + disc
         data["polygons"] = [{"v": _r(p.vertices), "z": [zlo, zhi]} for p in scenario.polygons]
+        data["danger"] = [{"c": _r(d.center), "r": d.radius} for d in scenario.danger_areas]
+        data["uncertain"] = [
+            {"v": _r([[u.x, u.y], [u.x + u.width, u.y], [u.x + u.width, u.y + u.height],
+                      [u.x, u.y + u.height]]), "known": u.revealed}
+            for u in scenario.uncertain_areas
+        ]  # fmt: skip
         data["moving"] = [
             {"r": m.radius, "t": _r(m.times, 3), "p": _r(np.asarray(m.positions)[:, :3])}
             for m in scenario.moving_obstacles
