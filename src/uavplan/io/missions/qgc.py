@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from uavplan.io.atomic import write_text_atomic
+from uavplan.io.atomic import write_texts_atomic
 from uavplan.io.missions import Mission, register_exporter
 
 #: MAV_AUTOPILOT and MAV_TYPE numbers
@@ -92,10 +92,8 @@ def qgc_document(mission: Mission, k: int) -> dict[str, Any]:
     "qgc", ".plan", "QGroundControl .plan (mission, geofence, rally points)", per_uav=True
 )
 def write_qgc(mission: Mission, out: Path) -> list[Path]:
-    ids = [tr.id for tr in mission.trajectories()]
-    return [
-        write_text_atomic(
-            out / f"{uid}.plan", json.dumps(qgc_document(mission, k), allow_nan=False) + "\n"
-        )
-        for k, uid in enumerate(ids)
+    files = [
+        (out / f"{tr.id}.plan", json.dumps(qgc_document(mission, k), allow_nan=False) + "\n")
+        for k, tr in enumerate(mission.trajectories())
     ]
+    return write_texts_atomic(files)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from uavplan.io.atomic import write_text_atomic
+from uavplan.io.atomic import write_texts_atomic
 from uavplan.io.missions import Mission, register_exporter
 
 
@@ -33,6 +33,6 @@ def wpl_text(mission: Mission, k: int) -> str:
 
 @register_exporter("wpl", ".waypoints", "MAVLink QGC WPL 110 text mission", per_uav=True)
 def write_wpl(mission: Mission, out: Path) -> list[Path]:
-    ids = [tr.id for tr in mission.trajectories()]
-    return [write_text_atomic(out / f"{uid}.waypoints", wpl_text(mission, k))
-            for k, uid in enumerate(ids)]  # fmt: skip
+    files = [(out / f"{tr.id}.waypoints", wpl_text(mission, k))
+             for k, tr in enumerate(mission.trajectories())]  # fmt: skip
+    return write_texts_atomic(files)
