@@ -94,26 +94,40 @@ def demo_record(plan: dict[str, Any]) -> dict[str, Any]:
     return {"uavs": [{k: u[k] for k in keep} for u in plan["uavs"]]}
 
 
-def collect() -> dict[str, Any]:
-    from typer.testing import CliRunner
-
-    from uavplan.bench.catalog import available_plans, get_plan
+def collect_plan(name: str) -> dict[str, Any]:
+    """One plan's smoke-scale rows (run_id -> compared columns)."""
+    from uavplan.bench.catalog import get_plan
     from uavplan.bench.runner import run_sweep
     from uavplan.bench.store import ResultStore
+
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp) / name
+        run_sweep(get_plan(name), folder, scale="smoke", executor="serial")
+        return plan_rows(ResultStore(folder).read())
+
+
+def collect_demo() -> dict[str, Any]:
+    """What ``uavplan demo`` writes, as compared."""
+    from typer.testing import CliRunner
+
     from uavplan.cli import app
 
-    data: dict[str, Any] = {"plans": {}}
     with tempfile.TemporaryDirectory() as tmp:
-        for name in available_plans():
-            folder = Path(tmp) / name
-            run_sweep(get_plan(name), folder, scale="smoke", executor="serial")
-            data["plans"][name] = plan_rows(ResultStore(folder).read())
-            print(f"{name}: {len(data['plans'][name])} runs", file=sys.stderr)
         out = Path(tmp) / "demo"
         res = CliRunner().invoke(app, ["demo", "--out", str(out)])
         if res.exit_code not in (0, 1):
             raise SystemExit(f"uavplan demo failed: {res.output}")
-        data["demo"] = demo_record(json.loads((out / "plan.json").read_text()))
+        return demo_record(json.loads((out / "plan.json").read_text()))
+
+
+def collect() -> dict[str, Any]:
+    from uavplan.bench.catalog import available_plans
+
+    data: dict[str, Any] = {"plans": {}}
+    for name in available_plans():
+        data["plans"][name] = collect_plan(name)
+        print(f"{name}: {len(data['plans'][name])} runs", file=sys.stderr)
+    data["demo"] = collect_demo()
     return data
 
 
