@@ -82,6 +82,14 @@ def summary_lines(s: Scenario) -> list[str]:
             f"extent x {_n(xmin)}..{_n(xmax)} m, y {_n(ymin)}..{_n(ymax)} m, "
             f"heights {_n(hmin)}..{_n(hmax)} m"
         )
+    if s.origin is None:
+        lines.append("origin: none (not geo-referenced; mission export needs one)")
+    else:
+        o = s.origin
+        at = f" at local ({_n(o.x)}, {_n(o.y)}) m" if o.x or o.y else ""
+        acc = f"; positions up to {_n(o.accuracy)} m off the terrain data" if o.accuracy else ""
+        lines.append(f"origin: {o.lat:.6f}, {o.lon:.6f} (WGS84){at}, z = 0 at {_n(o.alt)} m "
+                     f"AMSL{acc}" + (f" ({o.note})" if o.note else ""))  # fmt: skip
     n_inf = sum(1 for c in s.cylinders if c.infinite)
     n_rev = sum(1 for u in s.uncertain_areas if u.revealed)
     lines.append(
