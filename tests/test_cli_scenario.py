@@ -304,3 +304,9 @@ def test_module_entry_point(tmp_path: Path) -> None:
     assert "Traceback" not in r.stderr + r.stdout
     assert f"{bad}: tasks[0].start = [5000, 10, 150]: outside the bounds" in r.stderr
     assert f"{bad}: tasks[0].goal = [1, 1]: has 2 coordinates" in r.stderr
+
+
+def test_show_says_where_the_scenario_is_on_earth() -> None:
+    r = run("show", "jacksboro")
+    assert "origin: 36.589167, -84.246250 (WGS84)" in r.output and "78 m off" in r.output
+    assert "origin: none" in run("show", "simple2d").output
