@@ -169,9 +169,8 @@ class Mission:
                 out.append(MissionItem(178, 2, (1, current, -1, 0, 0, 0, 0)))
         end = self.options.end
         if end == "land":
-            ground = float(self.ground(P[-1:, :2])[0])
-            land_alt = {"amsl": self.origin.alt + ground, "relative": ground - float(
-                self.ground(P[:1, :2])[0]), "terrain": 0.0}[self.options.frame]  # fmt: skip
+            on_ground = np.column_stack([P[-1:, :2], self.ground(P[-1:, :2])])
+            land_alt = float(self.altitudes(tr, on_ground)[0])  # the ground under the goal
             out.append(MissionItem(21, frame, (0, 0, 0, nan, G[-1, 0], G[-1, 1], land_alt)))
         elif end == "rtl":
             out.append(MissionItem(20, 2, (0, 0, 0, 0, 0, 0, 0)))

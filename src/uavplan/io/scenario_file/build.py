@@ -50,6 +50,12 @@ def builtin_terrain(name: str) -> Terrain:
     return Terrain.builtin(name)
 
 
+def _resolve(name: str, base_dir: Path) -> Path:
+    """A file a scenario names: ``~`` expanded, relative to the scenario file's folder."""
+    path = Path(name).expanduser()
+    return Path(os.path.abspath(path if path.is_absolute() else base_dir / path))
+
+
 def _load_srtm(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Terrain | None:
     ts = spec.terrain
     assert ts is not None and ts.srtm is not None
@@ -61,8 +67,7 @@ def _load_srtm(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Terrai
         return None
     paths = []
     for k, name in enumerate(ts.srtm):
-        path = Path(name).expanduser()
-        path = Path(os.path.abspath(path if path.is_absolute() else base_dir / path))
+        path = _resolve(name, base_dir)
         if not path.is_file():
             problems.add(("terrain", "srtm", k), f"SRTM tile not found (or not a file): {path}")
             return None
@@ -92,8 +97,7 @@ def _no_fly_polygons(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> 
     geo = GeoOrigin(**spec.origin.model_dump())
     out: list[Polygon] = []
     for k, name in enumerate(spec.no_fly):
-        path = Path(name).expanduser()
-        path = Path(os.path.abspath(path if path.is_absolute() else base_dir / path))
+        path = _resolve(name, base_dir)
         try:
             doc = json.loads(path.read_text(encoding="utf-8"))
         except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
@@ -180,10 +184,7 @@ def _load_terrain(ts: TerrainSpec, problems: Problems, base_dir: Path) -> Terrai
             problems.add(("terrain", "builtin"), f"cannot load the built-in terrain: {exc}")
             return None
     assert ts.file is not None
-    path = Path(ts.file).expanduser()
-    if not path.is_absolute():
-        path = base_dir / path
-    resolved = Path(os.path.abspath(path))
+    resolved = _resolve(ts.file, base_dir)
     if not resolved.exists():
         problems.add(("terrain", "file"), f"DEM file not found: {resolved}")
         return None
