@@ -70,8 +70,8 @@ def viewer_data(plan: PlanFile, scenario: Scenario | None) -> dict[str, Any]:
             H = np.asarray(t.heights)
             # each shown node is the highest of the block it stands for: the page never shows a
             # path under a summit that the coarse picture flattened
-            Hb = np.array([[H[i : i + sy, j : j + sx].max() for j in range(0, nx, sx)]
-                           for i in range(0, ny, sy)])  # fmt: skip
+            rows = np.maximum.reduceat(H, np.arange(0, ny, sy), axis=0)
+            Hb = np.maximum.reduceat(rows, np.arange(0, nx, sx), axis=1)
             data["terrain"] = {"x0": t.x0, "y0": t.y0, "dx": t.dx * sx, "dy": t.dy * sy,
                                "h": _r(Hb, 1)}  # fmt: skip
         zlo, zhi = float(lo[2]), float(hi[2])
