@@ -327,17 +327,24 @@ def _force(
         if t >= mo_t[k1 - 1]:
             qx, qy, qz = mo_p[k1 - 1, 0], mo_p[k1 - 1, 1], mo_p[k1 - 1, 2]
         elif t > mo_t[k0]:
-            for k in range(k0, k1 - 1):
-                if mo_t[k] <= t < mo_t[k + 1]:
-                    h = mo_t[k + 1] - mo_t[k]
-                    a = (t - mo_t[k]) / h
-                    wx = (mo_p[k + 1, 0] - mo_p[k, 0]) / h
-                    wy = (mo_p[k + 1, 1] - mo_p[k, 1]) / h
-                    wz = (mo_p[k + 1, 2] - mo_p[k, 2]) / h
-                    qx = mo_p[k, 0] + a * (mo_p[k + 1, 0] - mo_p[k, 0])
-                    qy = mo_p[k, 1] + a * (mo_p[k + 1, 1] - mo_p[k, 1])
-                    qz = mo_p[k, 2] + a * (mo_p[k + 1, 2] - mo_p[k, 2])
-                    break
+            # the sample interval holding t: the last k with mo_t[k] <= t (binary search; the
+            # times do not decrease, so mo_t[k + 1] > t; other UAVs' flights have thousands)
+            lo_k, hi_k = k0, k1 - 1
+            while hi_k - lo_k > 1:
+                mid = (lo_k + hi_k) // 2
+                if mo_t[mid] <= t:
+                    lo_k = mid
+                else:
+                    hi_k = mid
+            k = lo_k
+            h = mo_t[k + 1] - mo_t[k]
+            a = (t - mo_t[k]) / h
+            wx = (mo_p[k + 1, 0] - mo_p[k, 0]) / h
+            wy = (mo_p[k + 1, 1] - mo_p[k, 1]) / h
+            wz = (mo_p[k + 1, 2] - mo_p[k, 2]) / h
+            qx = mo_p[k, 0] + a * (mo_p[k + 1, 0] - mo_p[k, 0])
+            qy = mo_p[k, 1] + a * (mo_p[k + 1, 1] - mo_p[k, 1])
+            qz = mo_p[k, 2] + a * (mo_p[k + 1, 2] - mo_p[k, 2])
         rx, ry = p[0] - qx, p[1] - qy
         rz = p[2] - qz if dim3 else 0.0
         dist = math.sqrt(rx * rx + ry * ry + rz * rz)
