@@ -113,6 +113,43 @@ def test_bad_plan_files_say_what_and_where(doc: object, message: str) -> None:
     assert str(e.value).startswith("p.json") and len(e.value.problems) == 1
 
 
+def _strict(text: str) -> object:
+    """Parse as RFC 8259 JSON: Python's ``Infinity``/``NaN`` extensions refused."""
+
+    def refuse(name: str) -> None:
+        raise ValueError(f"not JSON: {name}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_an_infeasible_plan_is_strict_json_with_null_for_infinity(tmp_path: Path) -> None:
+    # PSO under the "inf" rule on a scene with a wall: infinite costs in the cost and history
+    sc = resolve("simple2d")
+    plan = plan_all(sc, get_planner("pso", pop_size=4, constraints="inf"), 1, 0, polish=False)
+    r = plan.results[0]
+    assert not np.isfinite(r.cost) or not np.all(np.isfinite(r.history)), "needs an infinity"
+    path = write_plan_file(plan, tmp_path / "plan.json")
+    text = path.read_text()
+    doc = _strict(text)
+    assert isinstance(doc, dict) and doc["format"] == "uavplan.plan/3"
+    u = doc["uavs"][0]
+    numbers = [u["cost"], *u["terms"].values(), *u["history"]]
+    assert not any(isinstance(v, str) for v in numbers)  # format 2 wrote "inf" strings
+    assert (u["cost"] is None) == (not np.isfinite(r.cost))
+    assert [h is None for h in u["history"]] == [not np.isfinite(h) for h in r.history]
+    PlanSpec.model_validate(doc)
+    back = read_plan_file(path).uavs[0]
+    assert back.cost == r.cost or (back.cost == np.inf and not np.isfinite(r.cost))
+
+
+def test_format_2_infinity_strings_still_load() -> None:
+    v2 = {"format": "uavplan.plan/2", "uavs": [
+        {"id": "a", "waypoints": [[0, 0], [1, 0]], "times": [0, 1], "cost": "inf",
+         "history": ["inf", 3.0]}]}  # fmt: skip
+    assert parse_plan(v2).uavs[0].cost == np.inf
+    PlanSpec.model_validate(v2)
+
+
 def test_files_on_disk(tmp_path: Path, single_plan) -> None:  # type: ignore[no-untyped-def]
     path = write_plan_file(single_plan, tmp_path / "plan.json")
     assert read_plan_file(tmp_path).uavs[0].id == single_plan.results[0].uav_id  # the folder

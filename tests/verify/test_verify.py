@@ -516,7 +516,8 @@ def test_box_measure_matches_sampling_and_the_reservation_table(seed: int) -> No
     pa = rng.uniform([0, 0, 0], [300, 300, 60], (4, 3))
     pb = rng.uniform([0, 0, 0], [300, 300, 60], (5, 3))
     ta = np.concatenate([[0.0], np.cumsum(rng.uniform(1, 4, 3))])
-    tb = np.concatenate([[rng.uniform(0, 2)], rng.uniform(0, 2) + np.cumsum(rng.uniform(1, 4, 4))])
+    t0 = rng.uniform(0, 2)  # one take-off time: the times must not decrease
+    tb = np.concatenate([[t0], t0 + np.cumsum(rng.uniform(1, 4, 4))])
     a, b = traj("a", pa, ta), traj("b", pb, tb)
     d, tm = pair_min_distance(a, b, axes=BOX)
     if not math.isfinite(d):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import stat
 import tempfile
@@ -36,8 +37,21 @@ def write_text_atomic(path: str | Path, text: str) -> Path:
     return write_bytes_atomic(path, text.encode("utf-8"))
 
 
+def strict_json(obj: Any) -> Any:
+    """``obj`` with every float that is not finite replaced by None: JSON (RFC 8259) has no
+    infinity or NaN, and Python's ``json`` would write the non-standard ``Infinity``."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: strict_json(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [strict_json(v) for v in obj]
+    return obj
+
+
 def write_json_atomic(path: str | Path, obj: Any) -> Path:
-    return write_text_atomic(path, json.dumps(obj, indent=2) + "\n")
+    """Strict JSON (non-finite numbers as null, :func:`strict_json`), written atomically."""
+    return write_text_atomic(path, json.dumps(strict_json(obj), indent=2, allow_nan=False) + "\n")
 
 
 def write_texts_atomic(files: list[tuple[Path, str]], threads: int = 8) -> list[Path]:

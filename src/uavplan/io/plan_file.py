@@ -1,6 +1,6 @@
 """Plan files (``plan.json``): the one module that writes and reads them.
 
-**Format 2** (``"format": "uavplan.plan/2"``), a JSON object (its JSON Schema:
+**Format 3** (``"format": "uavplan.plan/3"``), a JSON object (its JSON Schema:
 :func:`plan_schema`, ``uavplan schema plan``; described in ``docs/plan-format.md``):
 
 * ``scenario``, ``algorithm``, ``config`` (the planner's options), ``seed``, ``version``,
@@ -18,12 +18,15 @@
   kinematic limits), and optionally ``smoothed`` (``points``, ``times``, ``clear``,
   ``violations``: a Dubins-smoothed version that the plan does not declare, informative).
 
-JSON has no infinity: infinite costs are the strings ``"inf"``/``"-inf"``. Coordinates and times
-are rounded to 6 decimals (micrometres, microseconds).
+Every file is strict JSON (RFC 8259): a number that is not finite (the infinite cost of a path
+that fails a check under the ``inf`` rule, a history entry before the first candidate) is
+``null``, and every field that can be ``null`` says what it means in ``docs/plan-format.md``.
+Format 2 was format 3 with such numbers as the strings ``"inf"``/``"-inf"``; it still loads.
+Coordinates and times are rounded to 6 decimals (micrometres, microseconds).
 
 **Reading** (:func:`read_plan_file`, :func:`parse_plan`) returns a typed :class:`PlanFile` whose
 UAVs give their trajectories (:meth:`UAVPlan.trajectory`: flown, planned or smoothed, as
-:class:`Trajectory`); it reads format 2 and format 1 (no top-level ``feasible``, no per-UAV
+:class:`Trajectory`); it reads formats 3, 2 and 1 (no top-level ``feasible``, no per-UAV
 ``cost_model``, ``info`` and ``flown``: the planned polyline is then what is flown), and a bare
 ``{"uavs": [{"id", "waypoints", "times"}, ...]}``. A
 file it cannot read raises :class:`PlanFormatError` with one line naming the file, the field
@@ -55,12 +58,12 @@ if TYPE_CHECKING:
 
 FloatArray = NDArray[np.float64]
 
-PLAN_FORMAT = "uavplan.plan/2"
+PLAN_FORMAT = "uavplan.plan/3"
 #: Which trajectory of a UAV: the one it is to fly (declared), its planned polyline, or the
 #: informative smoothed version.
 TrajectoryKind = Literal["flown", "planned", "smoothed"]
 #: Every format this module reads.
-READABLE_FORMATS = ("uavplan.plan/1", PLAN_FORMAT)
+READABLE_FORMATS = ("uavplan.plan/1", "uavplan.plan/2", PLAN_FORMAT)
 FRAME = "local ENU metres: x east, y north, z up (absolute altitude)"
 
 
@@ -73,10 +76,10 @@ class PlanFormatError(ValueError):
 
 
 # ====================================================================================== writing
-def _num(v: float) -> float | str:
-    """JSON has no infinity: write it as the string "inf"."""
+def _num(v: float) -> float | None:
+    """JSON has no infinity: a number that is not finite is written as null."""
     v = float(v)
-    return v if math.isfinite(v) else ("inf" if v > 0 else ("-inf" if v < 0 else "nan"))
+    return v if math.isfinite(v) else None
 
 
 def _points(a: Any) -> list[Any]:
@@ -85,7 +88,7 @@ def _points(a: Any) -> list[Any]:
 
 
 def _plain(obj: Any) -> Any:
-    """JSON-ready: NumPy scalars and arrays as Python numbers and lists, non-finite as strings."""
+    """JSON-ready: NumPy scalars and arrays as Python numbers and lists, non-finite as null."""
     if isinstance(obj, Mapping):
         return {str(k): _plain(v) for k, v in obj.items()}
     if isinstance(obj, list | tuple):
@@ -152,7 +155,7 @@ def fleet_record(f: FleetResult) -> dict[str, Any]:
 
 
 def plan_document(plan: FleetPlan) -> dict[str, Any]:
-    """The JSON-ready ``plan.json`` of a plan (format 2)."""
+    """The JSON-ready ``plan.json`` of a plan (format 3)."""
     return {
         "format": PLAN_FORMAT,
         "scenario": plan.scenario.name,
@@ -429,6 +432,8 @@ def parse_plan(data: Any, dim: int | None = None, source: str = "plan") -> PlanF
             flown = _timed(fl, "points", f"{here}.flown", d, uid, fl_ok)
             fl_viol = _names(fl, "violations", f"{here}.flown")
         cost = rec.get("cost")
+        if cost is None and "cost" in rec and fmt == PLAN_FORMAT:
+            cost = "inf"  # format 3 writes an infinite cost as null
         cm = rec.get("cost_model")
         out.append(
             UAVPlan(
@@ -514,7 +519,8 @@ def read_plan_file(path: str | Path, dim: int | None = None) -> PlanFile:
 
 
 # ====================================================================================== schema
-Number = float | Literal["inf", "-inf"]
+#: a number in a plan file: null where it is not finite (format 3), the strings of format 2
+Number = float | Literal["inf", "-inf"] | None
 
 
 class _Spec(BaseModel):
@@ -577,7 +583,7 @@ class FleetSpec(_Spec):
 class PlanSpec(_Spec):
     """A uavplan plan file (``plan.json``)."""
 
-    format: Literal["uavplan.plan/1", "uavplan.plan/2"] | None = "uavplan.plan/2"
+    format: Literal["uavplan.plan/1", "uavplan.plan/2", "uavplan.plan/3"] | None = PLAN_FORMAT
     scenario: str | None = None
     algorithm: str | None = None
     config: dict[str, Any] = Field(default_factory=dict)

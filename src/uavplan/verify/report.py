@@ -128,7 +128,7 @@ class VerifyReport:
 
     def to_dict(self) -> dict[str, Any]:
         return {
-            "format": "uavplan.verify/1",
+            "format": "uavplan.verify/2",
             "scenario": self.scenario,
             "plan_scenario": self.plan_scenario,
             "smoothed": self.smoothed,
@@ -152,9 +152,10 @@ class VerifyReport:
         }
 
 
-def json_number(v: float) -> float | str:
+def json_number(v: float) -> float | None:
+    """JSON has no infinity: null (format 2; format 1 wrote the strings "inf", "-inf")."""
     v = float(v)
-    return v if math.isfinite(v) else ("inf" if v > 0 else ("-inf" if v < 0 else "nan"))
+    return v if math.isfinite(v) else None
 
 
 # ================================================================================ formatting
