@@ -98,4 +98,3 @@ def test_bad_rule_and_base() -> None:
     with pytest.raises(OptimizerError, match="base"):
         Constrained(Disc(), "feasibility-first", base=-1.0)
     assert RULES == ("cost", "inf", "feasibility-first")
-

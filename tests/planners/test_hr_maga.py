@@ -25,9 +25,11 @@ def hills() -> Scenario:
     straight line, a band 30-250 m above ground."""
     x = np.arange(0, 2001, 20.0)
     X, Y = np.meshgrid(x, x)
-    H = 150 * np.exp(-((X - 700) ** 2 + (Y - 600) ** 2) / 2e5) + 120 * np.exp(
-        -((X - 1300) ** 2 + (Y - 1400) ** 2) / 1.5e5
-    ) + 20 * np.sin(X / 130) * np.cos(Y / 170)
+    H = (
+        150 * np.exp(-((X - 700) ** 2 + (Y - 600) ** 2) / 2e5)
+        + 120 * np.exp(-((X - 1300) ** 2 + (Y - 1400) ** 2) / 1.5e5)
+        + 20 * np.sin(X / 130) * np.cos(Y / 170)
+    )
     t = Terrain(H, 0.0, 0.0, 20.0, 20.0, "hills")
     s = (100.0, 100.0, float(t.height(100.0, 100.0)) + 100.0)
     g = (1900.0, 1900.0, float(t.height(1900.0, 1900.0)) + 100.0)

@@ -162,9 +162,7 @@ def test_flights_keep_their_timing_and_agree_with_the_verifier(
 
 
 @pytest.mark.parametrize("timing", ["planned", "constant"])
-def test_paper_mode_smooths_after_and_declares_the_polylines(
-    fleet3: Scenario, timing: str
-) -> None:
+def test_paper_mode_smooths_after_and_declares_the_polylines(fleet3: Scenario, timing: str) -> None:
     r = get_planner("ppswarm", **SMALL, smooth_timing=timing, flight="after").plan_fleet(
         fleet3, seed=5
     )

@@ -442,4 +442,3 @@ def test_schedule_rejects_bad_times():
         schedule(sp, [0.0, 1.0])
     with pytest.raises(ValueError, match="non-decreasing"):
         schedule(sp, [0.0, 5.0, 4.0])
-

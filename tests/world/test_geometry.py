@@ -475,9 +475,7 @@ def test_fused_scene_kernel_matches_the_separate_kernels() -> None:
         d = segment_cylinder_distance(P3, w.circ_centers, np.full(J, -np.inf), np.full(J, np.inf))
         assert np.array_equal(circle_hit, np.any(d < w.circ_radii, axis=(1, 2)))
         dp = segment_polygon_distance(P3, verts, starts)
-        assert np.array_equal(
-            polygon_hit, np.any((dp <= 0.0) | (dp < w.poly_margin), axis=(1, 2))
-        )
+        assert np.array_equal(polygon_hit, np.any((dp <= 0.0) | (dp < w.poly_margin), axis=(1, 2)))
 
 
 def test_fused_kernel_convex_fast_path_agrees_with_the_general_method() -> None:

@@ -159,9 +159,9 @@ def test_simplified_reservation_is_conservative_within_its_pad():
         assert pad.shape == (len(keep) - 1,) and np.all(pad <= tol + 1e-12)
         # the stated deviation is the largest one, at the original samples
         for i, (a, b) in enumerate(itertools.pairwise(keep)):
-            f = (t[a:b + 1] - t[a]) / (t[b] - t[a])
+            f = (t[a : b + 1] - t[a]) / (t[b] - t[a])
             chord = p[a] + f[:, None] * (p[b] - p[a])
-            assert np.max(np.linalg.norm(p[a:b + 1] - chord, axis=1)) == pytest.approx(
+            assert np.max(np.linalg.norm(p[a : b + 1] - chord, axis=1)) == pytest.approx(
                 pad[i], abs=1e-9
             )
         exact = ReservationTable(LO, HI, sep)

@@ -238,7 +238,8 @@ def plan(
     algorithm: Annotated[
         str | None,
         typer.Option(
-            "--algorithm", "-a",
+            "--algorithm",
+            "-a",
             help="Planner name (default: the best for the scenario's kind by our results: "
             "spso for one UAV, 2-D or 3-D; ppswarm for a fleet).",
         ),

@@ -106,8 +106,8 @@ def verify(
     speed, and the UAV's kinematic limits (turn radius, climb and descent angles, minimum speed).
     By default each UAV's flown trajectory (its planned polyline where the plan declares none).
     Exit 0 if all pass, 1 on any violation, 2 on bad input."""
-    from uavplan.io.plan_file import PlanFormatError, load_plan_json, parse_plan, plan_path
     from uavplan.io.atomic import strict_json
+    from uavplan.io.plan_file import PlanFormatError, load_plan_json, parse_plan, plan_path
     from uavplan.verify import verify_trajectories
     from uavplan.verify.verifier import TRAJECTORIES
 
@@ -149,9 +149,8 @@ def verify(
     if json_out is not None:
         try:
             json_out.parent.mkdir(parents=True, exist_ok=True)
-            json_out.write_text(
-                json.dumps(strict_json(report.to_dict()), indent=2, allow_nan=False) + "\n", encoding="utf-8"
-            )
+            doc = strict_json(report.to_dict())
+            json_out.write_text(json.dumps(doc, indent=2, allow_nan=False) + "\n", encoding="utf-8")
         except OSError as exc:
             raise fail(f"--json {json_out}: cannot write: {exc}") from None
     if not report.ok:

@@ -62,9 +62,7 @@ def _box_min(r0x, r0y, r0z, drx, dry, drz, S):  # pragma: no cover - numba
     """(q_min, s at the minimum) of ``q(s) = max_i |r0_i + s dr_i| / S_i`` over [0, 1], by
     bisection on the level (80 halvings: to the last bits of a double)."""
     q0 = max(abs(r0x) / S[0], max(abs(r0y) / S[1], abs(r0z) / S[2]))
-    q1 = max(
-        abs(r0x + drx) / S[0], max(abs(r0y + dry) / S[1], abs(r0z + drz) / S[2])
-    )
+    q1 = max(abs(r0x + drx) / S[0], max(abs(r0y + dry) / S[1], abs(r0z + drz) / S[2]))
     hi = min(q0, q1)
     s_hi = 0.0 if q0 <= q1 else 1.0
     lo = 0.0
@@ -302,9 +300,7 @@ def pair_min_distance(a: Trajectory, b: Trajectory, axes: Axes = None) -> tuple[
     return float(res[0]), float(res[1])
 
 
-def pair_encounters(
-    a: Trajectory, b: Trajectory, s2: float, axes: Axes = None
-) -> list[Violation]:
+def pair_encounters(a: Trajectory, b: Trajectory, s2: float, axes: Axes = None) -> list[Violation]:
     """Every close encounter of two UAVs (a run of consecutive common intervals on which they
     come closer than ``s2 - TOL``), reported at its closest point. With per-axis ``axes``,
     ``s2`` is ``max(axes)`` and "closer" is the box measure (:func:`box_measure`)."""
@@ -369,9 +365,7 @@ def _crossing(row: FloatArray, s2: float, first: bool, axes: Axes = None) -> flo
     dr = row[13:16] - r0
     if axes is not None:
         S = np.asarray(axes, dtype=np.float64)
-        lo, hi = _box_level(
-            r0[0], r0[1], r0[2], dr[0], dr[1], dr[2], S, s2 / float(S.max())
-        )
+        lo, hi = _box_level(r0[0], r0[1], r0[2], dr[0], dr[1], dr[2], S, s2 / float(S.max()))
         if lo > hi:
             return t0 if first else t1
         return t0 + (lo if first else hi) * (t1 - t0)

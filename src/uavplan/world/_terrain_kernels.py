@@ -419,9 +419,7 @@ def mean_height_batch_reference(H, u, v):  # pragma: no cover - numba
             tsorted = np.sort(ts[:n])
             total = 0.0
             for q in range(n - 1):
-                total += _interval_mean(
-                    H, ncx, ncy, u0, v0, du, dv, tsorted[q], tsorted[q + 1]
-                )
+                total += _interval_mean(H, ncx, ncy, u0, v0, du, dv, tsorted[q], tsorted[q + 1])
             if du == 0.0 and dv == 0.0:
                 uc = min(max(u0, 0.0), float(ncx))
                 vc = min(max(v0, 0.0), float(ncy))

@@ -296,9 +296,7 @@ def _piece_min_dist2(a0, a1, ta0, ta1, b0, b1, tb0, tb1):  # pragma: no cover - 
 
 @njit(cache=True)
 def _cheb_at(r0x, r0y, r0z, drx, dry, drz, w, s):  # pragma: no cover - numba
-    return max(
-        w[0] * abs(r0x + s * drx), max(w[1] * abs(r0y + s * dry), w[2] * abs(r0z + s * drz))
-    )
+    return max(w[0] * abs(r0x + s * drx), max(w[1] * abs(r0y + s * dry), w[2] * abs(r0z + s * drz)))
 
 
 @njit(cache=True)
@@ -461,9 +459,7 @@ class ReservationTable:
         )
         self.separation = float(axes.max())
         # scaled Chebyshev weights S_ref / S_i (unused for a sphere)
-        self._w = (
-            self.separation / np.asarray(self.axes) if self.axes is not None else np.ones(3)
-        )
+        self._w = self.separation / np.asarray(self.axes) if self.axes is not None else np.ones(3)
         self.dt = float(dt)
         self.cell = float(cell if cell is not None else max(4.0 * self.separation, 40.0))
         lo = np.asarray(lower, dtype=np.float64)[:3]

@@ -45,6 +45,7 @@ FUNCTION_ALGORITHMS = (
     Algorithm("abc", "abc"),
 )
 
+
 def _functions_plan(name: str, description: str, smoke: Scale, paper: Scale) -> None:
     register_plan(
         ExperimentPlan(
