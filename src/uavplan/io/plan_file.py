@@ -583,7 +583,7 @@ class FleetSpec(_Spec):
 class PlanSpec(_Spec):
     """A uavplan plan file (``plan.json``)."""
 
-    format: Literal["uavplan.plan/1", "uavplan.plan/2", "uavplan.plan/3"] | None = PLAN_FORMAT
+    format: Literal["uavplan.plan/1", "uavplan.plan/2", "uavplan.plan/3"] | None = "uavplan.plan/3"
     scenario: str | None = None
     algorithm: str | None = None
     config: dict[str, Any] = Field(default_factory=dict)

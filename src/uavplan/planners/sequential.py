@@ -12,11 +12,11 @@ RRT*, the RGG) is refused with a message naming the planners that can.
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable
 
 import numpy as np
 
+from uavplan.compile_clock import Stopwatch
 from uavplan.optimizers.base import Budget
 from uavplan.planners.base import Planner
 from uavplan.planners.options import PlannerError
@@ -58,7 +58,7 @@ def plan_sequentially(
             f"{scenario.name!r} has {len(scenario.tasks)} UAVs: plan it with one of "
             f"{', '.join(separating_planners())}"
         )
-    t0 = time.perf_counter()
+    clock = Stopwatch()  # kernel compilation left out
     tasks = scenario.tasks
     seeds = task_seeds(seed, len(tasks))
     straight = [float(np.linalg.norm(np.subtract(t.goal, t.start))) for t in tasks]
@@ -84,7 +84,7 @@ def plan_sequentially(
         planned_feasible=planned,
         history=np.zeros(0),
         restart_costs=np.asarray([total if planned else math.inf]),
-        wall_time=time.perf_counter() - t0,
+        wall_time=clock.elapsed,
         algorithm=planner.name,
         config=planner.describe(),
         seed=seed,
