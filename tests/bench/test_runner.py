@@ -193,6 +193,8 @@ def test_shards_share_one_schema(tmp_path: Path) -> None:
             "best_cost": None,
             "feasible": None,
             "history": None,
+            "uav_min_clear_m": [None, None],  # a kind's own metrics, none this time
+            "min_separation": None,
         }
     )
     store.flush()
@@ -207,6 +209,8 @@ def test_shards_share_one_schema(tmp_path: Path) -> None:
             "best_cost": 1.5,
             "feasible": True,
             "history": [3.0, 1.5],
+            "uav_min_clear_m": [12.5, 40.0],
+            "min_separation": 61.0,
         }
     )
     store.flush()
@@ -214,6 +218,8 @@ def test_shards_share_one_schema(tmp_path: Path) -> None:
     df = pd.read_parquet(tmp_path / "runs").sort_values("run_id")
     assert df.first_feasible_iteration.tolist()[1] == 7
     assert np.isnan(df.best_cost.tolist()[0]) and df.best_cost.tolist()[1] == 1.5
+    assert df.min_separation.tolist()[1] == 61.0
+    assert list(df.uav_min_clear_m.tolist()[1]) == [12.5, 40.0]
 
 
 def test_report_uses_the_runs_the_last_sweep_asked_for(tmp_path) -> None:

@@ -196,5 +196,19 @@ def rows_to_table(rows: list[dict[str, Any]]) -> pa.Table:
         elif k in TYPES:
             arrays[k] = pa.array(values, type=TYPES[k], from_pandas=True)
         else:
-            arrays[k] = pa.array(values, from_pandas=True)
+            arrays[k] = _no_null_type(pa.array(values, from_pandas=True))
     return pa.table(arrays)
+
+
+def _no_null_type(arr: pa.Array) -> pa.Array:
+    """A column of a kind's own metrics that is all null in this shard (a metric no run of the
+    chunk had, such as a clearance with no moving obstacle) would get Arrow's null type, and
+    pandas and pyarrow, reading the folder as one dataset with the first shard's schema, could
+    not cast another shard's numbers to it: such metrics are numbers, so null becomes float64
+    (and a list of nulls a list of float64)."""
+    t = arr.type
+    if pa.types.is_null(t):
+        return arr.cast(pa.float64())
+    if pa.types.is_list(t) and pa.types.is_null(t.value_type):
+        return arr.cast(pa.list_(pa.float64()))
+    return arr
