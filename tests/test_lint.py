@@ -20,6 +20,7 @@ def test_ruff_clean() -> None:
     assert r.returncode == 0, r.stdout + r.stderr
 
 
+@pytest.mark.slow  # 40-110 s without its cache (a fresh clone)
 @pytest.mark.skipif(shutil.which("mypy") is None, reason="mypy not installed")
 def test_mypy_clean() -> None:
     r = subprocess.run(

@@ -45,6 +45,7 @@ def test_seeds_depend_only_on_identity() -> None:
     assert a != derive_seed(0, "p", "s", "b", 3)
 
 
+@pytest.mark.slow  # a Dask cluster and two process pools: 60-90 s
 def test_serial_process_and_dask_give_identical_results(tmp_path: Path) -> None:
     serial = run_sweep(PLAN, tmp_path / "serial", executor="serial")
     assert serial.executed == 24 and serial.failed == 0

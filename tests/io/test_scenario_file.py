@@ -747,6 +747,7 @@ def test_invalid_dict_is_not_written(tmp_path: Path) -> None:
     assert not (tmp_path / "x.yaml").exists()
 
 
+@pytest.mark.slow  # four generations with their reference paths: 30 s
 def test_resolve_generates_rgg_family_scenes() -> None:
     from uavplan.scenarios import resolve
     from uavplan.scenarios.generators import rgg_scenario
