@@ -6,7 +6,6 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from uavplan.cli._common import err, out, print_table
@@ -90,6 +89,14 @@ def run(
     if scheduler:
         executor = "dask"
     folder = out_dir or Path("results") / f"{plan}-{scale}"
+    from rich.progress import (  # here: 50 ms that `uavplan --help` need not pay
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+    )
+
     with Progress(
         TextColumn(f"[bold]{plan}[/bold] {scale}"),
         BarColumn(),
