@@ -11,7 +11,6 @@ from uavplan.bench.catalog import available_plans, get_plan
 from uavplan.bench.report import write_report
 from uavplan.bench.runner import run_sweep
 
-
 #: plans whose smoke sweep takes 25-100 s here: in the slow set (their golden records, which run
 #: the same sweep and compare its numbers, stay in the default run)
 SLOW = {"fleet-scale", "hrmaga-compare", "rscdwoa-dynamic", "functions", "functions-iterations"}

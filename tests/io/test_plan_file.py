@@ -239,3 +239,18 @@ def test_plan_summary_is_not_cut_when_piped(tmp_path: Path) -> None:
                             "--out", str(tmp_path / "o")])  # fmt: skip
     assert r.exit_code in (0, 1)
     assert "flight s" in r.output and "cpu s" in r.output and "…" not in r.output
+
+
+def test_plan_takes_a_time_budget(tmp_path: Path) -> None:
+    """--time alone: no iteration limit (RRT* keeps improving its tree until the time is up)."""
+    args = ["plan", "simple2d", "-a", "rrt-star", "--param", "stop_at_goal=false", "--cost",
+            "length", "--time", "0.5", "--out", str(tmp_path)]  # fmt: skip
+    r = runner.invoke(app, args)
+    assert r.exit_code == 0, r.output
+    doc = json.loads((tmp_path / "plan.json").read_text())
+    u = doc["uavs"][0]
+    assert doc["feasible"] and u["cost_model"] == "length"
+    assert u["cost"] == pytest.approx(u["length"])
+    assert 0.4 < u["wall_time"] < 5.0
+    r = runner.invoke(app, ["plan", "simple2d", "--time", "-1", "--out", str(tmp_path / "x")])
+    assert r.exit_code == 2 and "--time -1.0: must be a positive number of seconds" in r.output

@@ -160,7 +160,8 @@ def scenarios() -> dict[str, Scenario]:
 
 # ----------------------------------------------------------------------------- batch == loop
 def test_presets_are_the_documented_ones() -> None:
-    assert cost_presets() == ["hrmaga", "length2d", "ppswarm", "spso"]
+    assert cost_presets() == ["hrmaga", "length", "length2d", "ppswarm", "spso"]
+    assert [(t.name, t.weight) for t in PRESETS["length"]] == [("length", 1.0)]
     assert [(t.name, t.weight) for t in PRESETS["spso"]] == [
         ("length", 5.0), ("threat", 1.0), ("altitude", 10.0), ("smoothness", 1.0)
     ]  # fmt: skip
@@ -477,3 +478,22 @@ def test_spso_threat_term_agrees_with_cylinder_feasibility_mixed_margins() -> No
     ev = pr.evaluate(line(20.0 - 10.5))  # 10.5 m from the first axis: clear of its 10 m
     assert not ev.violations["cylinders"][0]
     assert np.isfinite(ev.terms["threat"][0])
+
+
+def test_length_preset_is_the_path_length_and_keeps_feasibility() -> None:
+    from uavplan.scenarios import resolve
+
+    sc = resolve("spso")
+    plain = PathProblem(sc, cost="length")
+    full = PathProblem(sc)
+    rng = np.random.default_rng(4)
+    lo, hi = sc.bounds.lo, sc.bounds.hi
+    inner = rng.uniform(lo, hi, (16, 5, 3))
+    t = sc.tasks[0]
+    P = np.concatenate(
+        [np.broadcast_to(t.start, (16, 1, 3)), inner, np.broadcast_to(t.goal, (16, 1, 3))], axis=1
+    )
+    a, b = plain.evaluate(P), full.evaluate(P)
+    L = np.linalg.norm(np.diff(P, axis=1), axis=2).sum(axis=1)
+    np.testing.assert_allclose(a.cost, L, rtol=1e-12)  # violations travel apart from the cost
+    assert np.array_equal(a.feasible, b.feasible)  # the preset changes the cost, not the checks

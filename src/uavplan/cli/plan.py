@@ -49,6 +49,7 @@ def _run_plan(
     params: list[str],
     figure: bool = True,
     raw: bool = False,
+    max_time: float | None = None,
 ) -> Any:
     from uavplan.io.scenario_file import ScenarioFileError
     from uavplan.optimizers.base import Budget, OptimizerError
@@ -60,6 +61,8 @@ def _run_plan(
                         ("--waypoints", waypoints)):  # fmt: skip
         if value is not None and value < 1:
             raise fail(f"{flag} {value}: must be at least 1")
+    if max_time is not None and not max_time > 0:
+        raise fail(f"--time {max_time}: must be a positive number of seconds")
     compile_notice()
     try:
         scenario = resolve(scenario_ref)
@@ -82,8 +85,10 @@ def _run_plan(
         planner = get_planner(algorithm, **options)
     except (PlannerError, OptimizerError, TypeError, ValueError) as exc:
         raise fail(f"--algorithm {algorithm}: {exc}") from None
-    budget = Budget(max_iterations=iterations) if iterations else None
-    n_iter = iterations or 200
+    budget = (
+        Budget(max_iterations=iterations, max_time=max_time) if iterations or max_time else None
+    )
+    n_iter = iterations or (None if max_time else 200)
 
     with Progress(
         TextColumn("[bold]{task.description}"),
@@ -247,6 +252,14 @@ def plan(
     seed: Annotated[int, typer.Option(help="Root random seed.")] = 0,
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Output folder.")] = Path("out"),
     iterations: Annotated[int | None, typer.Option(help="Iteration budget (default 200).")] = None,
+    max_time: Annotated[
+        float | None,
+        typer.Option(
+            "--time",
+            help="Wall-time budget per UAV's search, seconds (with --iterations: whichever "
+            "ends first; alone: no iteration limit, for anytime planners such as rrt-star).",
+        ),
+    ] = None,
     pop_size: Annotated[int | None, typer.Option(help="Population size.")] = None,
     waypoints: Annotated[int | None, typer.Option(help="Free waypoints per path.")] = None,
     cost: Annotated[str | None, typer.Option(help="Cost preset (default: the scenario's).")] = None,
@@ -261,7 +274,7 @@ def plan(
     more, unless --raw (the experiments use the raw paths)."""
     result, elapsed = _run_plan(
         scenario, algorithm, seed, out_dir, iterations, pop_size, waypoints, cost, param or [],
-        raw=raw,
+        raw=raw, max_time=max_time,
     )  # fmt: skip
     _summary(result, elapsed, out_dir)
     if not result.feasible:

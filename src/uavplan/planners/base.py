@@ -42,7 +42,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import time
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
@@ -284,11 +283,10 @@ class Planner(ABC):
                 "not see time): plan fleets with a fleet planner (uavplan planners lists them)"
             )
         b = self.budget(budget)
-        t0 = time.perf_counter()
-        clock = Stopwatch()  # the reported time leaves kernel compilation out
+        clock = Stopwatch()  # the reported time (and a time budget) leave kernel compilation out
         problem = self.problem(scenario, t, reservations)
         termination = Termination(
-            self.iteration_limit(b), b.max_evaluations, b.max_time, callback, t0
+            self.iteration_limit(b), b.max_evaluations, b.max_time, callback, clock.t0, clock.c0
         )
         tracker = Tracker(termination, bool(getattr(self.config, "track_feasibility", True)))
         run = Run(scenario, t, problem, seed, b, termination.max_iterations, tracker, reservations)

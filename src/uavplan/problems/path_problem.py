@@ -157,6 +157,9 @@ PRESETS: dict[str, tuple[Term, ...]] = {
         Term("danger", 15.0, _t_danger),
     ),
     "length2d": (Term("length", 1.0, _t_length2d),),
+    # the path's length alone, metres, in 2-D or 3-D (OMPL's path-length objective): what RRT*
+    # minimises; feasibility stays the validator's, as with every preset
+    "length": (Term("length", 1.0, _t_length),),
 }
 
 #: How each preset reads terrain heights for its altitude terms.
