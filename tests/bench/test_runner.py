@@ -79,6 +79,19 @@ def test_resume_skips_finished_runs(tmp_path: Path) -> None:
     assert len(df) == 24 and df.run_id.is_unique
 
 
+def test_every_finished_chunk_is_on_disk_before_the_next(tmp_path: Path) -> None:
+    """A kill -9 between chunks loses no finished run: each chunk's rows are written when it
+    ends, not when the store's timer next fires (which kept all but a chunk's first row in
+    memory for as long as the next chunk ran)."""
+    seen: list[tuple[int, int]] = []
+
+    def check(pr) -> None:  # type: ignore[no-untyped-def]
+        seen.append((pr.done, len(ResultStore(tmp_path).finished_ids())))
+
+    run_sweep(PLAN, tmp_path, executor="serial", progress=check)
+    assert len(seen) > 2 and all(done == on_disk for done, on_disk in seen), seen
+
+
 def test_interrupt_saves_finished_runs(tmp_path: Path) -> None:
     seen = []
 

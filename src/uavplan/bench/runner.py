@@ -246,6 +246,9 @@ def run_sweep(
                         if row.get("status") != "ok":
                             prog.failed += 1
                             failures.append(f"{row['run_id']}: {row.get('error')}")
+                    # a finished chunk is on disk before anything else happens: a kill now
+                    # loses nothing (the store's own timer would keep all but its first row)
+                    store.flush()
                     if progress:
                         progress(prog)
             except BrokenProcessPool:
