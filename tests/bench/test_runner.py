@@ -209,6 +209,7 @@ def test_shards_share_one_schema(tmp_path: Path) -> None:
             "history": None,
             "uav_min_clear_m": [None, None],  # a kind's own metrics, none this time
             "min_separation": None,
+            "verified": None,
         }
     )
     store.flush()
@@ -225,11 +226,18 @@ def test_shards_share_one_schema(tmp_path: Path) -> None:
             "history": [3.0, 1.5],
             "uav_min_clear_m": [12.5, 40.0],
             "min_separation": 61.0,
+            "verified": True,
         }
     )
     store.flush()
-    assert len(store.shards()) == 2
+    # and null again after the type is known: it takes the known type
+    store.add({**base, "run_id": "3", "run_index": 3, "uav_min_clear_m": [None],
+               "min_separation": None, "verified": None})  # fmt: skip
+    store.flush()
+    assert len(store.shards()) == 3
     df = pd.read_parquet(tmp_path / "runs").sort_values("run_id")
+    assert df.verified.tolist()[1] == 1  # a bool column, though null in the first shard
+    assert len(store.read()) == 3  # the store's own reader too
     assert df.first_feasible_iteration.tolist()[1] == 7
     assert np.isnan(df.best_cost.tolist()[0]) and df.best_cost.tolist()[1] == 1.5
     assert df.min_separation.tolist()[1] == 61.0

@@ -282,3 +282,35 @@ def test_planner_parameters() -> None:
     )
     with pytest.raises(PlannerError, match="band"):
         get_planner("rrt-star").plan(sc, budget=5, seed=0)
+
+
+def test_informed_samples_stay_where_a_shorter_path_can_pass(spso: Scenario) -> None:
+    cfg = RRTStarConfig(informed=True, goal_bias=0.0)
+    tree = RRTStarTree(spso, None, cfg, np.random.default_rng(1))
+    while not tree.goal_nodes:
+        tree.iterate()
+    c = tree.informed_bound()
+    path = tree.path()
+    assert path is not None
+    assert c == pytest.approx(float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum()))
+    s = np.array([tree.sample() for _ in range(300)])
+    focal = np.linalg.norm(s - tree.start, axis=1) + np.linalg.norm(s - tree.goal, axis=1)
+    assert (focal < c).all() and tree.rejected > 0
+    h = s[:, 2] - spso.ground(s[:, 0], s[:, 1])  # still the sampler's region: the band
+    assert h.min() >= 100.0 - 1e-9 and h.max() <= 200.0 + 1e-9
+    # off by default: the same seed draws the same samples as before
+    plain = RRTStarTree(spso, None, RRTStarConfig(goal_bias=0.0), np.random.default_rng(1))
+    again = RRTStarTree(spso, None, RRTStarConfig(goal_bias=0.0), np.random.default_rng(1))
+    for _ in range(50):
+        plain.iterate()
+        again.iterate()
+    assert plain.rejected == 0 and np.array_equal(plain.points, again.points)
+
+
+def test_a_time_budget_alone_sets_no_iteration_limit() -> None:
+    from uavplan.optimizers.base import Budget
+
+    p = RRTStarPlanner()
+    assert p.iteration_limit(Budget(max_time=1.0)) is None
+    assert p.iteration_limit(Budget(max_time=1.0, max_iterations=7)) == 7
+    assert p.iteration_limit(Budget(max_evaluations=100)) == p.config.max_iterations

@@ -88,17 +88,41 @@ class ResultStore:
         self._last_flush = time.monotonic()
         if not self._buffer:
             return None
-        table = rows_to_table(self._buffer)
+        table = self._harmonize(rows_to_table(self._buffer))
         self._seq += 1
         name = f"part-{time.strftime('%Y%m%dT%H%M%S')}-{self._session}-{self._seq:05d}.parquet"
         final = self.dir / name
-        tmp = self.dir / f".{name}.tmp"
-        pq.write_table(table, tmp, compression="zstd")
-        with open(tmp, "rb+") as f:
-            os.fsync(f.fileno())
-        os.replace(tmp, final)
+        _write_shard(table, final)
         self._buffer.clear()
         return final
+
+    def _harmonize(self, table: pa.Table) -> pa.Table:
+        """One type per column across the store's shards. A kind's own metric that is null in
+        every row of a chunk has Arrow's null type; pandas and pyarrow read a folder with the
+        first shard's schema and cannot cast numbers to null. So a null column takes the type
+        the other shards give it, and earlier shards where it was null are rewritten with the
+        type this one brings (each atomically, as written)."""
+        known: dict[str, pa.DataType] = {}
+        nulls: dict[Path, list[str]] = {}
+        for shard in self.shards():
+            for f in pq.read_schema(shard):
+                if _nullish(f.type):
+                    nulls.setdefault(shard, []).append(f.name)
+                else:
+                    known.setdefault(f.name, f.type)
+        for i, f in enumerate(table.schema):
+            if _nullish(f.type) and f.name in known:
+                table = table.set_column(i, f.name, table.column(i).cast(known[f.name]))
+        mine = {f.name: f.type for f in table.schema if not _nullish(f.type)}
+        for shard, cols in nulls.items():
+            fix = [c for c in cols if c in mine and c not in known]
+            if fix:
+                old = pq.read_table(shard)
+                for c in fix:
+                    i = old.schema.get_field_index(c)
+                    old = old.set_column(i, c, old.column(i).cast(mine[c]))
+                _write_shard(old, shard)
+        return table
 
     # ------------------------------------------------------------------ reading
     def shards(self) -> list[Path]:
@@ -172,6 +196,20 @@ TYPES: dict[str, pa.DataType] = {
 }
 
 
+def _nullish(t: pa.DataType) -> bool:
+    """Arrow's null type, or a list of it: what a column of Nones (or of lists of Nones) gets."""
+    return bool(pa.types.is_null(t) or (pa.types.is_list(t) and pa.types.is_null(t.value_type)))
+
+
+def _write_shard(table: pa.Table, path: Path) -> None:
+    """Write ``table`` to ``path`` atomically: a fsynced temporary file, then a rename."""
+    tmp = path.parent / f".{path.name}.tmp"
+    pq.write_table(table, tmp, compression="zstd")
+    with open(tmp, "rb+") as f:
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
 def rows_to_table(rows: list[dict[str, Any]]) -> pa.Table:
     """Build an Arrow table from run rows; ``history``-like columns become list<float32>, known
     columns get their :data:`TYPES`."""
@@ -196,19 +234,5 @@ def rows_to_table(rows: list[dict[str, Any]]) -> pa.Table:
         elif k in TYPES:
             arrays[k] = pa.array(values, type=TYPES[k], from_pandas=True)
         else:
-            arrays[k] = _no_null_type(pa.array(values, from_pandas=True))
+            arrays[k] = pa.array(values, from_pandas=True)
     return pa.table(arrays)
-
-
-def _no_null_type(arr: pa.Array) -> pa.Array:
-    """A column of a kind's own metrics that is all null in this shard (a metric no run of the
-    chunk had, such as a clearance with no moving obstacle) would get Arrow's null type, and
-    pandas and pyarrow, reading the folder as one dataset with the first shard's schema, could
-    not cast another shard's numbers to it: such metrics are numbers, so null becomes float64
-    (and a list of nulls a list of float64)."""
-    t = arr.type
-    if pa.types.is_null(t):
-        return arr.cast(pa.float64())
-    if pa.types.is_list(t) and pa.types.is_null(t.value_type):
-        return arr.cast(pa.list_(pa.float64()))
-    return arr

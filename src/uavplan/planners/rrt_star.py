@@ -79,6 +79,13 @@ ChrismasTerrain world, 100-200 m above ground, that PPSwarm's experiments follow
 * ``max_iterations = 5000``: over three times the worst first-path iteration above, even
   without goal bias.
 * ``shortcut = False``: greedy shortcutting (:func:`shortcut_path`) is not in the paper.
+* ``informed = False``: Informed RRT* (Gammell, Srinivasa & Barfoot, "Informed RRT*", IROS
+  2014), not in the paper. Once the tree has a goal path of length ``c``, only a sample ``x``
+  with ``|x - start| + |x - goal| < c`` (the prolate spheroid with foci start and goal) can lie
+  on a shorter path, since tree costs are Euclidean lengths; the others are rejected and drawn
+  again (from the same sampler, so the samples stay uniform over the sampling region, altitude
+  band included, within the spheroid; after 1,000 rejections in a row the next sample is
+  kept). Goal-biased samples always pass.
 
 Runs that grow the tree (:meth:`RRTStarTree.run`, the planner) execute Numba's parallel
 feasibility kernels on one thread (:func:`serial_numba`): a batch is a few dozen segments, and
@@ -144,6 +151,9 @@ class RRTStarConfig(Options):
                                   low_open=True)  # fmt: skip
     stop_at_goal: bool = option(True, "Alg. 1 line 12: stop at the first goal connection")
     shortcut: bool = option(False, "greedy shortcutting of the extracted path (not in the paper)")
+    informed: bool = option(
+        False, "Informed RRT*: once a goal path exists, sample only where a shorter one can pass"
+    )
 
 
 @dataclass(frozen=True)
@@ -334,6 +344,7 @@ class RRTStarTree:
         self.edge_checks = 0
         self.rewires = 0
         self.found_iteration: int | None = None
+        self.rejected = 0  # informed samples drawn again
         self._samples = np.zeros((0, 3))
         self._goal_draw = np.zeros(0, dtype=bool)
         self._pos = 0
@@ -372,13 +383,37 @@ class RRTStarTree:
         self._samples[:, : self.dim] = p
         self._pos = 0
 
-    def sample(self) -> FloatArray:
-        """Alg. 1 line 3 (padded to 3 coordinates)."""
+    def _draw(self) -> FloatArray:
         if self._pos >= len(self._samples):
             self._refill()
         i = self._pos
         self._pos += 1
         return pad3(self.goal) if self._goal_draw[i] else self._samples[i]
+
+    def informed_bound(self) -> float:
+        """The length of the shortest goal path in the tree (inf if none): Informed RRT*'s
+        ``c_best``."""
+        node = self.best_goal_node()
+        if node is None:
+            return math.inf
+        return float(
+            self._cost[node] + np.linalg.norm(self.grid.buffer[node, : self.dim] - self.goal)
+        )
+
+    def sample(self) -> FloatArray:
+        """Alg. 1 line 3 (padded to 3 coordinates); with ``informed``, within the spheroid of
+        the shortest goal path so far."""
+        q = self._draw()
+        if not self.config.informed or not self.goal_nodes:
+            return q
+        c = self.informed_bound()
+        d = self.dim
+        for _ in range(1000):
+            if float(np.linalg.norm(q[:d] - self.start) + np.linalg.norm(q[:d] - self.goal)) < c:
+                break
+            self.rejected += 1
+            q = self._draw()
+        return q
 
     def _grow(self) -> None:
         cap = len(self.grid.buffer)
@@ -545,6 +580,8 @@ class RRTStarPlanner(Planner):
         return super().budget(budget if budget is not None else self.config.max_iterations)
 
     def iteration_limit(self, budget: Budget) -> int | None:
+        if budget.max_iterations is None and budget.max_evaluations is None:
+            return None if budget.max_time is not None else self.config.max_iterations
         return budget.max_iterations or self.config.max_iterations
 
     def rrt_config(self) -> RRTStarConfig:
@@ -591,6 +628,7 @@ class RRTStarPlanner(Planner):
                 "shortcut_checks": shortcut_checks,
                 "path_evaluations": path_evaluations,
                 "rewires": tree.rewires,
+                "informed_rejections": tree.rejected,
                 "radius": tree.radius(),
                 "length": best_length if found else None,
                 "reason": "" if found else "no start-goal path found within the budget",
