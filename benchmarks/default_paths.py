@@ -26,22 +26,7 @@ from typer.testing import CliRunner
 
 from uavplan.cli import app
 from uavplan.scenarios import builtin_names, load_builtin
-
-
-def crosses(P: np.ndarray) -> bool:
-    """Whether a horizontal track crosses itself (non-adjacent segments properly intersect)."""
-    P = np.asarray(P, dtype=np.float64)[:, :2]
-
-    def orient(a, b, c):  # type: ignore[no-untyped-def]
-        return np.sign((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
-
-    n = len(P) - 1
-    for i in range(n):
-        for j in range(i + 2, n):
-            a, b, c, d = P[i], P[i + 1], P[j], P[j + 1]
-            if orient(a, b, c) * orient(a, b, d) < 0 and orient(c, d, a) * orient(c, d, b) < 0:
-                return True
-    return False
+from uavplan.world.geometry import track_crosses_itself
 
 
 def run(name: str, seed: int, algorithm: str | None) -> dict | None:  # type: ignore[type-arg]
@@ -58,7 +43,7 @@ def run(name: str, seed: int, algorithm: str | None) -> dict | None:  # type: ig
     return {
         "algorithm": doc["algorithm"],
         "feasible": bool(doc["feasible"]),
-        "loops": sum(crosses(np.asarray(u["waypoints"])) for u in uavs),
+        "loops": sum(track_crosses_itself(np.asarray(u["waypoints"])) for u in uavs),
         "length": float(sum(u["length"] for u in uavs)),
     }
 

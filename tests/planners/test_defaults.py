@@ -15,6 +15,7 @@ from uavplan.cli import app
 from uavplan.planners import available_planners
 from uavplan.planners.defaults import DEFAULTS, default_planner
 from uavplan.scenarios import resolve
+from uavplan.world.geometry import track_crosses_itself
 
 
 def test_defaults_are_registered_planners_by_kind() -> None:
@@ -23,21 +24,6 @@ def test_defaults_are_registered_planners_by_kind() -> None:
     assert default_planner(resolve("simple2d"))[:2] == ("spso", "2-D scene")
     assert default_planner(resolve("spso"))[:2] == ("spso", "3-D single UAV")
     assert default_planner(resolve("ppswarm1"))[:2] == ("ppswarm", "fleet")
-
-
-def _crosses(P: np.ndarray) -> bool:
-    """Whether a 2-D polyline crosses itself (non-adjacent segments properly intersect)."""
-
-    def orient(a, b, c):  # type: ignore[no-untyped-def]
-        return np.sign((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
-
-    n = len(P) - 1
-    for i in range(n):
-        for j in range(i + 2, n):
-            a, b, c, d = P[i], P[i + 1], P[j], P[j + 1]
-            if orient(a, b, c) * orient(a, b, d) < 0 and orient(c, d, a) * orient(c, d, b) < 0:
-                return True
-    return False
 
 
 @pytest.mark.parametrize("scenario", ["simple2d", "spso"])
@@ -51,7 +37,7 @@ def test_the_default_plan_is_feasible_without_loops(
     doc = json.loads((tmp_path / "plan.json").read_text())
     assert doc["feasible"] is True
     P = np.asarray(doc["uavs"][0]["waypoints"])[:, :2]
-    assert not _crosses(P)
+    assert not track_crosses_itself(P)
     straight = float(np.linalg.norm(P[-1] - P[0]))
     assert doc["uavs"][0]["length"] < 1.6 * straight  # no detour of a loop's size
 

@@ -536,3 +536,12 @@ def test_convex_hulls_of_packed_polygons() -> None:
         assert {tuple(p) for p in h} == {tuple(p) for p in ref}
         x, y = h[:, 0], h[:, 1]
         assert np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)) > 0  # counter-clockwise
+
+
+def test_track_crosses_itself() -> None:
+    from uavplan.world.geometry import track_crosses_itself
+
+    assert not track_crosses_itself(np.array([[0, 0], [1, 0], [2, 1], [3, 1]]))
+    assert track_crosses_itself(np.array([[0, 0], [2, 0], [2, 1], [1, -1]]))  # a loop
+    assert not track_crosses_itself(np.array([[0, 0, 5], [1, 0, 6], [1, 1, 7]]))  # 3-D: track
+    assert not track_crosses_itself(np.array([[0, 0], [1, 0], [1, 1], [0, 0]]))  # touches only

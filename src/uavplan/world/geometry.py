@@ -442,6 +442,24 @@ def segment_polygon_inside_fraction(paths, verts, starts):  # pragma: no cover -
     return out
 
 
+def track_crosses_itself(points: FloatArray) -> bool:
+    """Whether a path's horizontal track crosses itself: two non-adjacent segments properly
+    intersect (a loop, as a user sees it on a map). Touching and collinear overlaps do not
+    count. Plain loops: a path has tens of segments."""
+    P = np.asarray(points, dtype=np.float64)[:, :2]
+
+    def orient(a: FloatArray, b: FloatArray, c: FloatArray) -> float:
+        return float(np.sign((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])))
+
+    n = len(P) - 1
+    for i in range(n):
+        for j in range(i + 2, n):
+            a, b, c, d = P[i], P[i + 1], P[j], P[j + 1]
+            if orient(a, b, c) * orient(a, b, d) < 0 and orient(c, d, a) * orient(c, d, b) < 0:
+                return True
+    return False
+
+
 def point_in_polygon(points: FloatArray, vertices: FloatArray) -> NDArray[np.bool_]:
     """Even-odd point-in-polygon for (..., 2) points against one polygon (k, 2). NumPy."""
     pts = np.asarray(points, dtype=np.float64)
