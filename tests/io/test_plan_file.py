@@ -254,3 +254,23 @@ def test_plan_takes_a_time_budget(tmp_path: Path) -> None:
     assert 0.4 < u["wall_time"] < 5.0
     r = runner.invoke(app, ["plan", "simple2d", "--time", "-1", "--out", str(tmp_path / "x")])
     assert r.exit_code == 2 and "--time -1.0: must be a positive number of seconds" in r.output
+
+
+def test_plan_exits_1_when_the_verifier_rejects_its_plan(
+    tmp_path: Path, monkeypatch
+) -> None:  # type: ignore[no-untyped-def]
+    """Never unsafe called safe: `plan` runs the independent verifier on what it wrote."""
+    from types import SimpleNamespace
+
+    import uavplan.verify
+
+    r = runner.invoke(app, ["plan", "simple2d", "--iterations", "20", "--out", str(tmp_path / "a")])
+    assert r.exit_code == 0 and "independent verifier: every flown trajectory passes" in r.output
+
+    bad = SimpleNamespace(kind="circles", message="uav0 enters circle 2 at t=1.000 s")
+    fake = SimpleNamespace(ok=False, violations=[bad], n_segments=3)
+    monkeypatch.setattr(uavplan.verify, "verify_trajectories", lambda *a, **k: fake)
+    r = runner.invoke(app, ["plan", "simple2d", "--iterations", "20", "--out", str(tmp_path / "b")])
+    assert r.exit_code == 1
+    assert "UNSAFE" in r.output and "circles: uav0 enters circle 2" in r.output
+    assert (tmp_path / "b" / "plan.json").exists()  # what was written stays, for inspection

@@ -121,6 +121,30 @@ def _run_plan(
     return plan, elapsed
 
 
+def verified_by_the_verifier(plan: Any, out_dir: Path) -> bool:
+    """The gate before a feasible plan leaves with exit 0: the independent verifier (which
+    imports no planning code) reads the plan.json just written and checks every UAV's flown
+    trajectory, kinematic limits included. Prints one line; False (and a loud line on stderr
+    naming the first violations) if it rejects a plan the planner called feasible."""
+    from uavplan.io.plan_file import read_plan_file
+    from uavplan.verify import verify_trajectories
+
+    pf = read_plan_file(out_dir / "plan.json", plan.scenario.dim)
+    report = verify_trajectories(pf.trajectories("flown"), plan.scenario, pf.scenario)
+    if report.ok:
+        out.print(f"independent verifier: every flown trajectory passes ({report.n_segments} "
+                  "segments, kinematic limits included)")  # fmt: skip
+        return True
+    err.print(
+        "[bold red]UNSAFE[/]: the planner called this plan feasible, and the independent "
+        f"verifier rejects it ({len(report.violations)} violations); do not fly it; "
+        f"`uavplan verify {out_dir / 'plan.json'}` lists them"
+    )
+    for v in report.violations[:5]:
+        err.print(f"  {v.kind}: {v.message}", markup=False, highlight=False)
+    return False
+
+
 def _verdict(ok: bool, violations: Any) -> str:
     """A table cell: yes, or NO and the first failed check (+ how many more)."""
     if ok:
@@ -277,7 +301,7 @@ def plan(
         raw=raw, max_time=max_time,
     )  # fmt: skip
     _summary(result, elapsed, out_dir)
-    if not result.feasible:
+    if not result.feasible or not verified_by_the_verifier(result, out_dir):
         raise typer.Exit(1)
 
 
@@ -292,3 +316,5 @@ def demo(
     OUT/plan.png (the figure) and OUT/plan.html (open it in a browser), and print a summary."""
     result, elapsed = _run_plan("spso", None, seed, out_dir, 200, 500, None, None, [])
     _summary(result, elapsed, out_dir)
+    if not result.feasible or not verified_by_the_verifier(result, out_dir):
+        raise typer.Exit(1)
