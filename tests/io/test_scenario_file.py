@@ -914,3 +914,19 @@ def test_fleet_schema() -> None:
     assert fleet["required"] == ["count"]
     assert set(fleet["properties"]) == {"count", "pattern", "seed", "min_spacing"}
     assert ScenarioSpec.model_validate({"name": "x", "fleet": {"count": 3}}).tasks is None
+
+
+@pytest.mark.parametrize(
+    ("upper", "message"),
+    [
+        ([1e308, 1e308], "bounds.upper[0]"),  # passed `scenario check`, then planned inf
+        ([-1e308, 10.0], "bounds.upper[0]"),
+        ([2.0e6, 100.0], "extent beyond the 1,000 km this tool plans over (x: 2,000,000 m)"),
+    ],
+)
+def test_absurd_bounds_are_refused(tmp_path: Path, upper: list[float], message: str) -> None:
+    doc = {"name": "big", "bounds": {"lower": [0, 0], "upper": upper},
+           "tasks": [{"id": "a", "start": [1, 1], "goal": [9, 9]}]}  # fmt: skip
+    path = tmp_path / "big.json"
+    path.write_text(json.dumps(doc))
+    assert any(message in p for p in problems_of(path)), problems_of(path)

@@ -15,6 +15,7 @@ import numpy as np
 
 from uavplan.io.scenario_file.errors import NO_VALUE, Problems, ScenarioFileError
 from uavplan.io.scenario_file.schema import (
+    MAX_EXTENT,
     AltitudeSpec,
     FleetSpec,
     ScenarioSpec,
@@ -275,9 +276,17 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
             )
         else:
             bad = [f"{'xyz'[k]}: {lo[k]:g} >= {hi[k]:g}" for k in range(len(lo)) if lo[k] >= hi[k]]
+            wide = [f"{'xyz'[k]}: {hi[k] - lo[k]:,.0f} m" for k in range(len(lo))
+                    if hi[k] - lo[k] > MAX_EXTENT]  # fmt: skip
             if bad:
                 problems.add(
                     ("bounds",), f"lower must be below upper on every axis ({'; '.join(bad)})"
+                )
+            elif wide:
+                problems.add(
+                    ("bounds",),
+                    f"extent beyond the {MAX_EXTENT / 1000:,.0f} km this tool plans over "
+                    f"({'; '.join(wide)}): split the area or check the units (metres)",
                 )
             elif len(lo) == 2 and spec.terrain is not None:
                 if terrain is not None:

@@ -30,8 +30,14 @@ PosNum = Annotated[float, BeforeValidator(_no_bool), Field(gt=0)]
 NonNegNum = Annotated[float, BeforeValidator(_no_bool), Field(ge=0)]
 #: Degrees in (0, 90].
 Angle = Annotated[float, BeforeValidator(_no_bool), Field(gt=0, le=90)]
-XY = Annotated[list[Num], Field(min_length=2, max_length=2)]
-Point = Annotated[list[Num], Field(min_length=2, max_length=3)]
+#: The largest coordinate accepted, metres (10,000 km: UTM northings fit; a float64 path
+#: computation at that magnitude still resolves about 2 nm).
+MAX_COORD = 1e7
+#: The largest extent of a scenario's box on any axis, metres (1,000 km).
+MAX_EXTENT = 1e6
+Coord = Annotated[float, BeforeValidator(_no_bool), Field(ge=-MAX_COORD, le=MAX_COORD)]
+XY = Annotated[list[Coord], Field(min_length=2, max_length=2)]
+Point = Annotated[list[Coord], Field(min_length=2, max_length=3)]
 
 
 class _Spec(BaseModel):
