@@ -274,3 +274,16 @@ def test_plan_exits_1_when_the_verifier_rejects_its_plan(
     assert r.exit_code == 1
     assert "UNSAFE" in r.output and "circles: uav0 enters circle 2" in r.output
     assert (tmp_path / "b" / "plan.json").exists()  # what was written stays, for inspection
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--waypoints", "5000"], "--waypoints 5000: at most 1000 free waypoints per path"),
+        (["--pop-size", "10000000"], "exceeds the 20,000,000 path points a run may hold"),
+    ],
+)
+def test_plan_refuses_sizes_beyond_limits(tmp_path: Path, args: list[str], message: str) -> None:
+    r = runner.invoke(app, ["plan", "simple2d", *args, "--out", str(tmp_path)])
+    assert r.exit_code == 2 and message in r.output
+    assert not (tmp_path / "plan.json").exists()

@@ -930,3 +930,20 @@ def test_absurd_bounds_are_refused(tmp_path: Path, upper: list[float], message: 
     path = tmp_path / "big.json"
     path.write_text(json.dumps(doc))
     assert any(message in p for p in problems_of(path)), problems_of(path)
+
+
+def test_resource_limits_are_checked_when_read(tmp_path: Path) -> None:
+    doc = {"name": "many", "bounds": {"lower": [0, 0], "upper": [100, 100]},
+           "circles": [{"center": [5, 5], "radius": 1}] * 100_001,
+           "tasks": [{"id": "a", "start": [1, 1], "goal": [9, 9]}],
+           "planning": {"n_waypoints": 5000}}  # fmt: skip
+    path = tmp_path / "many.json"
+    path.write_text(json.dumps(doc))
+    found = problems_of(path)
+    assert any(p.startswith(f"{path}: circles") and "at most 100000" in p for p in found)
+    assert any("planning.n_waypoints = 5000" in p for p in found)
+    big = tmp_path / "big.yaml"
+    with big.open("w") as f:  # larger than a scenario file may be: refused before it is read
+        f.write("name: x\n")
+        f.truncate(65 * 2**20)
+    assert any("a scenario file is at most" in p for p in problems_of(big))

@@ -37,6 +37,10 @@ def write_plan(plan: FleetPlan, out: str | Path, figure: bool = True) -> list[Pa
     return written
 
 
+#: the largest population of path points a CLI run allocates (population x points per path)
+MAX_POINTS = 20_000_000
+
+
 def _run_plan(
     scenario_ref: str,
     algorithm: str | None,
@@ -52,6 +56,7 @@ def _run_plan(
     max_time: float | None = None,
 ) -> Any:
     from uavplan.io.scenario_file import ScenarioFileError
+    from uavplan.io.scenario_file.schema import MAX_WAYPOINTS
     from uavplan.optimizers.base import Budget, OptimizerError
     from uavplan.planners import PlannerError, get_planner
     from uavplan.planners.fleet_plan import plan_all
@@ -61,6 +66,14 @@ def _run_plan(
                         ("--waypoints", waypoints)):  # fmt: skip
         if value is not None and value < 1:
             raise fail(f"{flag} {value}: must be at least 1")
+    if waypoints is not None and waypoints > MAX_WAYPOINTS:
+        raise fail(f"--waypoints {waypoints}: at most {MAX_WAYPOINTS} free waypoints per path")
+    if pop_size is not None and pop_size * ((waypoints or 10) + 2) > MAX_POINTS:
+        raise fail(
+            f"--pop-size {pop_size}: a population of {pop_size} paths of {(waypoints or 10) + 2} "
+            f"points exceeds the {MAX_POINTS:,} path points a run may hold; use a smaller "
+            "population"
+        )
     if max_time is not None and not max_time > 0:
         raise fail(f"--time {max_time}: must be a positive number of seconds")
     compile_notice()

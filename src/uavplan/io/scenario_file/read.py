@@ -21,7 +21,7 @@ from uavplan.io.scenario_file.errors import (
     fmt_value,
     validation_problems,
 )
-from uavplan.io.scenario_file.schema import ScenarioSpec
+from uavplan.io.scenario_file.schema import MAX_FILE_BYTES, ScenarioSpec
 from uavplan.world import Scenario
 
 YAML_SUFFIXES = (".yaml", ".yml")
@@ -102,6 +102,15 @@ def read_scenario_data(path: str | Path) -> Any:
         raise ScenarioFileError([f"{source}: no such file ({os.path.abspath(p)})"])
     if p.is_dir():
         raise ScenarioFileError([f"{source}: is a directory, not a scenario file"])
+    try:
+        size = p.stat().st_size
+    except OSError as exc:
+        raise ScenarioFileError([f"{source}: cannot read: {exc.strerror or exc}"]) from None
+    if size > MAX_FILE_BYTES:
+        raise ScenarioFileError(
+            [f"{source}: {size:,} bytes; a scenario file is at most {MAX_FILE_BYTES:,} bytes "
+             "(a DEM goes in its own file)"]
+        )  # fmt: skip
     try:
         data = p.read_bytes()
     except OSError as exc:

@@ -35,6 +35,16 @@ Angle = Annotated[float, BeforeValidator(_no_bool), Field(gt=0, le=90)]
 MAX_COORD = 1e7
 #: The largest extent of a scenario's box on any axis, metres (1,000 km).
 MAX_EXTENT = 1e6
+#: Resource limits, checked when a file is read and before anything is allocated for it
+#: (``docs/scenario-format.md``, "Limits"): a scenario file's size, its UAVs (tasks or a
+#: generated fleet), the entries of each obstacle list, a polygon's vertices, a moving
+#: obstacle's samples and the free waypoints per path.
+MAX_FILE_BYTES = 64 * 2**20
+MAX_UAVS = 10_000
+MAX_ITEMS = 100_000
+MAX_VERTICES = 100_000
+MAX_SAMPLES = 1_000_000
+MAX_WAYPOINTS = 1_000
 Coord = Annotated[float, BeforeValidator(_no_bool), Field(ge=-MAX_COORD, le=MAX_COORD)]
 XY = Annotated[list[Coord], Field(min_length=2, max_length=2)]
 Point = Annotated[list[Coord], Field(min_length=2, max_length=3)]
@@ -149,7 +159,7 @@ class CircleSpec(_Spec):
 class PolygonSpec(_Spec):
     """A simple polygon obstacle, convex or not (an infinitely tall prism in 3-D)."""
 
-    vertices: Annotated[list[XY], Field(min_length=3)] = Field(
+    vertices: Annotated[list[XY], Field(min_length=3, max_length=MAX_VERTICES)] = Field(
         description="At least 3 vertices [[x, y], ...] in order, metres."
     )
     margin: NonNegNum = Field(0.0, description="Distance a path must keep from it, metres.")
@@ -176,10 +186,10 @@ class MovingObstacleSpec(_Spec):
     """A sphere (a disc in 2-D) moving along a timed piecewise-linear trajectory."""
 
     radius: PosNum = Field(description="Radius, metres (> 0).")
-    times: Annotated[list[Num], Field(min_length=1)] = Field(
+    times: Annotated[list[Num], Field(min_length=1, max_length=MAX_SAMPLES)] = Field(
         description="Knot times, strictly increasing seconds."
     )
-    positions: Annotated[list[Point], Field(min_length=1)] = Field(
+    positions: Annotated[list[Point], Field(min_length=1, max_length=MAX_SAMPLES)] = Field(
         description="One position per time, [x, y, z] (3-D) or [x, y] (2-D), absolute metres."
     )
 
@@ -299,7 +309,7 @@ class PlanningSpec(_Spec):
         min_length=1,
         description="Cost preset name; default 'ppswarm' in 3-D, 'length2d' in 2-D.",
     )
-    n_waypoints: Annotated[int, BeforeValidator(_no_bool), Field(ge=1)] = Field(
+    n_waypoints: Annotated[int, BeforeValidator(_no_bool), Field(ge=1, le=MAX_WAYPOINTS)] = Field(
         10, description="Free path nodes between start and goal."
     )
 
@@ -307,7 +317,7 @@ class PlanningSpec(_Spec):
 class FleetSpec(_Spec):
     """A generated fleet: tasks uav0 ... uav<count-1> (uavplan.world.fleet_tasks)."""
 
-    count: Annotated[int, BeforeValidator(_no_bool), Field(ge=1)] = Field(
+    count: Annotated[int, BeforeValidator(_no_bool), Field(ge=1, le=MAX_UAVS)] = Field(
         description="Number of UAVs (tasks uav0 ... uav<count-1>)."
     )
     pattern: Literal["crossing", "random"] = Field(
@@ -352,12 +362,22 @@ class ScenarioSpec(_Spec):
     terrain: TerrainSpec | None = Field(
         None, description="Terrain; absent = none (a 2-D scene, or a flat 3-D world)."
     )
-    cylinders: list[CylinderSpec] = Field(default_factory=list, description="3-D only.")
-    circles: list[CircleSpec] = Field(default_factory=list)
-    polygons: list[PolygonSpec] = Field(default_factory=list)
-    danger_areas: list[DangerAreaSpec] = Field(default_factory=list)
-    uncertain_areas: list[UncertainAreaSpec] = Field(default_factory=list)
-    moving_obstacles: list[MovingObstacleSpec] = Field(default_factory=list)
+    cylinders: Annotated[list[CylinderSpec], Field(max_length=MAX_ITEMS)] = Field(
+        default_factory=list, description="3-D only."
+    )
+    circles: Annotated[list[CircleSpec], Field(max_length=MAX_ITEMS)] = Field(default_factory=list)
+    polygons: Annotated[list[PolygonSpec], Field(max_length=MAX_ITEMS)] = Field(
+        default_factory=list
+    )
+    danger_areas: Annotated[list[DangerAreaSpec], Field(max_length=MAX_ITEMS)] = Field(
+        default_factory=list
+    )
+    uncertain_areas: Annotated[list[UncertainAreaSpec], Field(max_length=MAX_ITEMS)] = Field(
+        default_factory=list
+    )
+    moving_obstacles: Annotated[list[MovingObstacleSpec], Field(max_length=MAX_ITEMS)] = Field(
+        default_factory=list
+    )
     altitude: AltitudeSpec | None = Field(None, description="Altitude band (3-D only).")
     uav: UAVSpec = Field(default_factory=lambda: UAVSpec.model_validate({}))
     task_z: Literal["absolute", "ground"] = Field(
@@ -365,7 +385,7 @@ class ScenarioSpec(_Spec):
         description="Whether task z values are absolute or above the terrain (converted to "
         "absolute at load).",
     )
-    tasks: Annotated[list[TaskSpec], Field(min_length=1)] | None = Field(
+    tasks: Annotated[list[TaskSpec], Field(min_length=1, max_length=MAX_UAVS)] | None = Field(
         None, description="At least one task. Required unless 'fleet' is given (not both)."
     )
     fleet: FleetSpec | None = Field(
