@@ -283,7 +283,8 @@ def plan(
             "--algorithm",
             "-a",
             help="Planner name (default: the best for the scenario's kind by our results: "
-            "spso for one UAV, 2-D or 3-D; ppswarm for a fleet).",
+            "spso for one UAV, 2-D or 3-D; hr-maga with danger or uncertain areas; ppswarm "
+            "for a fleet).",
         ),
     ] = None,
     seed: Annotated[int, typer.Option(help="Root random seed.")] = 0,
