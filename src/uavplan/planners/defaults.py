@@ -15,9 +15,9 @@ scenario (``docs/results.md``).
   loss sees the danger areas and its levels see the uncertain areas, and it repairs locally
   when one is revealed (``hrmaga-replan``: flown feasible and verified in 40, 39 and 39 of 40
   runs on the spso, topobathy and virtual maps, 26 of 40 on jacksboro, where the first plan was
-  infeasible as often). SPSO at the CLI's defaults (its own constraint rule) returned
-  infeasible paths on ``hrmaga-jacksboro`` and ``hrmaga-popup`` in 10 of 10 seeds
-  (``benchmarks/default_paths.py``), where HR-MAGA's are feasible.
+  infeasible as often). SPSO at the CLI's defaults (its own constraint rule) was feasible in 0
+  of 10 seeds on ``hrmaga-jacksboro``, ``-popup``, ``-topobathy`` and ``-virtual`` and 7 of 10
+  on ``hrmaga-spso`` (``benchmarks/default_paths.py``, docs/results.md).
 * **Several UAVs**: ``ppswarm``. Every UAV's flown trajectory is checked while planning and
   reserved for the others; 40 of 40 UAVs verified as flown on the PPSwarm scenarios and among
   ten moving obstacles (``ppswarm1-traffic``).
