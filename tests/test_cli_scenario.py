@@ -310,3 +310,15 @@ def test_show_says_where_the_scenario_is_on_earth() -> None:
     r = run("show", "jacksboro")
     assert "origin: 36.589167, -84.246250 (WGS84)" in r.output and "78 m off" in r.output
     assert "origin: none" in run("show", "simple2d").output
+
+
+def test_the_cli_starts_without_numba_or_matplotlib() -> None:
+    """`uavplan --help` answers in well under a second because the CLI imports the heavy
+    libraries only in the commands that use them (a top-level import of Numba costs 0.2 s)."""
+    import subprocess
+    import sys
+
+    heavy = "('numba', 'matplotlib', 'scipy')"
+    code = f"import sys, uavplan.cli; print(sorted(m for m in {heavy} if m in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]", out.stdout

@@ -1,8 +1,8 @@
 """Seconds spent compiling (or loading from the cache) Numba kernels in this process, so that
 reported planning times leave them out.
 
-A kernel compiles on its first call with a new signature (about 30-60 s for all of them the
-first time on a machine, a fraction of a second to load them from the cache later); that is not
+A kernel compiles on its first call with a new signature (about 10-30 s for those of a plan
+the first time on a machine, a fraction of a second to load them from the cache later); that is not
 the planner's time. Numba announces every compilation as a ``numba:compile`` event
 (:mod:`numba.core.event`); one listener, registered on import, adds up their durations (nested
 compilations, a kernel compiling the kernels it calls, count once). A timed section takes the

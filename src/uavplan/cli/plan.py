@@ -3,7 +3,6 @@ plan.png, print a summary."""
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -55,6 +54,7 @@ def _run_plan(
     raw: bool = False,
     max_time: float | None = None,
 ) -> Any:
+    from uavplan.compile_clock import Stopwatch  # here: it imports Numba
     from uavplan.io.scenario_file import ScenarioFileError
     from uavplan.io.scenario_file.schema import MAX_WAYPOINTS
     from uavplan.optimizers.base import Budget, OptimizerError
@@ -121,17 +121,16 @@ def _run_plan(
 
             return cb
 
-        t0 = time.perf_counter()
+        clock = Stopwatch()
         try:
             plan = plan_all(scenario, planner, budget, seed, make_cb, polish=not raw)
         except ValueError as exc:
             raise fail(f"{scenario_ref}: {exc}") from None
-        elapsed = time.perf_counter() - t0
     try:
         write_plan(plan, out_dir, figure=figure)
     except OSError as exc:
         raise fail(f"--out {out_dir}: cannot write: {exc}") from None
-    return plan, elapsed
+    return plan, (clock.elapsed, clock.compile)
 
 
 def verified_by_the_verifier(plan: Any, out_dir: Path) -> bool:
@@ -177,7 +176,9 @@ def _flown_cell(r: Any) -> str:
 _AS = {"smoothed": "dubins", "polyline": "line"}
 
 
-def _summary(plan: Any, elapsed: float, out_dir: Path) -> None:
+def _summary(plan: Any, times: tuple[float, float], out_dir: Path) -> None:
+    """The table and lines after a plan; ``times``: planning and kernel-compilation seconds."""
+    elapsed, compiled = times
     import numpy as np
     from rich import box
 
@@ -251,8 +252,8 @@ def _summary(plan: Any, elapsed: float, out_dir: Path) -> None:
     evals = sum(int(r.evaluations) for r in plan.results)
     out.print(
         f"wrote {out_dir / 'plan.json'}, {out_dir / 'plan.png'} and {out_dir / 'plan.html'} "
-        f"({evals} cost evaluations, "
-        f"{elapsed:.1f} s)"
+        f"({evals} cost evaluations, {elapsed:.1f} s"
+        + (f", and {compiled:.1f} s compiling kernels once)" if compiled >= 0.5 else ")")
     )
     if not plan.feasible:
         bad = [r.uav_id for r in plan.results if not r.flown_feasible]
@@ -310,11 +311,11 @@ def plan(
     """Plan every task of SCENARIO; write OUT/plan.json, OUT/plan.png and OUT/plan.html. A
     single UAV's path is shortened by line of sight where that stays feasible and costs no
     more, unless --raw (the experiments use the raw paths)."""
-    result, elapsed = _run_plan(
+    result, times = _run_plan(
         scenario, algorithm, seed, out_dir, iterations, pop_size, waypoints, cost, param or [],
         raw=raw, max_time=max_time,
     )  # fmt: skip
-    _summary(result, elapsed, out_dir)
+    _summary(result, times, out_dir)
     if not result.feasible or not verified_by_the_verifier(result, out_dir):
         raise typer.Exit(1)
 
@@ -328,7 +329,7 @@ def demo(
     """Plan the built-in SPSO benchmark with the default planner for it (SPSO) at SPSO's budget
     (500 x 200); write OUT/plan.json,
     OUT/plan.png (the figure) and OUT/plan.html (open it in a browser), and print a summary."""
-    result, elapsed = _run_plan("spso", None, seed, out_dir, 200, 500, None, None, [])
-    _summary(result, elapsed, out_dir)
+    result, times = _run_plan("spso", None, seed, out_dir, 200, 500, None, None, [])
+    _summary(result, times, out_dir)
     if not result.feasible or not verified_by_the_verifier(result, out_dir):
         raise typer.Exit(1)
