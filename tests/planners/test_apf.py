@@ -113,3 +113,35 @@ def test_kernel_force_matches_the_numpy_reference() -> None:
             a = force_at(sc, prm, p, vel, t, goal)
             b = force_reference(sc, prm, p, vel, t, goal)
             np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-9 * max(1.0, np.abs(b).max()))
+
+
+def test_a_moving_obstacle_with_many_samples_is_found_on_the_right_interval() -> None:
+    """The kernel finds a moving obstacle's sample interval by bisection (other UAVs' flights
+    have thousands of samples). On a curved, unevenly sampled motion, the force at time t
+    must equal the force with only the two samples around t (a wrong interval puts the
+    obstacle elsewhere on the curve)."""
+    import dataclasses
+
+    from uavplan.planners.apf import force_at
+
+    sc = resolve("rscdwoa-mixed")
+    o = sc.moving_obstacles[0]
+    rng = np.random.default_rng(8)
+    T = np.sort(np.concatenate([[0.0, 1200.0], rng.uniform(0, 1200, 2999)]))
+    ang = T / 1200 * np.pi
+    P = np.stack([50e3 + 20e3 * np.cos(ang), 50e3 + 20e3 * np.sin(ang), 4000 + 0 * T], axis=1)
+    curved = dataclasses.replace(
+        sc, moving_obstacles=(dataclasses.replace(o, times=T, positions=P),)
+    )
+    prm = field_params(get_planner("apf").config, sc, 1e4)
+    for t in rng.uniform(1.0, 1199.0, 80):
+        k = int(np.searchsorted(T, t, side="right")) - 1
+        two = dataclasses.replace(o, times=T[k : k + 2], positions=P[k : k + 2])
+        pair = dataclasses.replace(sc, moving_obstacles=(two,))
+        near = np.interp(t, T, P[:, 0]), np.interp(t, T, P[:, 1])
+        q = np.array([near[0] + rng.normal(0, 2000), near[1] + rng.normal(0, 2000), 4000.0])
+        vel = rng.normal(size=3) * sc.uav.speed
+        goal = np.array([90e3, 90e3, 0.0])
+        a = force_at(curved, prm, q, vel, float(t), goal)
+        b = force_at(pair, prm, q, vel, float(t), goal)
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * max(1.0, np.abs(b).max()))
