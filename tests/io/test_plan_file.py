@@ -256,9 +256,7 @@ def test_plan_takes_a_time_budget(tmp_path: Path) -> None:
     assert r.exit_code == 2 and "--time -1.0: must be a positive number of seconds" in r.output
 
 
-def test_plan_exits_1_when_the_verifier_rejects_its_plan(
-    tmp_path: Path, monkeypatch
-) -> None:  # type: ignore[no-untyped-def]
+def test_plan_exits_1_when_the_verifier_rejects_its_plan(tmp_path: Path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """Never unsafe called safe: `plan` runs the independent verifier on what it wrote."""
     from types import SimpleNamespace
 
