@@ -83,3 +83,19 @@ def test_plan_raw_keeps_the_optimizers_path(tmp_path: Path) -> None:
         < doc2["uavs"][0]["info"]["polished"]["points"][0]
     )
     assert doc2["uavs"][0]["cost"] <= doc["uavs"][0]["cost"]
+
+
+def test_flight_check_plans_against_the_band_along_segments() -> None:
+    """flight_check=true: the optimizer's problem checks the altitude band along whole
+    segments, as the declared flight is checked, so a polyline it calls feasible flies."""
+    from uavplan.planners import get_planner
+
+    sc = resolve("spso")
+    plain = get_planner("spso", pop_size=60)
+    strict = get_planner("spso", pop_size=60, flight_check=True)
+    assert not plain.problem(sc, sc.tasks[0]).strict_altitude
+    assert strict.problem(sc, sc.tasks[0]).strict_altitude
+    for seed in (0, 1):
+        r = strict.plan(sc, budget=30, seed=seed)
+        assert (not r.feasible) or r.flown_feasible
+    assert strict.describe()["flight_check"] is True

@@ -206,9 +206,12 @@ class Planner(ABC):
         conflict) and the band is checked along whole segments, as in the fleet engine."""
         cost = getattr(self.config, "cost", None)
         weights = getattr(self.config, "weights", None)
+        strict = bool(getattr(self.config, "flight_check", False))
         try:
             if reservations is None:
-                return PathProblem(scenario, task, cost=cost, weights=weights)
+                return PathProblem(
+                    scenario, task, cost=cost, weights=weights, strict_altitude=strict
+                )
             return separated_problem(scenario, task, reservations, cost, weights)
         except ValueError as exc:
             raise PlannerError(f"{self.name}: {exc}") from None

@@ -152,6 +152,11 @@ class PlannerConfig(Options):
         "record the best feasible cost after every iteration (feasible_history, "
         "first_feasible_iteration); optimizer planners then check every candidate's feasibility",
     )
+    flight_check: bool = option(
+        False,
+        "search against the flight's own check: the altitude band along whole segments, as the "
+        "declared flight is checked (default: at the waypoints, the SPSO paper's rule)",
+    )
 
 
 @dataclass(frozen=True)
