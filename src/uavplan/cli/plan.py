@@ -68,9 +68,10 @@ def _run_plan(
             raise fail(f"{flag} {value}: must be at least 1")
     if waypoints is not None and waypoints > MAX_WAYPOINTS:
         raise fail(f"--waypoints {waypoints}: at most {MAX_WAYPOINTS} free waypoints per path")
-    if pop_size is not None and pop_size * ((waypoints or 10) + 2) > MAX_POINTS:
+    n_points = (waypoints or 10) + 2  # the free waypoints (default 10), start and goal
+    if pop_size is not None and pop_size * n_points > MAX_POINTS:
         raise fail(
-            f"--pop-size {pop_size}: a population of {pop_size} paths of {(waypoints or 10) + 2} "
+            f"--pop-size {pop_size}: a population of {pop_size} paths of {n_points} "
             f"points exceeds the {MAX_POINTS:,} path points a run may hold; use a smaller "
             "population"
         )

@@ -289,7 +289,7 @@ class Planner(ABC):
         clock = Stopwatch()  # the reported time (and a time budget) leave kernel compilation out
         problem = self.problem(scenario, t, reservations)
         termination = Termination(
-            self.iteration_limit(b), b.max_evaluations, b.max_time, callback, clock.t0, clock.c0
+            self.iteration_limit(b), b.max_evaluations, b.max_time, callback, clock
         )
         tracker = Tracker(termination, bool(getattr(self.config, "track_feasibility", True)))
         run = Run(scenario, t, problem, seed, b, termination.max_iterations, tracker, reservations)

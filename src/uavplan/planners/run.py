@@ -5,7 +5,6 @@ the :class:`Tracker` a planner records into, the :class:`Run` its ``_plan`` gets
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -13,7 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from uavplan.compile_clock import compile_seconds
+from uavplan.compile_clock import Stopwatch
 from uavplan.optimizers.base import Budget
 from uavplan.problems.path_problem import PathProblem
 from uavplan.world.reservations import ReservationTable
@@ -29,14 +28,13 @@ ProgressCallback = Callable[[int, float], bool | None]
 class Termination:
     """When a run stops (OMPL's ``PlannerTerminationCondition``): any limit reached, or the
     callback asking to stop. ``max_iterations`` None: no iteration limit. ``max_time`` counts
-    planning time as results report it: wall seconds since ``t0`` less kernel compilation."""
+    planning time as results report it: ``clock``'s wall seconds less kernel compilation."""
 
     max_iterations: int | None
     max_evaluations: int | None = None
     max_time: float | None = None
     callback: ProgressCallback | None = None
-    t0: float = field(default_factory=time.perf_counter)
-    c0: float = field(default_factory=compile_seconds)
+    clock: Stopwatch = field(default_factory=Stopwatch)
 
     def reached(self, iterations: int, evaluations: int, best: float) -> bool:
         """Called once per iteration; the callback is always called first."""
@@ -45,9 +43,8 @@ class Termination:
             stop = True
         if self.max_evaluations is not None and evaluations >= self.max_evaluations:
             stop = True
-        if self.max_time is not None:
-            spent = time.perf_counter() - self.t0 - (compile_seconds() - self.c0)
-            stop = stop or spent >= self.max_time
+        if self.max_time is not None and self.clock.elapsed >= self.max_time:
+            stop = True
         return stop
 
 
