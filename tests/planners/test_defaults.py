@@ -71,6 +71,23 @@ def test_polish_shortens_by_line_of_sight_and_never_costs_more() -> None:
     assert "polished" not in raw.info
 
 
+def test_polish_follows_the_terrain_where_the_flight_leaves_the_band() -> None:
+    """SPSO on jacksboro (band 50-300 m above a rugged DEM, checked along whole segments in
+    flight; the optimizer's problem checks it at the waypoints, as the SPSO paper does): the
+    raw path is feasible for its problem and does not fly; polished, it flies, on the same
+    horizontal track's vertices."""
+    from uavplan.planners import get_planner
+
+    sc = resolve("jacksboro")
+    planner = get_planner("spso", pop_size=50, constraints="feasibility-first")
+    raw = planner.plan(sc, budget=30, seed=0)
+    pol = planner.plan(sc, budget=30, seed=0, polish=True)
+    assert raw.feasible and not raw.flown_feasible and "altitude" in raw.flown_violations
+    assert pol.feasible and pol.flown_feasible
+    assert pol.info["polished"]["steps"] == ["terrain following", "shortcut"]
+    assert not track_crosses_itself(np.asarray(pol.waypoints))
+
+
 def test_plan_raw_keeps_the_optimizers_path(tmp_path: Path) -> None:
     r = CliRunner().invoke(app, ["plan", "simple2d", "--raw", "--out", str(tmp_path)])
     assert r.exit_code == 0, r.output
@@ -99,3 +116,39 @@ def test_flight_check_plans_against_the_band_along_segments() -> None:
         r = strict.plan(sc, budget=30, seed=seed)
         assert (not r.feasible) or r.flown_feasible
     assert strict.describe()["flight_check"] is True
+
+
+def test_a_default_plan_that_does_not_fly_falls_back(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Without -a, when the default's plan fails a check as flown, the fallbacks are tried in
+    order and the first that flies is written, and the console says so (here the default is
+    made RRT* with two iterations, which ends on the blocked straight line, and the fallbacks
+    a planner that fails as well, then the RGG's shortest path)."""
+    import uavplan.planners.defaults as D
+
+    monkeypatch.setitem(D.DEFAULTS, "2-D scene", ("rrt-star", "test"))
+    monkeypatch.setattr(
+        D, "fallback_planners", lambda sc: [("rrt-star", {"step": 1.0}), ("rgg", {})]
+    )
+    args = ["plan", "simple2d", "--iterations", "2", "--out", str(tmp_path)]
+    r = CliRunner().invoke(app, args)
+    assert r.exit_code == 0, r.output
+    assert "rrt-star's plan does not fly (uav0: circles" in r.output
+    assert "trying the fallback rrt-star" in r.output
+    assert "rrt-star's plan does not fly (uav0: circles +2); trying the fallback rgg" in r.output
+    assert "rgg's plan flies: it is the one written" in r.output
+    doc = json.loads((tmp_path / "plan.json").read_text())
+    assert doc["algorithm"] == "rgg" and doc["feasible"] is True
+    # options for the default turn the fallbacks off: the user asked for that planner
+    r = CliRunner().invoke(app, [*args, "--param", "goal_bias=0.1"])
+    assert r.exit_code == 1 and "fallback" not in r.output
+
+
+def test_fallbacks_scale_rrt_star_to_the_map() -> None:
+    from uavplan.planners.defaults import fallback_planners
+
+    assert fallback_planners(resolve("ppswarm1")) == []
+    (name, opts), _ = fallback_planners(resolve("jacksboro"))
+    assert name == "rrt-star" and 800 < opts["step"] < 900  # 2 % of a 43.6 km diagonal
+    assert fallback_planners(resolve("spso"))[0][1]["step"] == 50.0  # its default, 1 km map

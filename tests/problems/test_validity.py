@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from uavplan.problems import PathProblem
-from uavplan.problems.validity import CHECKS, MotionValidator, greedy_shortcut
+from uavplan.problems.validity import CHECKS, MotionValidator, band_repair, greedy_shortcut
 from uavplan.scenarios import resolve
 from uavplan.world import (
     AltitudeBand,
@@ -179,6 +179,32 @@ def test_greedy_shortcut_is_valid_never_longer_and_matches_the_all_pairs_form() 
         assert np.array_equal(s[0], r.path[0]) and np.array_equal(s[-1], r.path[-1])
         L = lambda q: float(np.linalg.norm(np.diff(q, axis=0), axis=1).sum())  # noqa: E731
         assert L(s) <= L(r.path) + 1e-9
+
+
+def test_band_repair_follows_the_terrain_along_the_same_track() -> None:
+    """A level line along jacksboro's southern edge, 150 m above the ground at its start,
+    leaves the 50-300 m band over the ridges: terrain following moves and adds points
+    vertically until every segment holds the band (strict validator), on the same horizontal
+    line, start and goal kept; a path through a cylinder cannot be cured that way (None)."""
+    sc = resolve("jacksboro")
+    v = MotionValidator(sc, strict_altitude=True)
+    a, b = np.array([1500.0, 1500.0, 0.0]), np.array([28000.0, 1500.0, 0.0])
+    a[2], b[2] = (float(sc.terrain.height(p[0], p[1])) + 150.0 for p in (a, b))
+    line = a + np.linspace(0.0, 1.0, 12)[:, None] * (b - a)
+    line[1:-1, 2] = a[2]
+    assert not v.paths_valid(line[None])[0]
+    rep = band_repair(v, line)
+    assert rep is not None and len(rep) > len(line)
+    assert v.segments_valid(rep[:-1], rep[1:]).all()
+    assert np.array_equal(rep[0], line[0]) and np.array_equal(rep[-1], line[-1])
+    d, u = b[:2] - a[:2], rep[:, :2] - a[:2]
+    assert np.abs(u[:, 0] * d[1] - u[:, 1] * d[0]).max() / np.linalg.norm(d) < 1e-6
+    assert np.all(np.diff(u @ d) > 0)  # in order along the line: no loop
+    assert band_repair(v, line, max_points=len(line) + 1) is None  # too few points allowed
+    c = sc.cylinders[0]
+    (cx, cy), z = c.center, 0.5 * (c.z_min + c.z_max)
+    through = np.array([[cx - 3 * c.radius, cy, z], [cx + 3 * c.radius, cy, z]])
+    assert band_repair(MotionValidator(sc), through) is None
 
 
 def test_bad_shapes_are_refused() -> None:

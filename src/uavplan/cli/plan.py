@@ -82,12 +82,15 @@ def _run_plan(
         scenario = resolve(scenario_ref)
     except ScenarioFileError as exc:
         raise fail(getattr(exc, "problems", None) or [str(exc)]) from None
+    fallbacks: list[tuple[str, dict[str, Any]]] = []
     if algorithm is None:
-        from uavplan.planners.defaults import default_planner
+        from uavplan.planners.defaults import default_planner, fallback_planners
 
         algorithm, kind, why = default_planner(scenario)
         out.print(f"planner: {algorithm} (the default for a {kind}: {why}; docs/results.md; "
                   "-a NAME for another)")  # fmt: skip
+        if not (params or pop_size or waypoints):  # options meant for the default
+            fallbacks = fallback_planners(scenario)
     options: dict[str, Any] = parse_params(params)
     if pop_size is not None:
         options["pop_size"] = pop_size
@@ -125,6 +128,22 @@ def _run_plan(
         clock = Stopwatch()
         try:
             plan = plan_all(scenario, planner, budget, seed, make_cb, polish=not raw)
+            tried = plan
+            for name, extra in fallbacks if not plan.feasible else ():
+                bad = next(r for r in tried.results if not r.flown_feasible)
+                why = _verdict(False, bad.flown_violations or bad.violations)[4:] or "a check"
+                out.print(f"{tried.algorithm}'s plan does not fly ({bad.uav_id}: {why}); "
+                          f"trying the fallback {name}")  # fmt: skip
+                algorithm = name
+                fb = get_planner(name, **{**extra, **options})
+                tried = plan_all(scenario, fb, budget, seed, make_cb, polish=not raw)
+                if tried.feasible:
+                    out.print(f"{name}'s plan flies: it is the one written")
+                    plan = tried
+                    break
+            else:
+                if fallbacks and not plan.feasible:
+                    out.print(f"no fallback's plan flies either: {plan.algorithm}'s is written")
         except ValueError as exc:
             raise fail(f"{scenario_ref}: {exc}") from None
     try:
@@ -286,7 +305,8 @@ def plan(
             "-a",
             help="Planner name (default: the best for the scenario's kind by our results: "
             "spso for one UAV, 2-D or 3-D; hr-maga with danger or uncertain areas; ppswarm "
-            "for a fleet).",
+            "for a fleet; for one UAV, when that plan does not fly, rrt-star and then "
+            "rgg-pso+ are tried).",
         ),
     ] = None,
     seed: Annotated[int, typer.Option(help="Root random seed.")] = 0,
@@ -306,12 +326,17 @@ def plan(
     param: Annotated[list[str] | None, typer.Option(help="Planner parameter NAME=VALUE.")] = None,
     raw: Annotated[
         bool,
-        typer.Option(help="Keep the optimizer's path as found (no line-of-sight shortcut)."),
+        typer.Option(
+            help="Keep the optimizer's path as found (no terrain following, no "
+            "line-of-sight shortcut)."
+        ),
     ] = False,
 ) -> None:
     """Plan every task of SCENARIO; write OUT/plan.json, OUT/plan.png and OUT/plan.html. A
-    single UAV's path is shortened by line of sight where that stays feasible and costs no
-    more, unless --raw (the experiments use the raw paths)."""
+    single UAV's path is polished unless --raw (the experiments use the raw paths): where its
+    flight leaves the altitude band, points are moved or added vertically (terrain following),
+    then it is shortened by line of sight; kept when it stays feasible and costs no more, or
+    flies where the raw path did not."""
     result, times = _run_plan(
         scenario, algorithm, seed, out_dir, iterations, pop_size, waypoints, cost, param or [],
         raw=raw, max_time=max_time,

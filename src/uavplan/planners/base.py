@@ -302,7 +302,7 @@ class Planner(ABC):
             reasons = reasons or ("no_path",)
         info = dict(outcome.info)
         if polish and not reasons and reservations is None and not self.steps_in_time:
-            path, note = _polished(problem, np.asarray(path, dtype=np.float64))
+            path, note = _polished(scenario, t, problem, np.asarray(path, dtype=np.float64))
             if note:
                 info["polished"] = note
         result = make_result(
@@ -374,19 +374,44 @@ def separated_problem(
     )
 
 
-def _polished(problem: PathProblem, path: FloatArray) -> tuple[FloatArray, dict[str, Any]]:
-    """``path`` shortened by line of sight when the shorter one is feasible and costs no more
-    (else ``path`` itself, and an empty note)."""
-    from uavplan.problems.validity import greedy_shortcut
+def _polished(
+    scenario: Scenario, task: Task, problem: PathProblem, path: FloatArray
+) -> tuple[FloatArray, dict[str, Any]]:
+    """The CLI's polish of a found polyline, judged by the straight-segment validator of its
+    flight (the band along whole segments: :func:`~uavplan.planners.flight.flight_validator`):
 
-    short, _, _ = greedy_shortcut(problem.validator, path)
-    if len(short) >= len(path):
+    1. when that validator rejects the path, terrain following
+       (:func:`~uavplan.problems.validity.band_repair`: points moved or added vertically
+       until every segment holds the band; the horizontal track unchanged);
+    2. line-of-sight shortcutting (:func:`~uavplan.problems.validity.greedy_shortcut`).
+
+    The result is kept when the problem finds it feasible, it is no less flyable than
+    ``path``, and it costs no more unless it flies where ``path`` did not; else
+    ``path`` itself and an empty note. The flight is checked again after this
+    (:func:`~uavplan.planners.flight.fly`), so the verdict stays the flight's."""
+    from uavplan.planners.flight import flight_validator
+    from uavplan.problems.validity import band_repair, greedy_shortcut
+
+    v = flight_validator(scenario, task, kinematics=False)
+    flies = bool(v.paths_valid(path[None])[0])
+    cand, steps = path, []
+    if not flies:
+        repaired = band_repair(v, path)
+        if repaired is not None:
+            cand, steps = repaired, ["terrain following"]
+    short, _, _ = greedy_shortcut(v, cand)
+    if len(short) < len(cand):
+        cand, steps = short, [*steps, "shortcut"]
+    if not steps:
         return path, {}
-    before, after = problem.evaluate(path[None]), problem.evaluate(short[None])
+    before, after = problem.evaluate(path[None]), problem.evaluate(cand[None])
     c0, c1 = float(before.cost[0]), float(after.cost[0])
-    if not bool(after.feasible[0]) or (bool(before.feasible[0]) and c1 > c0):
+    cand_flies = bool(v.paths_valid(cand[None])[0])
+    if not bool(after.feasible[0]) or (flies and not cand_flies):
         return path, {}
-    return short, {"points": [len(path), len(short)], "cost": [c0, c1]}
+    if bool(before.feasible[0]) and c1 > c0 and (flies or not cand_flies):
+        return path, {}  # a higher cost only buys a path that flies where ``path`` did not
+    return cand, {"points": [len(path), len(cand)], "cost": [c0, c1], "steps": steps}
 
 
 def _task(scenario: Scenario, task: str | int | None) -> Task:

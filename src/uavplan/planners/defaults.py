@@ -18,6 +18,9 @@ scenario (``docs/results.md``).
   infeasible as often). SPSO at the CLI's defaults (its own constraint rule) was feasible in 0
   of 10 seeds on ``hrmaga-jacksboro``, ``-popup``, ``-topobathy`` and ``-virtual`` and 7 of 10
   on ``hrmaga-spso`` (``benchmarks/default_paths.py``, docs/results.md).
+* **When the default's plan does not fly** (the CLI without ``-a``): :func:`fallback_planners`
+  are tried in order and the first plan that flies is kept (``hr-maga`` on ``jacksboro``, seed
+  2, ends in a cylinder; RRT* with a step scaled to the map flies). The console says so.
 * **Several UAVs**: ``ppswarm``. Every UAV's flown trajectory is checked while planning and
   reserved for the others; 40 of 40 UAVs verified as flown on the PPSwarm scenarios and among
   ten moving obstacles (``ppswarm1-traffic``).
@@ -26,6 +29,8 @@ scenario (``docs/results.md``).
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 if TYPE_CHECKING:
     from uavplan.world.scenario import Scenario
@@ -40,6 +45,30 @@ DEFAULTS = {
     ),
     "fleet": ("ppswarm", "every UAV's flight checked while planning: 40/40 verified as flown"),
 }
+
+
+#: RRT*'s steering step as a share of the map's horizontal diagonal when it is a fallback
+#: (its default, 50 m, is the PPSwarm paper's for a 1 km map; a 30 km map needs longer steps).
+FALLBACK_STEP_SHARE = 0.02
+
+
+def fallback_planners(scenario: Scenario) -> list[tuple[str, dict[str, object]]]:
+    """The planners (name, options) tried in order when the default's plan does not fly (the
+    CLI without ``-a``): RRT* (every edge checked as flown; its step scaled to the map, at
+    least its default 50 m; informed and anytime within its iteration budget), then RGG-PSO+
+    (a graph path, then optimized). None for fleets (minutes per try)."""
+    if len(scenario.tasks) > 1:
+        return []
+    lo, hi = scenario.bounds.lo, scenario.bounds.hi
+    step = max(50.0, FALLBACK_STEP_SHARE * float(np.hypot(hi[0] - lo[0], hi[1] - lo[1])))
+    rrt: dict[str, object] = {
+        "step": step,
+        "goal_radius": step,
+        "near_radius": 2 * step,
+        "informed": True,
+        "stop_at_goal": False,
+    }
+    return [("rrt-star", rrt), ("rgg-pso+", {})]
 
 
 def scenario_kind(scenario: Scenario) -> str:

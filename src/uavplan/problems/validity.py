@@ -661,6 +661,66 @@ def greedy_shortcut(
     return wp[keep], (None if t is None else t[keep]), checks
 
 
+#: :func:`band_repair`: the share of the altitude band kept as a margin on each side of an
+#: inserted point (so that the short segments around it stay inside on a curved DEM).
+BAND_REPAIR_MARGIN = 0.1
+
+
+def band_repair(
+    validator: MotionValidator, path: FloatArray, max_points: int = 1000, rounds: int = 24
+) -> FloatArray | None:
+    """Make a 3-D polyline hold the altitude band and the terrain along whole segments by
+    terrain following: interior waypoints outside the band are moved vertically into it, then
+    every segment that ``validator`` rejects is split at its midpoint, the new point's height
+    put into the band (its interpolated height clipped to the band less
+    :data:`BAND_REPAIR_MARGIN` of its width on each side), for at most ``rounds`` rounds and
+    ``max_points`` points. The horizontal track is unchanged (no loop can appear), start and
+    goal are kept. Returns the repaired path when every segment then passes ``validator``, else
+    None (a segment fails for a reason splitting cannot cure, such as a cylinder). Not in any
+    paper: the CLI's polish (:meth:`uavplan.planners.base.Planner.plan`) uses it."""
+    sc = validator.scenario
+    band = sc.altitude
+    P = np.array(path, dtype=np.float64)
+    if sc.dim != 3 or band is None or len(P) < 2:
+        return P if validator.paths_valid(P[None])[0] else None
+    margin = BAND_REPAIR_MARGIN * (band.max - band.min)
+    z_lo, z_hi = float(sc.bounds.lo[2]), float(sc.bounds.hi[2])
+
+    def limits(q: FloatArray) -> tuple[FloatArray, FloatArray]:
+        if sc.terrain is None:
+            g_lo = g_hi = np.zeros(len(q))
+        else:
+            g1 = sc.terrain.height(q[:, 0], q[:, 1])
+            g2 = sc.terrain.lookup(q[:, 0], q[:, 1], validator.lookup)
+            g_lo, g_hi = np.maximum(g1, g2), np.minimum(g1, g2)
+        if band.reference == "ground":
+            lo, hi = g_lo + band.min, g_hi + band.max
+        else:
+            lo = np.full(len(q), band.min)
+            hi = np.full(len(q), band.max)
+            if sc.terrain is not None:
+                lo = np.maximum(lo, g_lo)
+        return np.maximum(lo, z_lo), np.minimum(hi, z_hi)
+
+    inner = P[1:-1]
+    if len(inner):
+        lo, hi = limits(inner)
+        out = (inner[:, 2] < lo) | (inner[:, 2] > hi)
+        inner[out, 2] = np.clip(inner[out, 2], lo[out] + margin, hi[out] - margin)
+    for _ in range(rounds):
+        ok = validator.segments_valid(P[:-1], P[1:])
+        if ok.all():
+            return P
+        bad = np.flatnonzero(~ok)
+        if len(P) + len(bad) > max_points:
+            return None
+        mid = 0.5 * (P[bad] + P[bad + 1])
+        lo, hi = limits(mid)
+        mid[:, 2] = np.clip(mid[:, 2], lo + margin, np.maximum(hi - margin, lo + margin))
+        P = np.insert(P, bad + 1, mid, axis=0)
+    return P if validator.segments_valid(P[:-1], P[1:]).all() else None
+
+
 def shortest_subsequence(
     validator: MotionValidator, path: FloatArray, max_interior: int
 ) -> tuple[FloatArray | None, int]:

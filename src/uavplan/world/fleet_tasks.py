@@ -77,7 +77,6 @@ from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import linear_sum_assignment
 
 from uavplan.world.scenario import Scenario, Task
 
@@ -386,6 +385,8 @@ def _pair(
         )
         short = length < min_len
         cost = rng.random((n, m)) + short * (n + 1.0)
+        from scipy.optimize import linear_sum_assignment  # lazy: 0.6 s of every CLI start
+
         rows, cols = linear_sum_assignment(cost)
         bad = int(np.count_nonzero(short[rows, cols]))
         if not bad:

@@ -32,7 +32,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.ndimage import maximum_filter
 
 from uavplan.world.terrain import Terrain
 
@@ -63,6 +62,8 @@ def conservative_level(terrain: Terrain, factor: int) -> TerrainLevel:
     H = terrain.heights
     ny, nx = H.shape
     mx, my = coarse_nodes(nx, factor), coarse_nodes(ny, factor)
+    from scipy.ndimage import maximum_filter  # lazy: 0.2 s of every CLI start
+
     window = maximum_filter(H, size=2 * factor + 1, mode="nearest")
     ii = np.minimum(np.arange(mx) * factor, nx - 1)
     jj = np.minimum(np.arange(my) * factor, ny - 1)
