@@ -105,6 +105,15 @@ def test_format_1_still_loads() -> None:
          "smoothed.points: 1 points, need at least 2"),
         ({"uavs": [{"id": "a", "waypoints": [[0, 0], [1, 0]], "times": [0, 1],
                     "violations": "terrain"}]}, "violations: expected a list of names"),
+        # the fast path of plain numbers leaves these to the element-by-element messages
+        ({"uavs": [{"id": "a", "waypoints": [[0, 0], [1, True]], "times": [0, 1]}]},
+         r"waypoints\[1\]\[1\]: True is not a number"),
+        ({"uavs": [{"id": "a", "waypoints": [[0, 0], [1, "2"]], "times": [0, 1]}]},
+         r"waypoints\[1\]\[1\]: '2' is not a number"),
+        ({"uavs": [{"id": "a", "waypoints": [[0, 0], [1, 0]], "times": [0, 1e999]}]},
+         r"times\[1\]: inf is not a finite number"),
+        ({"uavs": [{"id": "a", "waypoints": [[0, 0], [1, 0]], "times": [0, False]}]},
+         r"times\[1\]: False is not a number"),
     ],
 )  # fmt: skip
 def test_bad_plan_files_say_what_and_where(doc: object, message: str) -> None:

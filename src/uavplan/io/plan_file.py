@@ -35,6 +35,7 @@ and the value.
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import platform
@@ -302,9 +303,29 @@ def _number(value: Any, where: str, finite: bool = True) -> float:
     return x
 
 
+def _plain_array(value: list[Any], dim: int | None) -> FloatArray | None:
+    """``value`` as an array when it is plainly valid: finite JSON numbers only (no bool, no
+    string), in rows of ``dim``; else None, and :func:`_array` finds the error element by
+    element (the fast path: a flight has tens of thousands of points)."""
+    try:
+        flat = itertools.chain.from_iterable(value) if dim is not None else iter(value)
+        if not set(map(type, flat)) <= {float, int}:
+            return None
+        a = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        return None
+    shape_ok = a.ndim == 1 if dim is None else (a.ndim == 2 and a.shape[1] == dim)
+    if not shape_ok or not np.isfinite(a).all():
+        return None
+    return a
+
+
 def _array(value: Any, where: str, dim: int | None) -> FloatArray:
     if not isinstance(value, list):
         raise PlanFormatError([f"{where}: expected a list, got {_short(value)}"])
+    fast = _plain_array(value, dim)
+    if fast is not None:
+        return fast.reshape(len(value), dim) if dim is not None else fast
     if dim is None:
         return np.array([_number(v, f"{where}[{k}]") for k, v in enumerate(value)])
     rows = []

@@ -613,20 +613,17 @@ class ReservationTable:
         if not len(t0) or not self.n_pieces:
             return float("inf")
         b0, b1, s0, s1 = self._p0, self._p1, self._t0, self._t1
-        lo = np.maximum(t0[:, None], s0[None])
-        hi = np.minimum(t1[:, None], s1[None])
-        overlap = lo <= hi
+        i, j = np.nonzero((t0[:, None] <= s1[None]) & (s0[None] <= t1[:, None]))  # overlap
+        if not len(i):
+            return float("inf")
+        lo, hi = np.maximum(t0[i], s0[j]), np.minimum(t1[i], s1[j])
 
-        def at(p: FloatArray, q: FloatArray, u0: FloatArray, u1: FloatArray, t: FloatArray,
-               row: bool) -> FloatArray:  # fmt: skip
-            if row:
-                f = (t - u0[:, None]) / (u1 - u0)[:, None]
-                return p[:, None] + f[..., None] * (q - p)[:, None]
-            f = (t - u0[None]) / (u1 - u0)[None]
-            return p[None] + f[..., None] * (q - p)[None]
+        def at(p: FloatArray, q: FloatArray, u0: FloatArray, u1: FloatArray,
+               t: FloatArray) -> FloatArray:  # fmt: skip
+            return p + ((t - u0) / (u1 - u0))[:, None] * (q - p)
 
-        r0 = at(a0, a1, t0, t1, lo, True) - at(b0, b1, s0, s1, lo, False)
-        dr = at(a0, a1, t0, t1, hi, True) - at(b0, b1, s0, s1, hi, False) - r0
+        r0 = at(a0[i], a1[i], t0[i], t1[i], lo) - at(b0[j], b1[j], s0[j], s1[j], lo)
+        dr = at(a0[i], a1[i], t0[i], t1[i], hi) - at(b0[j], b1[j], s0[j], s1[j], hi) - r0
         if self.axes is not None:
             dist = _box_min_reference(r0, dr, self._w)
         else:
@@ -635,8 +632,7 @@ class ReservationTable:
                 s = np.where(dd > 0, -np.sum(r0 * dr, axis=-1) / np.where(dd > 0, dd, 1.0), 0.0)
             s = np.clip(s, 0.0, 1.0)
             dist = np.sqrt(np.sum((r0 + s[..., None] * dr) ** 2, axis=-1))
-        d = np.where(overlap, dist, np.inf) - self._pad[None]
-        return float(max(np.min(d), 0.0))
+        return float(max(np.min(dist - self._pad[j]), 0.0))
 
 
 def _box_min_reference(r0: FloatArray, dr: FloatArray, w: FloatArray) -> FloatArray:

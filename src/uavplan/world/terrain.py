@@ -153,6 +153,7 @@ class Terrain:
     @cached_property
     def _neg(self) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]:
         neg = np.ascontiguousarray(-self.heights)
+        neg.setflags(write=False)  # as the heights: one kernel signature, compiled once
         return neg, tk.build_max_pyramid(neg)
 
     def min_clearance(self, paths: ArrayLike, cap: float = np.inf) -> FloatArray:
