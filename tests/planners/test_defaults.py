@@ -84,7 +84,7 @@ def test_polish_follows_the_terrain_where_the_flight_leaves_the_band() -> None:
     pol = planner.plan(sc, budget=30, seed=0, polish=True)
     assert raw.feasible and not raw.flown_feasible and "altitude" in raw.flown_violations
     assert pol.feasible and pol.flown_feasible
-    assert pol.info["polished"]["steps"] == ["terrain following", "shortcut"]
+    assert pol.info["polished"]["steps"][:2] == ["terrain following", "shortcut"]
     assert not track_crosses_itself(np.asarray(pol.waypoints))
 
 

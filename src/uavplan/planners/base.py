@@ -63,6 +63,7 @@ from uavplan.planners.options import (
     bad_value,
     type_hints,
 )
+from uavplan.planners.polish import polished
 from uavplan.planners.results import FleetResult, PlanResult, make_result
 from uavplan.planners.run import Outcome, ProgressCallback, Run, Termination, Tracker
 from uavplan.problems.path_problem import PRESETS, SEPARATION_TERM, PathProblem
@@ -270,11 +271,11 @@ class Planner(ABC):
         iterations; default :attr:`default_iterations`) from ``seed``; ``callback(iteration,
         best)`` after every iteration may return True to stop. ``reservations``: other UAVs'
         flights to keep S2 from (planners with :attr:`supports_reservations` only).
-        ``polish``: the found path is then shortened by line of sight (the motion validator's
-        :func:`~uavplan.problems.validity.greedy_shortcut`) and the shorter one kept when it is
-        feasible and its cost is not higher (``info["polished"]`` says what changed); not for
-        planners that step in time, nor with reservations. The CLI polishes unless ``--raw``;
-        the experiments never do (the papers' numbers are the optimizers' own).
+        ``polish``: the found path is then polished (:func:`~uavplan.planners.polish.polished`:
+        terrain following, tightening and line-of-sight shortcuts; ``info["polished"]`` says
+        what changed); not for planners that step in time, nor with reservations. The CLI
+        polishes unless ``--raw``; the experiments never do (the papers' numbers are the
+        optimizers' own).
 
         The result declares its flight (:mod:`uavplan.planners.flight`): the polyline itself,
         or with a turn radius its Dubins-smoothed version, checked as it will be flown."""
@@ -302,7 +303,7 @@ class Planner(ABC):
             reasons = reasons or ("no_path",)
         info = dict(outcome.info)
         if polish and not reasons and reservations is None and not self.steps_in_time:
-            path, note = _polished(scenario, t, problem, np.asarray(path, dtype=np.float64))
+            path, note = polished(scenario, t, problem, np.asarray(path, dtype=np.float64))
             if note:
                 info["polished"] = note
         result = make_result(
@@ -372,46 +373,6 @@ def separated_problem(
         lookup="bilinear",
         name=f"{preset}+separation",
     )
-
-
-def _polished(
-    scenario: Scenario, task: Task, problem: PathProblem, path: FloatArray
-) -> tuple[FloatArray, dict[str, Any]]:
-    """The CLI's polish of a found polyline, judged by the straight-segment validator of its
-    flight (the band along whole segments: :func:`~uavplan.planners.flight.flight_validator`):
-
-    1. when that validator rejects the path, terrain following
-       (:func:`~uavplan.problems.validity.band_repair`: points moved or added vertically
-       until every segment holds the band; the horizontal track unchanged);
-    2. line-of-sight shortcutting (:func:`~uavplan.problems.validity.greedy_shortcut`).
-
-    The result is kept when the problem finds it feasible, it is no less flyable than
-    ``path``, and it costs no more unless it flies where ``path`` did not; else
-    ``path`` itself and an empty note. The flight is checked again after this
-    (:func:`~uavplan.planners.flight.fly`), so the verdict stays the flight's."""
-    from uavplan.planners.flight import flight_validator
-    from uavplan.problems.validity import band_repair, greedy_shortcut
-
-    v = flight_validator(scenario, task, kinematics=False)
-    flies = bool(v.paths_valid(path[None])[0])
-    cand, steps = path, []
-    if not flies:
-        repaired = band_repair(v, path)
-        if repaired is not None:
-            cand, steps = repaired, ["terrain following"]
-    short, _, _ = greedy_shortcut(v, cand)
-    if len(short) < len(cand):
-        cand, steps = short, [*steps, "shortcut"]
-    if not steps:
-        return path, {}
-    before, after = problem.evaluate(path[None]), problem.evaluate(cand[None])
-    c0, c1 = float(before.cost[0]), float(after.cost[0])
-    cand_flies = bool(v.paths_valid(cand[None])[0])
-    if not bool(after.feasible[0]) or (flies and not cand_flies):
-        return path, {}
-    if bool(before.feasible[0]) and c1 > c0 and (flies or not cand_flies):
-        return path, {}  # a higher cost only buys a path that flies where ``path`` did not
-    return cand, {"points": [len(path), len(cand)], "cost": [c0, c1], "steps": steps}
 
 
 def _task(scenario: Scenario, task: str | int | None) -> Task:
