@@ -10,13 +10,22 @@ compiled once, not at every start. ``NUMBA_CACHE_DIR``, when set, is left as it 
 """
 
 import os
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
-try:
-    __version__ = version("uavplan")
-except PackageNotFoundError:  # pragma: no cover - running from a source tree without install
-    __version__ = "0.0.0+unknown"
+
+def __getattr__(name: str) -> str:
+    """``__version__`` from the installed metadata, read on first use (importlib.metadata
+    costs a tenth of ``uavplan --help``'s start)."""
+    if name != "__version__":
+        raise AttributeError(f"module 'uavplan' has no attribute {name!r}")
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        v = version("uavplan")
+    except PackageNotFoundError:  # pragma: no cover - a source tree without install
+        v = "0.0.0+unknown"
+    globals()["__version__"] = v
+    return v
 
 
 def numba_cache_dir(package: Path, env: dict[str, str], writable: bool | None = None) -> str | None:
