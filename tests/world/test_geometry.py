@@ -133,6 +133,54 @@ def test_cylinder_distance_numba_equals_reference(seed: int, P: int, N: int, J: 
 
 
 @FAST
+@given(seed=SEEDS, P=st.integers(1, 4), N=st.integers(2, 6), J=st.integers(0, 6))
+def test_fused_cylinder_passes_equal_the_costs_of_the_distances(
+    seed: int, P: int, N: int, J: int
+) -> None:
+    """cylinder_threat (both threat forms) and cylinder_overlap against the costs computed from
+    the (P, N - 1, J) distances: 1e-12 relative, the same infinities, including the pairs
+    exactly at the inner radius (inf for PPSwarm's d <= R, finite for SPSO's d < R)."""
+    from uavplan.problems import costs as C
+    from uavplan.world.geometry import cylinder_distances, cylinder_overlap, cylinder_threat
+
+    rng = np.random.default_rng(seed)
+    paths = random_paths(rng, P, N)
+    if rng.integers(3) == 0:
+        paths[:, :, 2] = paths[:, :1, 2]  # flat segments
+    centers, lo, hi = random_cylinders(rng, J)
+    d = cylinder_distances(paths, centers, lo, hi)
+    R = rng.uniform(0.5, 4.0, J)
+    fin = d[..., 0][np.isfinite(d[..., 0])] if J else np.empty(0)
+    if fin.size:
+        R[0] = fin[0]  # a pair exactly at the inner radius
+    margin = rng.uniform(0.0, 1.0, J)
+    s1 = float(rng.uniform(0.5, 5.0))
+
+    def same(got: np.ndarray, ref: np.ndarray) -> None:
+        assert got.shape == ref.shape == (P,)
+        np.testing.assert_array_equal(np.isinf(got), np.isinf(ref))
+        np.testing.assert_allclose(got, ref, rtol=1e-12, atol=1e-12)
+
+    same(cylinder_threat(paths, centers, lo, hi, R, R + s1, strict=False), C.threat_cost(d, R, s1))
+    bare = R - margin
+    Rs = bare + margin
+    same(
+        cylinder_threat(paths, centers, lo, hi, Rs, Rs + 10.0 * margin, strict=True),
+        C.threat_cost_spso(d, bare, margin),
+    )
+    inside, clearance = cylinder_overlap(paths, centers, lo, hi, R)
+    same(inside, np.sum(np.maximum(0.0, R - d), axis=(1, 2)))
+    same(clearance, (d - R).min(axis=(1, 2), initial=np.inf))
+    np.testing.assert_array_equal(clearance < 0, np.any(d < R, axis=(1, 2)))
+    # 2-D paths are at z = 0, as cylinder_distances takes them
+    d2 = cylinder_distances(paths[..., :2], centers, lo, hi)
+    same(
+        cylinder_threat(paths[..., :2], centers, lo, hi, R, R + s1, strict=False),
+        C.threat_cost(d2, R, s1),
+    )
+
+
+@FAST
 @given(seed=SEEDS)
 def test_cylinder_distance_vs_dense_sampling(seed: int) -> None:
     rng = np.random.default_rng(seed)

@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 
 from uavplan.problems import costs as C
 from uavplan.problems.validity import Batch, MotionValidator
+from uavplan.world import geometry as G
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 from uavplan.world.terrain import Terrain
@@ -85,7 +86,12 @@ def _t_length(ctx: Batch) -> FloatArray:
 
 
 def _t_threat(ctx: Batch) -> FloatArray:
-    out = C.threat_cost(ctx.cyl_dist, ctx.world.cyl_radii, ctx.scenario.uav.s1)
+    # PPSwarm's Eqs. (4)-(5), fused (C.threat_cost of ctx.cyl_dist is the reference)
+    w = ctx.world
+    R = w.cyl_radii
+    out = G.cylinder_threat(
+        ctx.paths, w.cyl_centers, w.cyl_lo, w.cyl_hi, R, R + ctx.scenario.uav.s1, strict=False
+    )
     if ctx.scenario.moving_obstacles:
         radii = np.array([o.radius for o in ctx.scenario.moving_obstacles])
         out = out + C.moving_threat_cost(ctx.moving_dist, radii, ctx.scenario.uav.s1)
@@ -94,8 +100,12 @@ def _t_threat(ctx: Batch) -> FloatArray:
 
 def _t_threat_spso(ctx: Batch) -> FloatArray:
     # SPSO adds drone_size itself: use the bare radii; each cylinder's margin is the drone size.
+    # Fused; C.threat_cost_spso(ctx.cyl_dist, w.cyl_radii - w.cyl_margin, w.cyl_margin) is the
+    # reference, whose R + drone size this repeats operation for operation.
     w = ctx.world
-    return C.threat_cost_spso(ctx.cyl_dist, w.cyl_radii - w.cyl_margin, w.cyl_margin)
+    R = (w.cyl_radii - w.cyl_margin) + w.cyl_margin
+    r_out = R + 10.0 * w.cyl_margin
+    return G.cylinder_threat(ctx.paths, w.cyl_centers, w.cyl_lo, w.cyl_hi, R, r_out, strict=True)
 
 
 def _t_altitude(ctx: Batch) -> FloatArray:

@@ -1,8 +1,10 @@
 """Exact, batched geometry kernels: segments against circles, cylinders and polygons.
 
 Every kernel takes polylines as ``(pop, n_points, dim)`` arrays and returns one value per
-``(path, segment, obstacle)``; the hot ones are Numba-parallel over the population, and each has a
-plain NumPy or Python reference (``*_reference``) that the tests compare against.
+``(path, segment, obstacle)``, or per path where a cost or check only needs their sum or least
+(the fused ``*_batch`` kernels, which never build the (P, N - 1, J) array); the hot ones are
+Numba-parallel over the population, and each has a plain NumPy or Python reference
+(``*_reference``, or the per-pair kernel) that the tests compare against.
 """
 
 from __future__ import annotations
@@ -76,8 +78,10 @@ def segment_cylinder_distance(paths, centers, z_lo, z_hi):  # pragma: no cover -
 
 
 @njit(cache=True, inline="always")
-def seg_cyl_dist(paths, p, s, centers, z_lo, z_hi, j):  # pragma: no cover - numba
-    """:func:`segment_cylinder_distance` of segment ``s`` of path ``p`` to cylinder ``j``."""
+def seg_setup(paths, p, s):  # pragma: no cover - numba
+    """Segment ``s`` of path ``p`` as :func:`clipped_dist` takes it: its start, its xy
+    direction and that direction's inverse squared length, and its height change's inverse
+    (``flat``: none)."""
     ax = paths[p, s, 0]
     ay = paths[p, s, 1]
     az = paths[p, s, 2]
@@ -88,22 +92,146 @@ def seg_cyl_dist(paths, p, s, centers, z_lo, z_hi, j):  # pragma: no cover - num
     inv_ee = 1.0 / ee if ee > 0.0 else 0.0
     flat = dz == 0.0
     inv_dz = 1.0 / dz if not flat else 0.0
+    return ax, ay, az, ex, ey, inv_ee, flat, inv_dz
+
+
+@njit(cache=True, inline="always")
+def clipped_dist(ax, ay, az, ex, ey, inv_ee, flat, inv_dz, cx, cy, lo, hi):  # pragma: no cover
+    """:func:`segment_cylinder_distance` of one segment (as :func:`seg_setup` gives it) to the
+    cylinder of axis ``(cx, cy)`` and heights ``[lo, hi]``."""
     if flat:
         t0 = 0.0
-        t1 = 1.0 if z_lo[j] <= az <= z_hi[j] else -1.0
+        t1 = 1.0 if lo <= az <= hi else -1.0
     else:
-        ta = (z_lo[j] - az) * inv_dz
-        tb = (z_hi[j] - az) * inv_dz
+        ta = (lo - az) * inv_dz
+        tb = (hi - az) * inv_dz
         t0 = max(0.0, min(ta, tb))
         t1 = min(1.0, max(ta, tb))
-    qx = centers[j, 0] - ax
-    qy = centers[j, 1] - ay
+    qx = cx - ax
+    qy = cy - ay
     t = (qx * ex + qy * ey) * inv_ee
     t = min(max(t, t0), t1)
     rx = qx - t * ex
     ry = qy - t * ey
     d = np.sqrt(rx * rx + ry * ry)
     return d if t0 <= t1 else np.inf
+
+
+@njit(cache=True, inline="always")
+def seg_cyl_dist(paths, p, s, centers, z_lo, z_hi, j):  # pragma: no cover - numba
+    """:func:`segment_cylinder_distance` of segment ``s`` of path ``p`` to cylinder ``j``."""
+    ax, ay, az, ex, ey, inv_ee, flat, inv_dz = seg_setup(paths, p, s)
+    return clipped_dist(
+        ax, ay, az, ex, ey, inv_ee, flat, inv_dz, centers[j, 0], centers[j, 1], z_lo[j], z_hi[j]
+    )
+
+
+#: The fused kernels' floating-point licence: additions may be reassociated (so that the sums
+#: and least values over obstacles run in SIMD lanes); inf and NaN keep IEEE meaning (no
+#: ``nnan``/``ninf``) and products are not fused into additions (no ``contract``), so results
+#: differ from the per-pair kernel's only by the order of additions (tests: 1e-12 relative,
+#: the same infinities).
+FUSED_MATH = {"reassoc"}
+
+
+@njit(cache=True, parallel=True, error_model="numpy", fastmath=FUSED_MATH)
+def cylinder_threat_batch(paths, cx, cy, z_lo, z_hi, r_in, r_out, strict):  # pragma: no cover
+    """The linear threat cost summed over every segment and cylinder, (P,), in one pass (no
+    (P, N - 1, J) distances; cylinders as structure of arrays: axes ``cx``, ``cy``): with d the
+    :func:`segment_cylinder_distance`, a pair adds ``inf`` if ``d < r_in`` (``strict``) or
+    ``d <= r_in`` (not strict), ``r_out - d`` if ``d <= r_out``, else 0. PPSwarm's Eqs. (4)-(5)
+    are ``r_in = R``, ``r_out = R + S1``, not strict; SPSO's J2 is ``r_in = R + drone size``,
+    ``r_out = r_in + 10 drone size``, strict. The same terms as
+    :func:`uavplan.problems.costs.threat_cost` of the distances, summed in another order
+    (:data:`FUSED_MATH`; equal to 1e-12 relative, the same infinities)."""
+    P, N, _ = paths.shape
+    J = cx.shape[0]
+    out = np.empty(P)
+    for p in prange(P):
+        total = 0.0
+        hits = 0
+        for s in range(N - 1):
+            ax, ay, az, ex, ey, inv_ee, flat, inv_dz = seg_setup(paths, p, s)
+            for j in range(J):
+                d = clipped_dist(
+                    ax, ay, az, ex, ey, inv_ee, flat, inv_dz, cx[j], cy[j], z_lo[j], z_hi[j]
+                )
+                hits += 1 if (d < r_in[j] or (not strict and d == r_in[j])) else 0
+                total += (r_out[j] - d) if d <= r_out[j] else 0.0
+        out[p] = total if hits == 0 else np.inf
+    return out
+
+
+@njit(cache=True, parallel=True, error_model="numpy", fastmath=FUSED_MATH)
+def cylinder_overlap_batch(paths, cx, cy, z_lo, z_hi, radii):  # pragma: no cover - numba
+    """Per path, in one pass over segments and cylinders (as structure of arrays): the metres
+    inside (the sum of ``max(0, R - d)``) and the least clearance ``min(d - R)`` (inf without
+    cylinders), d the :func:`segment_cylinder_distance`; (P,) each. A path hits a cylinder iff
+    its clearance is negative."""
+    P, N, _ = paths.shape
+    J = cx.shape[0]
+    inside = np.empty(P)
+    clearance = np.empty(P)
+    for p in prange(P):
+        total = 0.0
+        least = np.inf
+        for s in range(N - 1):
+            ax, ay, az, ex, ey, inv_ee, flat, inv_dz = seg_setup(paths, p, s)
+            for j in range(J):
+                d = clipped_dist(
+                    ax, ay, az, ex, ey, inv_ee, flat, inv_dz, cx[j], cy[j], z_lo[j], z_hi[j]
+                )
+                gap = d - radii[j]
+                total += -gap if gap < 0.0 else 0.0
+                least = min(least, gap)
+        inside[p] = total
+        clearance[p] = least
+    return inside, clearance
+
+
+def _as_3d(paths: FloatArray) -> FloatArray:
+    """Contiguous float64 paths, 2-D ones at z = 0."""
+    p = np.asarray(paths, dtype=np.float64)
+    if p.shape[-1] == 2:
+        p = np.concatenate([p, np.zeros((*p.shape[:-1], 1))], axis=-1)
+    return np.ascontiguousarray(p)
+
+
+def cylinder_threat(
+    paths: FloatArray,
+    centers: FloatArray,
+    z_lo: FloatArray,
+    z_hi: FloatArray,
+    r_in: FloatArray,
+    r_out: FloatArray,
+    strict: bool,
+) -> FloatArray:
+    """:func:`cylinder_threat_batch` of any paths (2-D ones at z = 0 against the cylinders'
+    heights, as :func:`cylinder_distances`), (pop,)."""
+    p = _as_3d(paths)
+    if len(centers) == 0:
+        return np.zeros(p.shape[0])
+    c = np.asarray(centers, dtype=np.float64)
+    cx, cy, lo, hi, a, b = (
+        np.ascontiguousarray(x, dtype=np.float64)
+        for x in (c[:, 0], c[:, 1], z_lo, z_hi, r_in, r_out)
+    )
+    return np.asarray(cylinder_threat_batch(p, cx, cy, lo, hi, a, b, bool(strict)))
+
+
+def cylinder_overlap(
+    paths: FloatArray, centers: FloatArray, z_lo: FloatArray, z_hi: FloatArray, radii: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`cylinder_overlap_batch` of any paths: metres inside and least clearance, (pop,)."""
+    p = _as_3d(paths)
+    if len(centers) == 0:
+        return np.zeros(p.shape[0]), np.full(p.shape[0], np.inf)
+    c = np.asarray(centers, dtype=np.float64)
+    cx, cy, lo, hi, r = (
+        np.ascontiguousarray(x, dtype=np.float64) for x in (c[:, 0], c[:, 1], z_lo, z_hi, radii)
+    )
+    inside, clearance = cylinder_overlap_batch(p, cx, cy, lo, hi, r)
+    return np.asarray(inside), np.asarray(clearance)
 
 
 def cylinder_distances(
@@ -114,15 +242,13 @@ def cylinder_distances(
     Only the part of the segment within the cylinder's heights counts (exact); 2-D paths are
     taken at z = 0 against infinitely tall cylinders.
     """
-    p = np.asarray(paths, dtype=np.float64)
-    if p.shape[-1] == 2:
-        p = np.concatenate([p, np.zeros((*p.shape[:-1], 1))], axis=-1)
+    p = _as_3d(paths)
     J = len(centers)
     if J == 0:
         return np.zeros((p.shape[0], p.shape[1] - 1, 0))
     return np.asarray(
         segment_cylinder_distance(
-            np.ascontiguousarray(p),
+            p,
             np.ascontiguousarray(centers, dtype=np.float64),
             np.ascontiguousarray(z_lo, dtype=np.float64),
             np.ascontiguousarray(z_hi, dtype=np.float64),
