@@ -604,6 +604,7 @@ def test_mean_height_kernel_gives_the_bits_of_its_sorted_reference(seed: int) ->
 
     rng = np.random.default_rng(seed)
     H = rng.normal(size=(int(rng.integers(2, 40)), int(rng.integers(2, 40)))) * 100.0
+    H.setflags(write=False)  # as a Terrain's heights: the kernel's production signature
     P, N = 12, 9
     u = rng.uniform(-5.0, H.shape[1] + 4.0, (P, N))
     v = rng.uniform(-5.0, H.shape[0] + 4.0, (P, N))

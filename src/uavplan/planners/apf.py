@@ -614,6 +614,7 @@ def _packed(
         z_args = (1.0, *grid, f_abs, f_rel, c_abs, c_rel)
     else:
         H = np.zeros((1, 1))
+        H.setflags(write=False)  # read-only as a terrain's heights: one kernel signature
         z_args = (0.0, 0.0, 0.0, 1.0, 1.0, f_abs, f_rel, c_abs, c_rel)
     return (
         w.cyl_centers, w.cyl_radii, w.cyl_lo, w.cyl_hi, w.circ_centers, w.circ_radii,

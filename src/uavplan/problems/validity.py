@@ -228,7 +228,11 @@ class Batch:
         obs = self.scenario.moving_obstacles
         if not obs:
             return np.zeros((self.paths.shape[0], self.paths.shape[1] - 1, 0))
-        return np.stack([o.min_distance(self.paths, self.times) for o in obs], axis=-1)
+        # the paths and times prepared once for every obstacle (min_distance would per call)
+        t = np.require(self.times, np.float64, ["C", "W"])
+        return np.stack(
+            [G.timed_path_min_distance(self.paths3, t, o.times, o.positions) for o in obs], axis=-1
+        )
 
     @cached_property
     def scene2d(self) -> tuple[FloatArray, FloatArray, BoolArray, BoolArray, BoolArray]:
@@ -319,7 +323,15 @@ class MotionValidator:
         return Batch(self, self.check_paths(paths), times)
 
     def checks(self) -> tuple[str, ...]:
-        """The checks that apply to this world (see the module docstring), in report order."""
+        """The checks that apply to this world (see the module docstring), in report order
+        (worked out once per reservations/kinematics setting: RRT* asks for every edge)."""
+        key = (self.reservations is not None, self.kinematics)
+        cache = self.__dict__.setdefault("_checks_cache", {})
+        if key not in cache:
+            cache[key] = self._applicable_checks()
+        return cache[key]
+
+    def _applicable_checks(self) -> tuple[str, ...]:
         sc = self.scenario
         w = self.world
         out = ["bounds"]
@@ -381,6 +393,7 @@ class MotionValidator:
             )
         else:
             H = nH = np.zeros((2, 2))
+            H.setflags(write=False)  # read-only as a terrain's heights: one kernel signature
             flat, off, shp = nflat, noff, nshp = tk.build_max_pyramid(H)
             grid = np.array([0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0])
         return (
@@ -402,8 +415,9 @@ class MotionValidator:
         3-D world the bounds, cylinder, terrain and band checks run as one fused kernel
         (:mod:`uavplan.problems._validity_kernels`)."""
         skipped = set(skip)
-        names = [c for c in CASCADE if c in self.checks() and c not in skipped]
-        names += [c for c in self.checks() if c not in names and c not in skipped]
+        applicable = self.checks()
+        names = [c for c in CASCADE if c in applicable and c not in skipped]
+        names += [c for c in applicable if c not in names and c not in skipped]
         idx = np.arange(b.paths.shape[0])
         args = self._static_args
         if args is not None and not skipped & STATIC:

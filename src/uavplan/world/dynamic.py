@@ -65,5 +65,6 @@ class MovingObstacle:
         p = np.ascontiguousarray(paths, dtype=np.float64)
         if p.shape[-1] == 2:
             p = np.concatenate([p, np.zeros((*p.shape[:-1], 1))], axis=-1)
-        tt = np.ascontiguousarray(np.broadcast_to(times, p.shape[:-1]), dtype=np.float64)
+        # writable like ``p`` (a read-only array would be a second kernel signature to compile)
+        tt = np.require(np.broadcast_to(times, p.shape[:-1]), np.float64, ["C", "W"])
         return np.asarray(timed_path_min_distance(p, tt, self.times, self.positions))

@@ -574,7 +574,7 @@ class ReservationTable:
 
     def _run(self, paths: FloatArray, times: FloatArray, want_min: bool) -> FloatArray:
         p = np.ascontiguousarray(paths, dtype=np.float64)
-        t = np.ascontiguousarray(times, dtype=np.float64)
+        t = np.require(times, np.float64, ["C", "W"])  # one kernel signature: never read-only
         if p.ndim == 2:
             p, t = p[None], t[None]
         if p.ndim != 3 or p.shape[2] != 3 or t.shape != p.shape[:2]:
