@@ -532,8 +532,8 @@ def test_fused_kernel_convex_fast_path_agrees_with_the_general_method() -> None:
     crossing-and-midpoint method. Both must agree with the separate kernels."""
     from uavplan.problems import costs as C
     from uavplan.world.geometry import (
-        _polygon_convexity,
         pack_polygons,
+        polygon_convexity,
         scene2d_batch,
         segment_polygon_distance,
     )
@@ -544,7 +544,7 @@ def test_fused_kernel_convex_fast_path_agrees_with_the_general_method() -> None:
     ang = 2 * np.pi * np.arange(5) / 5
     star = np.c_[75 + 15 * np.cos(ang * 2), 70 + 15 * np.sin(ang * 2)]  # pentagram order
     verts, starts = pack_polygons([square_ccw, tri_cw, ell, star])
-    assert list(_polygon_convexity(verts, starts)) == [1, -1, 0, 0]
+    assert list(polygon_convexity(verts, starts)) == [1, -1, 0, 0]
     rng = np.random.default_rng(7)
     P = rng.uniform(0, 100, (400, 6, 2))
     P[:50, 1] = [10.0, 10.0]  # segments from a vertex
@@ -568,15 +568,15 @@ def test_fused_kernel_convex_fast_path_agrees_with_the_general_method() -> None:
     assert polygon_hit.any() and not polygon_hit.all()
 
 
-def test_convex_hulls_of_packed_polygons() -> None:
+def testconvex_hulls_of_packed_polygons() -> None:
     from scipy.spatial import ConvexHull
 
-    from uavplan.world.geometry import _convex_hulls, pack_polygons
+    from uavplan.world.geometry import convex_hulls, pack_polygons
 
     rng = np.random.default_rng(11)
     polys = [rng.uniform(0, 10, (n, 2)) for n in (3, 5, 9, 14)]
     polys.append(np.array([[0, 0], [2, 0], [4, 0], [4, 4], [0, 4]], float))  # collinear points
-    hv, hs = _convex_hulls(*pack_polygons(polys))
+    hv, hs = convex_hulls(*pack_polygons(polys))
     for k, poly in enumerate(polys):
         h = hv[hs[k] : hs[k + 1]]
         ref = poly[ConvexHull(poly).vertices]  # counter-clockwise, no collinear points

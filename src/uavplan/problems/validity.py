@@ -47,6 +47,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -105,7 +106,9 @@ class PackedWorld:
     ``cyl_lo``/``cyl_hi`` (J,) heights grown by the margin. Circles: ``circ_centers`` (C, 2),
     ``circ_radii`` (C,) radius + margin. Polygons (no-fly polygons and revealed uncertain
     areas): ``poly_verts``/``poly_starts`` (packed, see :func:`uavplan.world.geometry.
-    pack_polygons`), ``poly_margin`` (K,). ``lo2``/``hi2``: the box's x, y range.
+    pack_polygons`), ``poly_margin`` (K,), ``poly_prep``
+    (:func:`uavplan.world.geometry.polygon_prep`: boxes, convexity, hulls, once per world).
+    ``lo2``/``hi2``: the box's x, y range.
     """
 
     cyl_centers: FloatArray
@@ -120,12 +123,14 @@ class PackedWorld:
     poly_margin: FloatArray
     lo2: FloatArray
     hi2: FloatArray
+    poly_prep: tuple[Any, ...]
 
     @classmethod
     def of(cls, scenario: Scenario) -> PackedWorld:
         cyl = scenario.cylinders
         circ = scenario.circles
         verts, starts = scenario.packed_polygons()
+        margins = np.array([p.margin for p in scenario.no_fly_polygons], dtype=np.float64)
         return cls(
             cyl_centers=np.array([c.center for c in cyl], dtype=np.float64).reshape(-1, 2),
             cyl_radii=np.array([c.effective_radius for c in cyl], dtype=np.float64),
@@ -136,9 +141,10 @@ class PackedWorld:
             circ_radii=np.array([c.effective_radius for c in circ], dtype=np.float64),
             poly_verts=verts,
             poly_starts=starts,
-            poly_margin=np.array([p.margin for p in scenario.no_fly_polygons], dtype=np.float64),
+            poly_margin=margins,
             lo2=np.ascontiguousarray(scenario.bounds.lo[:2], dtype=np.float64),
             hi2=np.ascontiguousarray(scenario.bounds.hi[:2], dtype=np.float64),
+            poly_prep=G.polygon_prep(verts, starts, margins),
         )
 
     @property
@@ -249,6 +255,7 @@ class Batch:
             w.poly_margin,
             w.lo2,
             w.hi2,
+            w.poly_prep,
         )
         return length, inside, circle_hit, polygon_hit, outside
 

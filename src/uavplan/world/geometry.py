@@ -9,6 +9,8 @@ Numba-parallel over the population, and each has a plain NumPy or Python referen
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
@@ -752,40 +754,22 @@ def _inside_fraction_and_touch(ax, ay, bx, by, verts, v0, v1, ts):  # pragma: no
     return frac, touch
 
 
-@njit(cache=True)
-def _polygon_convexity(verts, starts):  # pragma: no cover - numba
+def polygon_convexity(verts: FloatArray, starts: NDArray[np.int64]) -> NDArray[np.int64]:
     """(K,) +1 for a convex counter-clockwise polygon, -1 for a convex clockwise one, 0 for a
     non-convex one: every turn between consecutive edges of one sign and the turns summing to
-    one full turn (a pentagram's turns share a sign but sum to two)."""
-    K = starts.shape[0] - 1
+    one full turn (a pentagram's turns share a sign but sum to two). NumPy, once per world."""
+    K = len(starts) - 1
     out = np.zeros(K, dtype=np.int64)
     for k in range(K):
-        v0 = starts[k]
-        v1 = starts[k + 1]
-        n = v1 - v0
-        pos = False
-        neg = False
-        turn = 0.0
-        for q in range(n):
-            i = v0 + q
-            j = v0 + (q + 1) % n
-            m = v0 + (q + 2) % n
-            ex = verts[j, 0] - verts[i, 0]
-            ey = verts[j, 1] - verts[i, 1]
-            fx = verts[m, 0] - verts[j, 0]
-            fy = verts[m, 1] - verts[j, 1]
-            c = _cross(ex, ey, fx, fy)
-            turn += np.arctan2(c, ex * fx + ey * fy)
-            if c > 0.0:
-                pos = True
-            elif c < 0.0:
-                neg = True
+        v = verts[starts[k] : starts[k + 1]]
+        e = np.roll(v, -1, axis=0) - v  # edge q: vertex q to q + 1
+        f = np.roll(e, -1, axis=0)  # the next edge
+        c = e[:, 0] * f[:, 1] - e[:, 1] * f[:, 0]
+        turn = float(np.arctan2(c, e[:, 0] * f[:, 0] + e[:, 1] * f[:, 1]).sum())
         if abs(abs(turn) - 2.0 * np.pi) > 1e-6:
             continue
-        if pos and not neg:
-            out[k] = 1
-        elif neg and not pos:
-            out[k] = -1
+        pos, neg = bool((c > 0.0).any()), bool((c < 0.0).any())
+        out[k] = 1 if pos and not neg else -1 if neg and not pos else 0
     return out
 
 
@@ -820,59 +804,59 @@ def _convex_clip(ax, ay, bx, by, verts, v0, v1, orient):  # pragma: no cover - n
     return t_in, t_out
 
 
-@njit(cache=True)
-def _convex_hulls(verts, starts):  # pragma: no cover - numba
-    """Counter-clockwise convex hulls (Andrew's monotone chain) of the packed polygons, packed
-    the same way: ``(hull vertices (H, 2), hull starts (K + 1,))``."""
-    K = starts.shape[0] - 1
-    hv = np.empty((2 * verts.shape[0] + 2, 2))
+def convex_hulls(
+    verts: FloatArray, starts: NDArray[np.int64]
+) -> tuple[FloatArray, NDArray[np.int64]]:
+    """Counter-clockwise convex hulls (Andrew's monotone chain, collinear points dropped) of the
+    packed polygons, packed the same way: ``(hull vertices (H, 2), hull starts (K + 1,))``.
+    Plain Python, once per world."""
+    K = len(starts) - 1
+    hv: list[tuple[float, float]] = []
     hs = np.zeros(K + 1, dtype=np.int64)
-    m = 0
     for k in range(K):
-        v0 = starts[k]
-        n = starts[k + 1] - v0
-        order = np.arange(n)
-        for q in range(1, n):  # insertion sort by (x, y)
-            key = order[q]
-            r = q - 1
-            while r >= 0 and (
-                verts[v0 + order[r], 0] > verts[v0 + key, 0]
-                or (
-                    verts[v0 + order[r], 0] == verts[v0 + key, 0]
-                    and verts[v0 + order[r], 1] > verts[v0 + key, 1]
-                )
-            ):
-                order[r + 1] = order[r]
-                r -= 1
-            order[r + 1] = key
-        h = np.empty((2 * n + 1, 2))
-        c = 0
-        for sweep in range(2):  # lower chain left to right, then upper chain right to left
-            base = c
-            for q in range(n):
-                i = v0 + (order[q] if sweep == 0 else order[n - 1 - q])
-                px = verts[i, 0]
-                py = verts[i, 1]
-                while c - base >= 2 and (
-                    _cross(
-                        h[c - 1, 0] - h[c - 2, 0],
-                        h[c - 1, 1] - h[c - 2, 1],
-                        px - h[c - 2, 0],
-                        py - h[c - 2, 1],
-                    )
-                    <= 0.0
-                ):
-                    c -= 1
-                h[c, 0] = px
-                h[c, 1] = py
-                c += 1
-            c -= 1  # the chain's last point starts the other chain
-        for q in range(c):
-            hv[m + q, 0] = h[q, 0]
-            hv[m + q, 1] = h[q, 1]
-        m += c
-        hs[k + 1] = m
-    return hv[:m].copy(), hs
+        pts = sorted(map(tuple, verts[starts[k] : starts[k + 1]].tolist()))
+        h: list[tuple[float, float]] = []
+        for chain in (pts, pts[::-1]):  # lower chain left to right, then upper right to left
+            base = len(h)
+            for px, py in chain:
+                while len(h) - base >= 2:
+                    (ax, ay), (bx, by) = h[-2], h[-1]
+                    if (bx - ax) * (py - ay) - (by - ay) * (px - ax) > 0.0:
+                        break
+                    h.pop()
+                h.append((px, py))
+            h.pop()  # the chain's last point starts the other chain
+        hv.extend(h)
+        hs[k + 1] = len(hv)
+    return np.array(hv, dtype=np.float64).reshape(-1, 2), hs
+
+
+def polygon_prep(
+    verts: FloatArray, starts: NDArray[np.int64], margins: FloatArray
+) -> tuple[FloatArray, NDArray[np.int64], FloatArray, NDArray[np.int64], float, FloatArray, int]:
+    """What :func:`scene2d_batch` needs of a world's polygons besides their vertices, worked out
+    once per world: bounding boxes (K, 4), convexity (K,), convex hulls (packed), the hulls'
+    growth ``delta``, squared margins (K,) and the most vertices of one polygon."""
+    K = len(starts) - 1
+    if K > 0:
+        box = np.column_stack(
+            [
+                np.minimum.reduceat(verts[:, 0], starts[:-1]),
+                np.minimum.reduceat(verts[:, 1], starts[:-1]),
+                np.maximum.reduceat(verts[:, 0], starts[:-1]),
+                np.maximum.reduceat(verts[:, 1], starts[:-1]),
+            ]
+        )
+    else:
+        box = np.zeros((0, 4))
+    hull_v, hull_s = convex_hulls(verts, starts)
+    delta = HULL_GROWTH_REL * (1.0 + float(np.max(np.abs(verts)))) if len(verts) else 0.0
+    m = np.maximum(np.asarray(margins, dtype=np.float64), 0.0)
+    maxv = int(np.diff(starts).max()) if K > 0 else 0
+    return (
+        np.ascontiguousarray(box), polygon_convexity(verts, starts), hull_v, hull_s,
+        delta, m * m, maxv,
+    )  # fmt: skip
 
 
 @njit(cache=True)
@@ -903,15 +887,50 @@ def _hull_missed(ax, ay, bx, by, hv, h0, h1, delta):  # pragma: no cover - numba
     return False
 
 
+def scene2d_batch(
+    paths: FloatArray,
+    centers: FloatArray,
+    radii: FloatArray,
+    verts: FloatArray,
+    starts: NDArray[np.int64],
+    margins: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    prep: tuple[Any, ...] | None = None,
+) -> tuple[FloatArray, FloatArray, NDArray[np.bool_], NDArray[np.bool_], NDArray[np.bool_]]:
+    """:func:`scene2d_kernel` with the polygons' :func:`polygon_prep` (given, as a world keeps
+    it, or worked out here)."""
+    if prep is None:
+        prep = polygon_prep(verts, starts, margins)
+    return scene2d_kernel(paths, centers, radii, verts, starts, margins, lo, hi, *prep)
+
+
 @njit(cache=True, parallel=True, error_model="numpy")
-def scene2d_batch(paths, centers, radii, verts, starts, margins, lo, hi):  # pragma: no cover
+def scene2d_kernel(
+    paths,
+    centers,
+    radii,
+    verts,
+    starts,
+    margins,
+    lo,
+    hi,
+    box,
+    convex,
+    hull_v,
+    hull_s,
+    delta,
+    cap2,
+    maxv,
+):  # pragma: no cover - numba
     """One pass over every (path, segment, obstacle) of a scene of circles and polygons.
 
     The fused form of :func:`segment_circle_inside_fraction`,
     :func:`segment_polygon_inside_fraction`, :func:`segment_cylinder_distance` (infinite, for
     circles), :func:`segment_polygon_distance` and the bounds test that the 2-D cost and
     feasibility need, without the (P, N - 1, J) intermediates. Only the xy coordinates of
-    ``paths`` (P, N, >= 2) are used; ``lo``, ``hi``: the (2,) box, with a 1e-9 tolerance.
+    ``paths`` (P, N, >= 2) are used; ``lo``, ``hi``: the (2,) box, with a 1e-9 tolerance;
+    ``box`` to ``maxv``: the world's :func:`polygon_prep`.
 
     Returns:
         length: (P,) xy path length;
@@ -928,16 +947,6 @@ def scene2d_batch(paths, centers, radii, verts, starts, margins, lo, hi):  # pra
     circle_hit = np.zeros(P, dtype=np.bool_)
     polygon_hit = np.zeros(P, dtype=np.bool_)
     outside = np.zeros(P, dtype=np.bool_)
-    maxv = 0
-    for k in range(K):
-        maxv = max(maxv, starts[k + 1] - starts[k])
-    box = _polygon_boxes(verts, starts)
-    convex = _polygon_convexity(verts, starts)
-    hull_v, hull_s = _convex_hulls(verts, starts)
-    delta = HULL_GROWTH_REL * (1.0 + np.max(np.abs(verts))) if verts.shape[0] else 0.0
-    cap2 = np.empty(K)
-    for k in range(K):
-        cap2[k] = max(margins[k], 0.0) ** 2
     tol = BOUNDS_TOL
     for p in prange(P):
         ts = np.empty(maxv + 2)
