@@ -322,3 +322,23 @@ def test_the_cli_starts_without_numba_or_matplotlib() -> None:
     code = f"import sys, uavplan.cli; print(sorted(m for m in {heavy} if m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]", out.stdout
+
+
+def test_bench_list_loads_no_world_model_nor_report_libraries() -> None:
+    """`uavplan bench list` counts the plans' runs without deriving seeds and without loading
+    Numba kernels, pandas, SciPy's statistics or matplotlib (they are imported on first use:
+    uavplan._lazy), so it answers in about a second, not nine."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\n"
+        "from uavplan.cli import main\n"
+        "sys.argv = ['uavplan', 'bench', 'list']\n"
+        "try:\n    main()\nexcept SystemExit:\n    pass\n"
+        "loaded = ('numba', 'matplotlib.figure', 'scipy.stats._stats_py', 'pandas.core.frame')\n"
+        "print(sorted(m for m in loaded if m in sys.modules), file=sys.stderr)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert "rggpso-rq1" in out.stdout
+    assert out.stderr.strip().splitlines()[-1] == "[]", out.stderr

@@ -45,3 +45,12 @@ def test_plan_runs_at_smoke_scale(name: str, tmp_path: Path) -> None:
     assert "<table>" in text and "data:image/png;base64," in text
     if plan.reference and len(plan.algorithms) > 1:
         assert "rank-sum" in md.read_text()
+
+
+def test_run_counts_match_the_runs_of_every_plan_and_scale() -> None:
+    """``bench list`` counts runs with ExperimentPlan.n_runs (no seeds derived): the same
+    numbers as the runs themselves, for every registered plan and scale."""
+    for name in available_plans():
+        plan = get_plan(name)
+        for scale in plan.scales:
+            assert plan.n_runs(scale) == len(plan.runs(scale)), (name, scale)

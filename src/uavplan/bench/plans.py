@@ -96,6 +96,19 @@ class ExperimentPlan:
     metric: str = "best_cost"
     report: Callable[[Any, str], ReportSections] | None = None
 
+    def n_runs(self, scale: str = "smoke") -> int:
+        """How many runs :meth:`runs` gives at ``scale``, counted without deriving their seeds
+        (``bench list`` counts 60,000 paper runs of one plan)."""
+        sc = self._scale(scale)
+        return len(sc.scenarios or self.scenarios) * len(self.algorithms) * sc.runs
+
+    def _scale(self, scale: str) -> Scale:
+        if scale not in self.scales:
+            raise PlanError(
+                f"plan {self.name!r} has no scale {scale!r}; choose {list(self.scales)}"
+            )
+        return self.scales[scale]
+
     def runs(
         self,
         scale: str = "smoke",
@@ -104,11 +117,7 @@ class ExperimentPlan:
         iterations: int | None = None,
     ) -> list[RunSpec]:
         """Every run of this plan at ``scale`` (``runs``/``iterations`` override the scale)."""
-        if scale not in self.scales:
-            raise PlanError(
-                f"plan {self.name!r} has no scale {scale!r}; choose {list(self.scales)}"
-            )
-        sc = self.scales[scale]
+        sc = self._scale(scale)
         n_runs = sc.runs if runs is None else runs
         if n_runs < 1:
             raise PlanError(f"--runs must be >= 1, got {n_runs}")

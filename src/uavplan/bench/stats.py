@@ -44,12 +44,19 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Hashable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
-import pandas as pd
 from numpy.typing import ArrayLike, NDArray
-from scipy import stats as sps
+
+from uavplan._lazy import lazy_module
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from scipy import stats as sps
+else:
+    pd = lazy_module("pandas")
+    sps = lazy_module("scipy.stats")
 
 __all__ = [
     "FriedmanResult",

@@ -30,7 +30,7 @@ def list_plans() -> None:
     rows = []
     for name in available_plans():
         p = get_plan(name)
-        smoke, paper = len(p.runs("smoke")), len(p.runs("paper"))
+        smoke, paper = p.n_runs("smoke"), p.n_runs("paper")
         n_sc = len(p.scales["paper"].scenarios or p.scenarios)
         rows.append((name, f"{n_sc} x {len(p.algorithms)}", str(smoke), f"{paper:,}",
                      p.description))  # fmt: skip

@@ -17,11 +17,12 @@ from __future__ import annotations
 import re
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import yaml
 
-from uavplan.io.scenario_file import ScenarioFileError, load_scenario
-from uavplan.world import Scenario
+if TYPE_CHECKING:
+    from uavplan.world import Scenario
 
 __all__ = ["builtin_names", "builtin_path", "list_builtin", "load_builtin", "resolve"]
 
@@ -43,6 +44,8 @@ def builtin_path(name: str) -> Path:
     """
     names = builtin_names()
     if name not in names:
+        from uavplan.io.scenario_file import ScenarioFileError
+
         raise ScenarioFileError(
             [f"{name}: no such built-in scenario (choose from {', '.join(names)})"]
         )
@@ -61,6 +64,8 @@ def list_builtin() -> list[tuple[str, str]]:
 
 def load_builtin(name: str) -> Scenario:
     """Load a built-in scenario by name (``metadata["builtin"]`` holds the name)."""
+    from uavplan.io.scenario_file import load_scenario
+
     scenario = load_scenario(builtin_path(name))
     scenario.metadata["builtin"] = name
     return scenario
@@ -93,6 +98,8 @@ def resolve(name_or_path: str | Path) -> Scenario:
                             pattern=str(fleet.get("pattern", "crossing")),
                             min_spacing=fleet.get("min_spacing"))  # fmt: skip
         except ValueError as exc:
+            from uavplan.io.scenario_file import ScenarioFileError
+
             raise ScenarioFileError([f"{text}: {exc}"]) from None
         return dataclasses.replace(sc, name=text)
     m = re.fullmatch(r"rgg-n(\d+)-i(\d+)(?:-s(\d+))?", text)
@@ -102,7 +109,11 @@ def resolve(name_or_path: str | Path) -> Scenario:
         return rgg_scenario(int(m.group(1)), int(m.group(2)), int(m.group(3) or 0))
     path = Path(name_or_path)
     if path.exists():
+        from uavplan.io.scenario_file import load_scenario
+
         return load_scenario(path)
+    from uavplan.io.scenario_file import ScenarioFileError
+
     raise ScenarioFileError(
         [
             f"{text}: no such scenario file, and not a built-in scenario "

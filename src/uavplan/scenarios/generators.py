@@ -76,6 +76,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.problems.path_problem import PathProblem
+from uavplan.scenarios.names import PER_SETTING, SETTINGS, family_names, rgg_name
 from uavplan.world.fleet_tasks import BAND_FRACTION
 from uavplan.world.obstacles import Circle, Cylinder, Polygon
 from uavplan.world.scenario import Bounds, Scenario, Task
@@ -111,10 +112,6 @@ __all__ = [
     "rgg_scenario",
 ]
 
-#: The ten obstacle counts of the family (the paper's "5-15", 15 exclusive).
-SETTINGS: tuple[int, ...] = tuple(range(5, 15))
-#: Scenes per obstacle count.
-PER_SETTING = 100
 #: Side of the square scene, metres.
 SIZE = 100.0
 #: Start and goal are uniform in these boxes ((x_lo, y_lo), (x_hi, y_hi)).
@@ -151,11 +148,6 @@ REFERENCES_CSV = "references.csv"
 
 _KINDS = tuple(KIND_PROBS)
 _PROBS = np.array([KIND_PROBS[k] for k in _KINDS])
-
-
-def rgg_name(n_obstacles: int, index: int) -> str:
-    """``rgg-n07-i042`` style name of scene ``index`` with ``n_obstacles`` obstacles."""
-    return f"rgg-n{n_obstacles:02d}-i{index:03d}"
 
 
 def _rng(n_obstacles: int, index: int, root_seed: int) -> np.random.Generator:
@@ -344,11 +336,6 @@ def rgg_family(
     for n in settings:
         for i in range(per_setting):
             yield rgg_scenario(n, i, root_seed)
-
-
-def family_names(per_setting: int = PER_SETTING, settings: Iterable[int] = SETTINGS) -> list[str]:
-    """Names of the family's scenes, in :func:`rgg_family` order."""
-    return [rgg_name(n, i) for n in settings for i in range(per_setting)]
 
 
 # ---------------------------------------------------------------------------- files

@@ -15,12 +15,17 @@ size.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 
+from uavplan._lazy import lazy_module
 from uavplan.bench.plans import Algorithm, ExperimentPlan, Scale, register_plan
+
+if TYPE_CHECKING:
+    import pandas as pd
+else:
+    pd = lazy_module("pandas")
 
 MAPS = ("ppswarm1", "ppswarm2", "ppswarm3", "ppswarm4", "open", "dense")
 SIZES = (40, 100, 200, 500, 1000)

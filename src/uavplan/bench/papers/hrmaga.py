@@ -25,14 +25,19 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 
+from uavplan._lazy import lazy_module
 from uavplan.bench.kinds import _budget, plan_run, planner_row, register_kind
 from uavplan.bench.plans import Algorithm, ExperimentPlan, RunSpec, Scale, register_plan
 from uavplan.bench.stats import stack_histories
+
+if TYPE_CHECKING:
+    import pandas as pd
+else:
+    pd = lazy_module("pandas")
 
 MAPS = tuple(f"hrmaga-{m}" for m in ("spso", "jacksboro", "topobathy", "virtual"))
 #: every method: the world's checks as constraints, Eq. (4) as the cost (the maps' preset)

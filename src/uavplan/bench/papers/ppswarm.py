@@ -12,12 +12,17 @@ absolute costs compare only in order of magnitude; the orderings are what can be
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 
+from uavplan._lazy import lazy_module
 from uavplan.bench.plans import Algorithm, ExperimentPlan, Scale, register_plan
+
+if TYPE_CHECKING:
+    import pandas as pd
+else:
+    pd = lazy_module("pandas")
 
 ALGS = ("pso", "de", "abc", "gwo", "spso", "ppswarm")
 

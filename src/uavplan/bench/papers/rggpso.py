@@ -35,14 +35,21 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
-import scipy.stats as sps
-from matplotlib.figure import Figure
 
+from uavplan._lazy import lazy_module
 from uavplan.bench import stats
 from uavplan.bench.plans import Algorithm, ExperimentPlan, Scale, register_plan
+
+if TYPE_CHECKING:
+    import pandas as pd
+    import scipy.stats as sps
+    from matplotlib.figure import Figure
+else:
+    pd = lazy_module("pandas")
+    sps = lazy_module("scipy.stats")
 
 #: Penalty of the normalized length where no feasible path exists (Sect. 6.1).
 PENALTY = 5.0
@@ -257,6 +264,8 @@ def fig5_curves(m: pd.DataFrame) -> pd.DataFrame:
 
 def fig5_figure(curves: pd.DataFrame) -> Figure:
     """Fig. 5: best normalized path length over iterations, mean over all runs and scenes."""
+    from matplotlib.figure import Figure
+
     fig = Figure(figsize=(7.5, 4.5))
     ax = fig.add_subplot()
     for alg in curves.columns:
@@ -374,7 +383,7 @@ def sections(
 def plans() -> list[ExperimentPlan]:
     """RGG-PSO+ (Liu et al. 2024) Sect. 5: 1000 scenes x 10 runs, 100 particles, 200 iterations,
     N = 20 waypoints (the scenes' default); smoke scale: two scenes, one run, a small budget."""
-    from uavplan.scenarios.generators import family_names
+    from uavplan.scenarios.names import family_names
 
     paper_scenes = tuple(family_names())
     smoke_scenes = ("rgg-n05-i000", "rgg-n14-i000")

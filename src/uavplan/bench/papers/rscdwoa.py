@@ -24,14 +24,19 @@ trajectories; ``feasible_but_failed`` counts plans called feasible that it rejec
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 
+from uavplan._lazy import lazy_module
 from uavplan.bench.kinds import register_kind
 from uavplan.bench.plans import Algorithm, ExperimentPlan, RunSpec, Scale, register_plan
 from uavplan.bench.stats import stack_histories
+
+if TYPE_CHECKING:
+    import pandas as pd
+else:
+    pd = lazy_module("pandas")
 
 #: RSCDWOA's Table 5 rivals; the WOA family's schedules (a: 2 -> 0) span 100 iterations
 FUNCTION_ALGORITHMS = (
