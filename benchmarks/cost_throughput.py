@@ -46,13 +46,11 @@ def minimal_fused(paths, cx, cy, lo, hi, r_in, r_out):  # pragma: no cover - num
     production kernel, branchless (min/max and selects), structure-of-arrays cylinders, all of
     LLVM's fast-math licences (so no infinities inside: heights beyond 1e300 stand for
     unbounded, and a hit is counted, the path's inf set at its end)."""
-    P, N, _ = paths.shape
-    J = cx.shape[0]
-    out = np.empty(P)
-    for p in prange(P):
-        total = 0.0
-        hits = 0
-        for s in range(N - 1):
+    n_paths, n_points = paths.shape[:2]
+    out = np.empty(n_paths)
+    for p in prange(n_paths):
+        total, hits = 0.0, 0
+        for s in range(n_points - 1):
             ax, ay, az = paths[p, s, 0], paths[p, s, 1], paths[p, s, 2]
             ex = paths[p, s + 1, 0] - ax
             ey = paths[p, s + 1, 1] - ay
@@ -60,7 +58,7 @@ def minimal_fused(paths, cx, cy, lo, hi, r_in, r_out):  # pragma: no cover - num
             ee = ex * ex + ey * ey
             inv_ee = 1.0 / ee if ee > 0.0 else 0.0
             inv_dz = 1.0 / dz if dz != 0.0 else 1e300
-            for j in range(J):
+            for j in range(cx.shape[0]):
                 ta = (lo[j] - az) * inv_dz
                 tb = (hi[j] - az) * inv_dz
                 t0 = max(0.0, min(ta, tb))
