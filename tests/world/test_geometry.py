@@ -181,6 +181,52 @@ def test_fused_cylinder_passes_equal_the_costs_of_the_distances(
 
 
 @FAST
+@given(seed=SEEDS, J=st.integers(64, 400), strict=st.booleans())
+def test_grid_threat_equals_every_pair(seed: int, J: int, strict: bool) -> None:
+    """The grid-indexed threat pass (from GRID_MIN_CYLINDERS cylinders on) against testing
+    every segment-cylinder pair: 1e-12 relative, the same infinities; with paths partly off the
+    grid, flat and zero-length segments, radii of very different sizes, and pairs exactly at
+    the inner radius."""
+    from uavplan.world.geometry import (
+        GRID_MIN_CYLINDERS,
+        cylinder_distances,
+        cylinder_grid,
+        cylinder_threat_batch,
+        cylinder_threat_grid,
+    )
+
+    assert J >= GRID_MIN_CYLINDERS
+    rng = np.random.default_rng(seed)
+    cx, cy = rng.uniform(0, 3000, J), rng.uniform(0, 3000, J)
+    R = np.where(rng.random(J) < 0.03, rng.uniform(40, 80, J), rng.uniform(1, 10, J))
+    band = rng.uniform(0.0, 40.0, J)
+    lo = np.where(rng.random(J) < 0.5, -np.inf, rng.uniform(0, 100, J))
+    hi = np.where(rng.random(J) < 0.5, np.inf, lo + rng.uniform(10, 200, J))
+    P, N = 12, 8
+    paths = np.cumsum(rng.normal(0, 80, (P, N, 3)), axis=1) + np.array([1500.0, 1500.0, 60.0])
+    paths[0] = rng.uniform(-500, 3500, (N, 3))  # long segments, off the grid
+    paths[1, :, 2] = 50.0  # flat
+    paths[2, 3] = paths[2, 2]  # zero length
+    paths = np.ascontiguousarray(paths)
+    # ten cylinders placed beside path vertices, inside their threat bands
+    near = paths[2:12, 4, :2]
+    R[6:16], band[6:16] = 1.0, 40.0
+    cx[6:16], cy[6:16] = near[:, 0] + 20.0, near[:, 1]
+    lo[6:16], hi[6:16] = -np.inf, np.inf
+    d = cylinder_distances(paths, np.c_[cx, cy], lo, hi)
+    fin = np.isfinite(d[..., 5])
+    if fin.any():
+        R[5] = d[..., 5][fin].min()  # the nearest pair exactly at the inner radius
+    r_out = R + band
+    want = cylinder_threat_batch(paths, cx, cy, lo, hi, R, r_out, strict)
+    g, starts, items, first = cylinder_grid(cx, cy, r_out)
+    got = cylinder_threat_grid(paths, cx, cy, lo, hi, R, r_out, strict, g, starts, items, first)
+    np.testing.assert_array_equal(np.isinf(got), np.isinf(want))
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-9)
+    assert (np.isfinite(want) & (want > 0)).any()  # the case has threats to find
+
+
+@FAST
 @given(seed=SEEDS)
 def test_cylinder_distance_vs_dense_sampling(seed: int) -> None:
     rng = np.random.default_rng(seed)

@@ -191,6 +191,109 @@ def cylinder_overlap_batch(paths, cx, cy, z_lo, z_hi, radii):  # pragma: no cove
     return inside, clearance
 
 
+#: :func:`cylinder_threat`: from this many cylinders on, a uniform grid picks the cylinders
+#: near each segment (:func:`cylinder_grid`); below it every pair is tested.
+GRID_MIN_CYLINDERS = 64
+#: :func:`cylinder_grid`: at most this many cells a side.
+GRID_MAX_CELLS = 1024
+
+
+def cylinder_grid(
+    cx: FloatArray, cy: FloatArray, reach: FloatArray
+) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+    """A uniform grid over the discs of radius ``reach`` around the cylinders' axes: ``(grid,
+    starts, items, first)`` with ``grid = (x0, y0, h, nx, ny)``, the cylinders whose disc's
+    bounding box meets cell ``(i, j)`` at ``items[starts[k]:starts[k + 1]]``, ``k = j nx + i``,
+    and each cylinder's first cell ``first[c] = (i, j)`` (its box's lowest corner).
+    The cell side ``h`` is at least the largest disc's diameter (each disc meets at most four
+    cells) and about the side that gives one cylinder per cell."""
+    r = np.asarray(reach, dtype=np.float64)
+    pad = 1e-9 * (1.0 + np.abs(cx) + np.abs(cy) + r)  # rounding: a disc never misses its cell
+    x_lo, x_hi, y_lo, y_hi = cx - r - pad, cx + r + pad, cy - r - pad, cy + r + pad
+    x0, y0 = float(x_lo.min()), float(y_lo.min())
+    w, hgt = float(x_hi.max()) - x0, float(y_hi.max()) - y0
+    h = max(2.0 * float((r + pad).max()), float(np.sqrt(max(w * hgt, 1e-300) / len(r))))
+    h = max(h, w / GRID_MAX_CELLS, hgt / GRID_MAX_CELLS, 1e-9)
+    nx, ny = int(w // h) + 1, int(hgt // h) + 1
+    i0 = np.floor((x_lo - x0) / h).astype(np.int64)
+    i1 = np.minimum(np.floor((x_hi - x0) / h).astype(np.int64), nx - 1)
+    j0 = np.floor((y_lo - y0) / h).astype(np.int64)
+    j1 = np.minimum(np.floor((y_hi - y0) / h).astype(np.int64), ny - 1)
+    cells, ids = [], []
+    for di in (0, 1):
+        for dj in (0, 1):
+            ok = (i0 + di <= i1) & (j0 + dj <= j1)
+            cells.append((j0 + dj)[ok] * nx + (i0 + di)[ok])
+            ids.append(np.nonzero(ok)[0])
+    cell, item = np.concatenate(cells), np.concatenate(ids)
+    order = np.lexsort((item, cell))
+    starts = np.searchsorted(cell[order], np.arange(nx * ny + 1)).astype(np.int64)
+    grid = np.array([x0, y0, h, nx, ny], dtype=np.float64)
+    first = np.ascontiguousarray(np.c_[i0, j0], dtype=np.int64)
+    return grid, starts, np.ascontiguousarray(item[order], dtype=np.int64), first
+
+
+_Grid = tuple[FloatArray, NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]
+_GRIDS: dict[bytes, _Grid] = {}
+
+
+def _cached_grid(cx: FloatArray, cy: FloatArray, reach: FloatArray) -> _Grid:
+    """:func:`cylinder_grid`, kept for the last few worlds (a planner asks for the same one at
+    every iteration; keyed by the cylinders' bytes, which cost far less to hash than the grid
+    to build)."""
+    import hashlib
+
+    key = hashlib.blake2b(cx.tobytes() + cy.tobytes() + reach.tobytes(), digest_size=16).digest()
+    grid = _GRIDS.get(key)
+    if grid is None:
+        if len(_GRIDS) >= 8:
+            _GRIDS.pop(next(iter(_GRIDS)))
+        grid = _GRIDS[key] = cylinder_grid(cx, cy, reach)
+    return grid
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def cylinder_threat_grid(
+    paths, cx, cy, z_lo, z_hi, r_in, r_out, strict, grid, starts, items, first
+):  # pragma: no cover - numba
+    """:func:`cylinder_threat_batch` with the cylinders near each segment taken from the
+    :func:`cylinder_grid` over the discs of radius ``r_out`` (``r_in <= r_out``): a cylinder
+    whose disc the segment's bounding box misses adds 0 (d > r_out), so only the cells the box
+    meets are visited; a cylinder listed in several of them is tested in the first one its box
+    and the segment's share, so once per segment, with no per-path bookkeeping. The same
+    terms, in another order."""
+    P, N, _ = paths.shape
+    x0, y0, h = grid[0], grid[1], grid[2]
+    nx, ny = int(grid[3]), int(grid[4])
+    out = np.empty(P)
+    for p in prange(P):
+        total = 0.0
+        hits = 0
+        for s in range(N - 1):
+            ax, ay, az, ex, ey, inv_ee, flat, inv_dz = seg_setup(paths, p, s)
+            bx, by = ax + ex, ay + ey
+            i0 = max(int(np.floor((min(ax, bx) - x0) / h)), 0)
+            i1 = min(int(np.floor((max(ax, bx) - x0) / h)), nx - 1)
+            j0 = max(int(np.floor((min(ay, by) - y0) / h)), 0)
+            j1 = min(int(np.floor((max(ay, by) - y0) / h)), ny - 1)
+            for jj in range(j0, j1 + 1):
+                for ii in range(i0, i1 + 1):
+                    k = jj * nx + ii
+                    for q in range(starts[k], starts[k + 1]):
+                        j = items[q]
+                        if ii != max(i0, first[j, 0]) or jj != max(j0, first[j, 1]):
+                            continue  # tested in the first cell shared with the segment
+                        d = clipped_dist(
+                            ax, ay, az, ex, ey, inv_ee, flat, inv_dz, cx[j], cy[j], z_lo[j], z_hi[j]
+                        )
+                        if d < r_in[j] or (not strict and d == r_in[j]):
+                            hits += 1
+                        elif d <= r_out[j]:
+                            total += r_out[j] - d
+        out[p] = total if hits == 0 else np.inf
+    return out
+
+
 def _as_3d(paths: FloatArray) -> FloatArray:
     """Contiguous float64 paths, 2-D ones at z = 0."""
     p = np.asarray(paths, dtype=np.float64)
@@ -218,6 +321,11 @@ def cylinder_threat(
         np.ascontiguousarray(x, dtype=np.float64)
         for x in (c[:, 0], c[:, 1], z_lo, z_hi, r_in, r_out)
     )
+    if len(cx) >= GRID_MIN_CYLINDERS and bool(np.all(a <= b)) and np.isfinite(p[..., :2]).all():
+        g, starts, items, first = _cached_grid(cx, cy, b)
+        return np.asarray(
+            cylinder_threat_grid(p, cx, cy, lo, hi, a, b, bool(strict), g, starts, items, first)
+        )
     return np.asarray(cylinder_threat_batch(p, cx, cy, lo, hi, a, b, bool(strict)))
 
 
