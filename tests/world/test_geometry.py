@@ -639,3 +639,19 @@ def test_track_crosses_itself() -> None:
     assert track_crosses_itself(np.array([[0, 0], [2, 0], [2, 1], [1, -1]]))  # a loop
     assert not track_crosses_itself(np.array([[0, 0, 5], [1, 0, 6], [1, 1, 7]]))  # 3-D: track
     assert not track_crosses_itself(np.array([[0, 0], [1, 0], [1, 1], [0, 0]]))  # touches only
+
+
+def test_built_structures_are_kept_by_content() -> None:
+    from uavplan.world.geometry import by_content
+
+    calls = []
+
+    def build(a: np.ndarray) -> float:
+        calls.append(1)
+        return float(a.sum())
+
+    a = np.arange(5.0)
+    assert by_content("test sum", build, a) == 10.0
+    assert by_content("test sum", build, a.copy()) == 10.0  # same bytes: built once
+    assert len(calls) == 1
+    assert by_content("test sum", build, a + 1) == 15.0 and len(calls) == 2

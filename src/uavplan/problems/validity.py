@@ -144,7 +144,7 @@ class PackedWorld:
             poly_margin=margins,
             lo2=np.ascontiguousarray(scenario.bounds.lo[:2], dtype=np.float64),
             hi2=np.ascontiguousarray(scenario.bounds.hi[:2], dtype=np.float64),
-            poly_prep=G.polygon_prep(verts, starts, margins),
+            poly_prep=G.by_content("polygon prep", G.polygon_prep, verts, starts, margins),
         )
 
     @property

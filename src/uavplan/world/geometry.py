@@ -9,6 +9,7 @@ Numba-parallel over the population, and each has a plain NumPy or Python referen
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -233,23 +234,26 @@ def cylinder_grid(
     return grid, starts, np.ascontiguousarray(item[order], dtype=np.int64), first
 
 
-_Grid = tuple[FloatArray, NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]
-_GRIDS: dict[bytes, _Grid] = {}
+_BUILT: dict[tuple[str, bytes], Any] = {}
 
 
-def _cached_grid(cx: FloatArray, cy: FloatArray, reach: FloatArray) -> _Grid:
-    """:func:`cylinder_grid`, kept for the last few worlds (a planner asks for the same one at
-    every iteration; keyed by the cylinders' bytes, which cost far less to hash than the grid
-    to build)."""
+def by_content(kind: str, build: Callable[..., Any], *arrays: Any) -> Any:
+    """``build(*arrays)``, kept for the last few distinct inputs of each ``kind`` (keyed by the
+    arrays' bytes, which cost far less to hash than the structure to build): a planner asks for
+    the same world's grid or polygon data at every iteration and every validator."""
     import hashlib
 
-    key = hashlib.blake2b(cx.tobytes() + cy.tobytes() + reach.tobytes(), digest_size=16).digest()
-    grid = _GRIDS.get(key)
-    if grid is None:
-        if len(_GRIDS) >= 8:
-            _GRIDS.pop(next(iter(_GRIDS)))
-        grid = _GRIDS[key] = cylinder_grid(cx, cy, reach)
-    return grid
+    h = hashlib.blake2b(digest_size=16)
+    for a in arrays:
+        h.update(np.ascontiguousarray(a).tobytes())
+        h.update(b"|")
+    key = (kind, h.digest())
+    out = _BUILT.get(key)
+    if out is None:
+        if len(_BUILT) >= 16:
+            _BUILT.pop(next(iter(_BUILT)))
+        out = _BUILT[key] = build(*arrays)
+    return out
 
 
 @njit(cache=True, parallel=True, error_model="numpy")
@@ -322,7 +326,7 @@ def cylinder_threat(
         for x in (c[:, 0], c[:, 1], z_lo, z_hi, r_in, r_out)
     )
     if len(cx) >= GRID_MIN_CYLINDERS and bool(np.all(a <= b)) and np.isfinite(p[..., :2]).all():
-        g, starts, items, first = _cached_grid(cx, cy, b)
+        g, starts, items, first = by_content("cylinder grid", cylinder_grid, cx, cy, b)
         return np.asarray(
             cylinder_threat_grid(p, cx, cy, lo, hi, a, b, bool(strict), g, starts, items, first)
         )
