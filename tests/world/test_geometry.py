@@ -183,16 +183,18 @@ def test_fused_cylinder_passes_equal_the_costs_of_the_distances(
 @FAST
 @given(seed=SEEDS, J=st.integers(64, 400), strict=st.booleans())
 def test_grid_threat_equals_every_pair(seed: int, J: int, strict: bool) -> None:
-    """The grid-indexed threat pass (from GRID_MIN_CYLINDERS cylinders on) against testing
-    every segment-cylinder pair: 1e-12 relative, the same infinities; with paths partly off the
-    grid, flat and zero-length segments, radii of very different sizes, and pairs exactly at
-    the inner radius."""
+    """The grid-indexed pass (from GRID_MIN_CYLINDERS cylinders on: the threat, the metres
+    inside and the hits) against testing every segment-cylinder pair: 1e-12 relative, the same
+    infinities; with paths partly off the grid, flat and zero-length segments, radii of very
+    different sizes, and pairs exactly at the inner radius."""
     from uavplan.world.geometry import (
         GRID_MIN_CYLINDERS,
         cylinder_distances,
         cylinder_grid,
+        cylinder_grid_pass,
+        cylinder_hits,
+        cylinder_overlap,
         cylinder_threat_batch,
-        cylinder_threat_grid,
     )
 
     assert J >= GRID_MIN_CYLINDERS
@@ -213,16 +215,25 @@ def test_grid_threat_equals_every_pair(seed: int, J: int, strict: bool) -> None:
     R[6:16], band[6:16] = 1.0, 40.0
     cx[6:16], cy[6:16] = near[:, 0] + 20.0, near[:, 1]
     lo[6:16], hi[6:16] = -np.inf, np.inf
+    cx[16], cy[16], R[16], lo[16], hi[16] = paths[3, 2, 0], paths[3, 2, 1], 5.0, -np.inf, np.inf
     d = cylinder_distances(paths, np.c_[cx, cy], lo, hi)
     fin = np.isfinite(d[..., 5])
     if fin.any():
         R[5] = d[..., 5][fin].min()  # the nearest pair exactly at the inner radius
     r_out = R + band
     want = cylinder_threat_batch(paths, cx, cy, lo, hi, R, r_out, strict)
-    g, starts, items, first = cylinder_grid(cx, cy, r_out)
-    got = cylinder_threat_grid(paths, cx, cy, lo, hi, R, r_out, strict, g, starts, items, first)
+    radii = 0.8 * R  # the check's radii, inside the threat's inner ones
+    g = cylinder_grid(cx, cy, np.maximum(r_out, radii))
+    got, inside, hit = cylinder_grid_pass(paths, cx, cy, lo, hi, radii, R, r_out, strict, *g)
     np.testing.assert_array_equal(np.isinf(got), np.isinf(want))
     np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-9)
+    want_inside, clearance = cylinder_overlap(paths, np.c_[cx, cy], lo, hi, radii)
+    np.testing.assert_allclose(inside, want_inside, rtol=1e-12, atol=1e-9)
+    np.testing.assert_array_equal(hit, clearance < 0)
+    assert hit[3]  # the cylinder on one of its vertices
+    inside2, hit2 = cylinder_hits(paths, np.c_[cx, cy], lo, hi, radii)  # the public form
+    np.testing.assert_allclose(inside2, want_inside, rtol=1e-12, atol=1e-9)
+    np.testing.assert_array_equal(hit2, hit)
     assert (np.isfinite(want) & (want > 0)).any()  # the case has threats to find
 
 

@@ -201,6 +201,14 @@ class Batch:
         return G.cylinder_distances(self.paths, w.cyl_centers, w.cyl_lo, w.cyl_hi)
 
     @cached_property
+    def cyl_hits(self) -> tuple[FloatArray, BoolArray]:
+        """(pop,) each: the metres inside cylinders and whether the path enters one
+        (:func:`uavplan.world.geometry.cylinder_hits`: indexed from 64 cylinders on), what the
+        cylinder check and the graded violation need."""
+        w = self.world
+        return G.cylinder_hits(self.paths, w.cyl_centers, w.cyl_lo, w.cyl_hi, w.cyl_radii)
+
+    @cached_property
     def cyl_overlap(self) -> tuple[FloatArray, FloatArray]:
         """(pop,) each: the metres inside cylinders (``max(0, R - d)`` summed over segments and
         cylinders) and the least ``d - R``, from one fused pass (what :attr:`cyl_dist` would
@@ -445,7 +453,7 @@ class MotionValidator:
             inbox = ~b.scene2d[4] if self.dim == 2 else np.all(sc.bounds.contains(p), axis=1)
             return np.asarray(~inbox)
         if name == "cylinders":
-            return np.asarray(b.cyl_overlap[1] < 0.0)
+            return b.cyl_hits[1]
         if name == "circles":
             return b.scene2d[2]
         if name == "polygons":
@@ -488,7 +496,7 @@ class MotionValidator:
             V += CHECK_WEIGHT * v
         w = self.world
         if len(w.cyl_radii):
-            V += b.cyl_overlap[0]
+            V += b.cyl_hits[0]
         band = self.scenario.altitude
         if band is not None and self.dim == 3:
             h = b.band_heights

@@ -257,22 +257,27 @@ def by_content(kind: str, build: Callable[..., Any], *arrays: Any) -> Any:
 
 
 @njit(cache=True, parallel=True, error_model="numpy")
-def cylinder_threat_grid(
-    paths, cx, cy, z_lo, z_hi, r_in, r_out, strict, grid, starts, items, first
+def cylinder_grid_pass(
+    paths, cx, cy, z_lo, z_hi, radii, r_in, r_out, strict, grid, starts, items, first
 ):  # pragma: no cover - numba
-    """:func:`cylinder_threat_batch` with the cylinders near each segment taken from the
-    :func:`cylinder_grid` over the discs of radius ``r_out`` (``r_in <= r_out``): a cylinder
-    whose disc the segment's bounding box misses adds 0 (d > r_out), so only the cells the box
-    meets are visited; a cylinder listed in several of them is tested in the first one its box
-    and the segment's share, so once per segment, with no per-path bookkeeping. The same
-    terms, in another order."""
+    """:func:`cylinder_threat_batch` and the metres inside and hits of
+    :func:`cylinder_overlap_batch`, with the cylinders near each segment taken from the
+    :func:`cylinder_grid` over the discs of radius ``max(r_out, radii)`` (``r_in <= r_out``): a
+    cylinder whose disc the segment's bounding box misses adds nothing (d > r_out, d > radii),
+    so only the cells the box meets are visited; a cylinder listed in several of them is tested
+    in the first one its box and the segment's share, so once per segment, with no per-path
+    bookkeeping. Returns ``(threat, inside, hit)``, (P,) each (``hit``: some d < radii), the
+    same terms as the every-pair kernels in another order."""
     P, N, _ = paths.shape
     x0, y0, h = grid[0], grid[1], grid[2]
     nx, ny = int(grid[3]), int(grid[4])
-    out = np.empty(P)
+    threat = np.empty(P)
+    inside = np.empty(P)
+    hit = np.zeros(P, dtype=np.bool_)
     for p in prange(P):
         total = 0.0
         hits = 0
+        metres = 0.0
         for s in range(N - 1):
             ax, ay, az, ex, ey, inv_ee, flat, inv_dz = seg_setup(paths, p, s)
             bx, by = ax + ex, ay + ey
@@ -294,8 +299,12 @@ def cylinder_threat_grid(
                             hits += 1
                         elif d <= r_out[j]:
                             total += r_out[j] - d
-        out[p] = total if hits == 0 else np.inf
-    return out
+                        if d < radii[j]:
+                            metres += radii[j] - d
+                            hit[p] = True
+        threat[p] = total if hits == 0 else np.inf
+        inside[p] = metres
+    return threat, inside, hit
 
 
 def _as_3d(paths: FloatArray) -> FloatArray:
@@ -304,6 +313,21 @@ def _as_3d(paths: FloatArray) -> FloatArray:
     if p.shape[-1] == 2:
         p = np.concatenate([p, np.zeros((*p.shape[:-1], 1))], axis=-1)
     return np.ascontiguousarray(p)
+
+
+def _soa(
+    paths: FloatArray, centers: FloatArray, *per_cylinder: FloatArray
+) -> tuple[FloatArray, list[FloatArray]]:
+    """Paths as :func:`_as_3d` gives them, and the axes' x, y and each per-cylinder array as
+    contiguous float64 (the fused kernels' structure of arrays)."""
+    c = np.asarray(centers, dtype=np.float64).reshape(-1, 2)
+    cols = [np.ascontiguousarray(x, dtype=np.float64) for x in (c[:, 0], c[:, 1], *per_cylinder)]
+    return _as_3d(paths), cols
+
+
+def _gridded(p: FloatArray, n_cylinders: int) -> bool:
+    """Whether the grid serves these paths: enough cylinders, and finite coordinates."""
+    return n_cylinders >= GRID_MIN_CYLINDERS and bool(np.isfinite(p[..., :2]).all())
 
 
 def cylinder_threat(
@@ -316,34 +340,41 @@ def cylinder_threat(
     strict: bool,
 ) -> FloatArray:
     """:func:`cylinder_threat_batch` of any paths (2-D ones at z = 0 against the cylinders'
-    heights, as :func:`cylinder_distances`), (pop,)."""
-    p = _as_3d(paths)
-    if len(centers) == 0:
+    heights, as :func:`cylinder_distances`), (pop,); from :data:`GRID_MIN_CYLINDERS` cylinders
+    on, :func:`cylinder_grid_pass`."""
+    p, (cx, cy, lo, hi, a, b) = _soa(paths, centers, z_lo, z_hi, r_in, r_out)
+    if len(cx) == 0:
         return np.zeros(p.shape[0])
-    c = np.asarray(centers, dtype=np.float64)
-    cx, cy, lo, hi, a, b = (
-        np.ascontiguousarray(x, dtype=np.float64)
-        for x in (c[:, 0], c[:, 1], z_lo, z_hi, r_in, r_out)
-    )
-    if len(cx) >= GRID_MIN_CYLINDERS and bool(np.all(a <= b)) and np.isfinite(p[..., :2]).all():
-        g, starts, items, first = by_content("cylinder grid", cylinder_grid, cx, cy, b)
-        return np.asarray(
-            cylinder_threat_grid(p, cx, cy, lo, hi, a, b, bool(strict), g, starts, items, first)
-        )
+    if _gridded(p, len(cx)) and bool(np.all(a <= b)):
+        g = by_content("cylinder grid", cylinder_grid, cx, cy, b)
+        return np.asarray(cylinder_grid_pass(p, cx, cy, lo, hi, a, a, b, bool(strict), *g)[0])
     return np.asarray(cylinder_threat_batch(p, cx, cy, lo, hi, a, b, bool(strict)))
+
+
+def cylinder_hits(
+    paths: FloatArray, centers: FloatArray, z_lo: FloatArray, z_hi: FloatArray, radii: FloatArray
+) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """The metres inside cylinders and whether a path hits one, (pop,) each: what the cylinder
+    check and the graded violation need (:func:`cylinder_grid_pass` from
+    :data:`GRID_MIN_CYLINDERS` cylinders on, else :func:`cylinder_overlap`)."""
+    p, (cx, cy, lo, hi, r) = _soa(paths, centers, z_lo, z_hi, radii)
+    if len(cx) == 0:
+        return np.zeros(p.shape[0]), np.zeros(p.shape[0], dtype=bool)
+    if _gridded(p, len(cx)):
+        g = by_content("cylinder grid", cylinder_grid, cx, cy, r)
+        _, inside, hit = cylinder_grid_pass(p, cx, cy, lo, hi, r, r, r, False, *g)
+        return np.asarray(inside), np.asarray(hit)
+    inside, clearance = cylinder_overlap(p, centers, z_lo, z_hi, radii)
+    return inside, clearance < 0.0
 
 
 def cylinder_overlap(
     paths: FloatArray, centers: FloatArray, z_lo: FloatArray, z_hi: FloatArray, radii: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
     """:func:`cylinder_overlap_batch` of any paths: metres inside and least clearance, (pop,)."""
-    p = _as_3d(paths)
-    if len(centers) == 0:
+    p, (cx, cy, lo, hi, r) = _soa(paths, centers, z_lo, z_hi, radii)
+    if len(cx) == 0:
         return np.zeros(p.shape[0]), np.full(p.shape[0], np.inf)
-    c = np.asarray(centers, dtype=np.float64)
-    cx, cy, lo, hi, r = (
-        np.ascontiguousarray(x, dtype=np.float64) for x in (c[:, 0], c[:, 1], z_lo, z_hi, radii)
-    )
     inside, clearance = cylinder_overlap_batch(p, cx, cy, lo, hi, r)
     return np.asarray(inside), np.asarray(clearance)
 
