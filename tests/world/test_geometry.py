@@ -666,3 +666,29 @@ def test_built_structures_are_kept_by_content() -> None:
     assert by_content("test sum", build, a.copy()) == 10.0  # same bytes: built once
     assert len(calls) == 1
     assert by_content("test sum", build, a + 1) == 15.0 and len(calls) == 2
+
+
+@FAST
+@given(seed=SEEDS)
+def test_cylinder_grid_lists_each_disc_in_every_cell_its_box_meets(seed: int) -> None:
+    from uavplan.world.geometry import cylinder_grid
+
+    rng = np.random.default_rng(seed)
+    J = int(rng.integers(1, 300))
+    cx, cy = rng.uniform(-1e4, 1e4, J), rng.uniform(-50, 50, J) * rng.choice([1.0, 100.0])
+    reach = rng.uniform(0.1, 200.0, J)
+    (x0, y0, h, nx, ny), starts, items, first = cylinder_grid(cx, cy, reach)
+    nx, ny = int(nx), int(ny)
+    listed: dict[int, set[int]] = {}
+    for k in range(nx * ny):
+        for j in items[starts[k] : starts[k + 1]]:
+            listed.setdefault(int(j), set()).add(k)
+    for j in range(J):
+        cells = listed[j]
+        ii = sorted({k % nx for k in cells})
+        jj = sorted({k // nx for k in cells})
+        assert cells == {b * nx + a for a in ii for b in jj}  # a full rectangle
+        assert (ii[0], jj[0]) == tuple(first[j])
+        # the disc's box lies within the cells listing it
+        assert x0 + ii[0] * h <= cx[j] - reach[j] and cx[j] + reach[j] <= x0 + (ii[-1] + 1) * h
+        assert y0 + jj[0] * h <= cy[j] - reach[j] and cy[j] + reach[j] <= y0 + (jj[-1] + 1) * h

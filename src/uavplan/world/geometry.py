@@ -206,8 +206,9 @@ def cylinder_grid(
     starts, items, first)`` with ``grid = (x0, y0, h, nx, ny)``, the cylinders whose disc's
     bounding box meets cell ``(i, j)`` at ``items[starts[k]:starts[k + 1]]``, ``k = j nx + i``,
     and each cylinder's first cell ``first[c] = (i, j)`` (its box's lowest corner).
-    The cell side ``h`` is at least the largest disc's diameter (each disc meets at most four
-    cells) and about the side that gives one cylinder per cell."""
+    The cell side ``h`` is at least the largest disc's diameter (each disc's box meets two
+    cells a side, three where rounding widens it; every one of them lists it) and about the
+    side that gives one cylinder per cell."""
     r = np.asarray(reach, dtype=np.float64)
     pad = 1e-9 * (1.0 + np.abs(cx) + np.abs(cy) + r)  # rounding: a disc never misses its cell
     x_lo, x_hi, y_lo, y_hi = cx - r - pad, cx + r + pad, cy - r - pad, cy + r + pad
@@ -221,8 +222,8 @@ def cylinder_grid(
     j0 = np.floor((y_lo - y0) / h).astype(np.int64)
     j1 = np.minimum(np.floor((y_hi - y0) / h).astype(np.int64), ny - 1)
     cells, ids = [], []
-    for di in (0, 1):
-        for dj in (0, 1):
+    for di in (0, 1, 2):  # two cells a side, a third where rounding widens a box
+        for dj in (0, 1, 2):
             ok = (i0 + di <= i1) & (j0 + dj <= j1)
             cells.append((j0 + dj)[ok] * nx + (i0 + di)[ok])
             ids.append(np.nonzero(ok)[0])
