@@ -88,6 +88,48 @@ def main() -> None:
         row = f"{J:>9,} {ns:>8.1f} {ratio} {ns_all:>11.1f} {ratio_all}"
         print(f"{row} {ns_c:>8.1f} {ns_c_all:>11.1f}", flush=True)
 
+    validator_case(a.repeats)
+
+
+def validator_case(repeats: int) -> None:
+    """The motion validator end to end (``paths_valid``: the fused 3-D static kernel for bounds,
+    terrain and band, then the cylinders) on the SPSO terrain with J small cylinders, against
+    the same validator with the grid turned off (every pair inside the fused kernel)."""
+    import dataclasses
+
+    from uavplan.problems.validity import MotionValidator
+    from uavplan.scenarios import resolve
+    from uavplan.world import Cylinder
+    from uavplan.world import geometry as G
+
+    sc0 = resolve("spso")
+    rng = np.random.default_rng(1)
+    lo, hi = np.asarray(sc0.bounds.lo), np.asarray(sc0.bounds.hi)
+    start = rng.uniform(lo[:2], hi[:2], (300, 1, 2))
+    xy = start + np.cumsum(rng.normal(0.0, 5.0, (300, 8, 2)), axis=1)
+    z = sc0.ground(xy[..., 0], xy[..., 1]) + 150.0
+    paths = np.ascontiguousarray(np.concatenate([xy, z[..., None]], axis=-1))
+    print("\nmotion validator on the SPSO terrain, 300 paths x 8 points, ns per segment:")
+    print(f"{'cylinders':>9} {'grid':>9} {'every pair':>11} {'valid':>6}")
+    default = G.GRID_MIN_CYLINDERS
+    for J in (50, 1_000, 10_000):
+        cyl = tuple(
+            Cylinder(tuple(c), float(r))
+            for c, r in zip(
+                rng.uniform(lo[:2], hi[:2], (J, 2)), rng.uniform(0.5, 2.0, J), strict=True
+            )
+        )
+        sc = dataclasses.replace(sc0, cylinders=cyl)
+        times, verdicts = [], []
+        for threshold in (default, 10**9):
+            G.GRID_MIN_CYLINDERS = threshold
+            v = MotionValidator(sc, sc.tasks[0])
+            verdicts.append(v.paths_valid(paths))
+            times.append(best_time(lambda: v.paths_valid(paths), repeats) / paths[:, 1:].size * 3e9)  # noqa: B023
+        G.GRID_MIN_CYLINDERS = default
+        assert np.array_equal(verdicts[0], verdicts[1])
+        print(f"{J:>9,} {times[0]:>9.1f} {times[1]:>11.1f} {int(verdicts[0].sum()):>6}", flush=True)
+
 
 if __name__ == "__main__":
     main()

@@ -217,15 +217,29 @@ def test_bad_shapes_are_refused() -> None:
         v.segments_valid(np.zeros((3, 2)), np.zeros((4, 2)))
 
 
-@pytest.mark.parametrize("name", ["ppswarm2", "spso", "jacksboro", "open", "topobathy", "w3s"])
+@pytest.mark.parametrize(
+    "name", ["ppswarm2", "spso", "jacksboro", "open", "topobathy", "w3s", "many"]
+)
 @pytest.mark.parametrize("strict", [False, True])
 def test_fused_static_checks_agree_with_the_checks_one_by_one(name: str, strict: bool) -> None:
     """``passing`` (one fused kernel for bounds, cylinders, terrain and band in 3-D) gives
-    exactly the verdicts of the checks run one by one (:meth:`violations`)."""
+    exactly the verdicts of the checks run one by one (:meth:`violations`); ``many``: 300
+    cylinders, which the grid-indexed check tests after the kernel."""
     import dataclasses
+
+    from uavplan.world import Cylinder
 
     if name == "w3s":  # finite cylinders, no polygons, no moving obstacles
         sc = dataclasses.replace(world3(), polygons=(), moving_obstacles=())
+    elif name == "many":  # enough cylinders for the grid, some finite
+        sc = resolve("spso")
+        r = np.random.default_rng(3)
+        lo2, hi2 = np.asarray(sc.bounds.lo[:2]), np.asarray(sc.bounds.hi[:2])
+        cyl = [
+            Cylinder(tuple(r.uniform(lo2, hi2)), float(r.uniform(3, 12)), z_max=float(z))
+            for z in r.choice([np.inf, 300.0, 600.0], 300)
+        ]
+        sc = dataclasses.replace(sc, cylinders=tuple(cyl))
     else:
         sc = resolve(name)
     if name == "jacksboro":  # finite cylinders on a real DEM; its revealed area is a polygon
@@ -255,6 +269,8 @@ def test_fused_static_checks_agree_with_the_checks_one_by_one(name: str, strict:
     got[v.passing(b)] = True
     np.testing.assert_array_equal(got, want)
     assert 0 < want.sum() < len(paths)
+    if name == "many":
+        assert v._cylinders_by_grid and v.violations(b)["cylinders"][:200].any()
     np.testing.assert_array_equal(v.paths_valid(paths), want)
     if sc.terrain is not None:  # the nearest-node lookup has no fused form
         assert MotionValidator(sc, sc.tasks[0], lookup="nearest")._static_args is None

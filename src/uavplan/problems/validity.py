@@ -381,6 +381,21 @@ class MotionValidator:
         return {c: self._check(c, b) for c in self.checks() if c not in skipped}
 
     @cached_property
+    def _static_cylinders(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """The cylinders the fused static kernel tests: all of them, or none where the world
+        has enough for the grid (:func:`uavplan.world.geometry.cylinder_hits`), which
+        :meth:`passing` then asks after the kernel."""
+        w = self.world
+        if self._cylinders_by_grid:
+            none = np.zeros(0)
+            return np.zeros((0, 2)), none, none, none
+        return w.cyl_centers, w.cyl_radii, w.cyl_lo, w.cyl_hi
+
+    @property
+    def _cylinders_by_grid(self) -> bool:
+        return len(self.world.cyl_radii) >= G.GRID_MIN_CYLINDERS
+
+    @cached_property
     def _static_args(self) -> tuple[object, ...] | None:
         """The arguments of the fused static-world kernel, or None where it does not apply
         (2-D, circles or polygons, terrain read as ``nearest``)."""
@@ -415,7 +430,7 @@ class MotionValidator:
             np.ascontiguousarray(sc.bounds.lo, dtype=np.float64),
             np.ascontiguousarray(sc.bounds.hi, dtype=np.float64),
             BOUNDS_TOL,
-            w.cyl_centers, w.cyl_radii, w.cyl_lo, w.cyl_hi,
+            *self._static_cylinders,
             terrain is not None, H, flat, off, shp, nH, nflat, noff, nshp, grid, need,
             band is not None, ground,
             float(band.min) if band is not None else 0.0,
@@ -428,7 +443,8 @@ class MotionValidator:
         cascading: the cheap checks first, each later one only on the paths still passing
         (the same verdicts as :meth:`violations`, without telling the failures apart). In a
         3-D world the bounds, cylinder, terrain and band checks run as one fused kernel
-        (:mod:`uavplan.problems._validity_kernels`)."""
+        (:mod:`uavplan.problems._validity_kernels`); from 64 cylinders on the kernel leaves
+        the cylinders to the indexed check that follows it."""
         skipped = set(skip)
         applicable = self.checks()
         names = [c for c in CASCADE if c in applicable and c not in skipped]
@@ -437,7 +453,8 @@ class MotionValidator:
         args = self._static_args
         if args is not None and not skipped & STATIC:
             idx = idx[VK.static_world_ok(b.paths, *args)]
-            names = [c for c in names if c not in STATIC]
+            fused = STATIC - {"cylinders"} if self._cylinders_by_grid else STATIC
+            names = [c for c in names if c not in fused]
         for c in names:
             if not idx.size:
                 break
