@@ -23,13 +23,12 @@ from __future__ import annotations
 
 import argparse
 import math
-import time
-from collections.abc import Callable
 
 import numba
 import numpy as np
 from numba import njit, prange
 
+from _timing import best_time
 from uavplan.problems import CartesianEncoding, PathProblem
 from uavplan.problems.costs import threat_cost_spso
 from uavplan.scenarios import load_builtin
@@ -74,16 +73,6 @@ def minimal_fused(paths, cx, cy, lo, hi, r_in, r_out):  # pragma: no cover - num
                 hits += 1 if (ok and d < r_in[j]) else 0
         out[p] = total if hits == 0 else np.inf
     return out
-
-
-def best_time(fn: Callable[[], object], repeats: int) -> float:
-    fn()  # warm-up (JIT compile, caches)
-    best = math.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def python_loop(paths: np.ndarray, centers: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> list:

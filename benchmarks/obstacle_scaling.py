@@ -16,27 +16,16 @@ at most 3 times the value at J = 50 at J = 10,000.
 from __future__ import annotations
 
 import argparse
-import math
-import time
 
 import numpy as np
 
+from _timing import best_time
 from uavplan.world.geometry import (
     cylinder_hits,
     cylinder_overlap,
     cylinder_threat,
     cylinder_threat_batch,
 )
-
-
-def best_time(fn, repeats: int) -> float:  # type: ignore[no-untyped-def]
-    fn()
-    best = math.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def main() -> None:

@@ -33,19 +33,10 @@ import numba
 import numpy as np
 from numba import njit
 
+from _timing import best_time
 from uavplan.planners.grid_index import GridIndex, near_brute, nearest_brute
 from uavplan.planners.rrt_star import RRTStarConfig, RRTStarTree, rrt_star
 from uavplan.scenarios import load_builtin
-
-
-def best_time(fn: Callable[[], object], repeats: int) -> float:
-    fn()  # warm-up (JIT compile, caches)
-    best = math.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 @njit(cache=True)

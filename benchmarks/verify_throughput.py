@@ -16,25 +16,13 @@ in this one run (best of ``--repeats``; the machine is shared):
 from __future__ import annotations
 
 import argparse
-import math
-import time
-from collections.abc import Callable
 
 import numpy as np
 
+from _timing import best_time
 from uavplan.verify import Trajectory, verify_trajectories
 from uavplan.verify.separation import candidate_pairs, check_separation
 from uavplan.world import UAV, Bounds, Scenario, Task
-
-
-def best_time(fn: Callable[[], object], repeats: int) -> float:
-    fn()  # warm-up (JIT compile, caches)
-    best = math.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def fleet(n: int, segments: int, side: float, seed: int = 0) -> list[Trajectory]:
