@@ -86,7 +86,7 @@ def _t_length(ctx: Batch) -> FloatArray:
 
 
 def _t_threat(ctx: Batch) -> FloatArray:
-    # PPSwarm's Eqs. (4)-(5), fused (C.threat_cost of ctx.cyl_dist is the reference)
+    # PPSwarm's Eqs. (4)-(5), fused (C.threat_cost of G.cylinder_distances is the reference)
     w = ctx.world
     R = w.cyl_radii
     out = G.cylinder_threat(
@@ -100,8 +100,8 @@ def _t_threat(ctx: Batch) -> FloatArray:
 
 def _t_threat_spso(ctx: Batch) -> FloatArray:
     # SPSO adds drone_size itself: use the bare radii; each cylinder's margin is the drone size.
-    # Fused; C.threat_cost_spso(ctx.cyl_dist, w.cyl_radii - w.cyl_margin, w.cyl_margin) is the
-    # reference, whose R + drone size this repeats operation for operation.
+    # Fused; C.threat_cost_spso of G.cylinder_distances (bare radii, margins as drone sizes) is
+    # the reference, whose R + drone size this repeats operation for operation.
     w = ctx.world
     R = (w.cyl_radii - w.cyl_margin) + w.cyl_margin
     r_out = R + 10.0 * w.cyl_margin

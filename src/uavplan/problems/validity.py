@@ -56,6 +56,7 @@ from uavplan.problems import _validity_kernels as VK
 from uavplan.problems import costs as C
 from uavplan.world import _terrain_kernels as tk
 from uavplan.world import geometry as G
+from uavplan.world.dynamic import min_distances
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 from uavplan.world.terrain import Terrain
@@ -194,13 +195,6 @@ class Batch:
         return np.asarray(self.seg_len.sum(axis=1))
 
     @cached_property
-    def cyl_dist(self) -> FloatArray:
-        """(pop, n - 1, J): horizontal distance from each segment to each cylinder's axis,
-        within its heights (inf if the segment never is)."""
-        w = self.world
-        return G.cylinder_distances(self.paths, w.cyl_centers, w.cyl_lo, w.cyl_hi)
-
-    @cached_property
     def cyl_hits(self) -> tuple[FloatArray, BoolArray]:
         """(pop,) each: the metres inside cylinders and whether the path enters one
         (:func:`uavplan.world.geometry.cylinder_hits`: indexed from 64 cylinders on), what the
@@ -211,8 +205,9 @@ class Batch:
     @cached_property
     def cyl_overlap(self) -> tuple[FloatArray, FloatArray]:
         """(pop,) each: the metres inside cylinders (``max(0, R - d)`` summed over segments and
-        cylinders) and the least ``d - R``, from one fused pass (what :attr:`cyl_dist` would
-        give, without its (pop, n - 1, J) array)."""
+        cylinders) and the least ``d - R``, from one fused pass (what
+        :func:`uavplan.world.geometry.cylinder_distances` would give, without its (pop, n - 1, J)
+        array)."""
         w = self.world
         return G.cylinder_overlap(self.paths, w.cyl_centers, w.cyl_lo, w.cyl_hi, w.cyl_radii)
 
@@ -239,14 +234,7 @@ class Batch:
     @cached_property
     def moving_dist(self) -> FloatArray:
         """(pop, n - 1, K): exact minimum distance over time to each moving obstacle."""
-        obs = self.scenario.moving_obstacles
-        if not obs:
-            return np.zeros((self.paths.shape[0], self.paths.shape[1] - 1, 0))
-        # the paths and times prepared once for every obstacle (min_distance would per call)
-        t = np.require(self.times, np.float64, ["C", "W"])
-        return np.stack(
-            [G.timed_path_min_distance(self.paths3, t, o.times, o.positions) for o in obs], axis=-1
-        )
+        return min_distances(self.scenario.moving_obstacles, self.paths, self.times)
 
     @cached_property
     def scene2d(self) -> tuple[FloatArray, FloatArray, BoolArray, BoolArray, BoolArray]:

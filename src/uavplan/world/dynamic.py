@@ -7,6 +7,7 @@ them, and compute distances to a timed path exactly (both motions are linear bet
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -60,11 +61,20 @@ class MovingObstacle:
         Returns:
             (pop, n - 1) metres.
         """
-        from uavplan.world.geometry import timed_path_min_distance
+        return min_distances((self,), paths, times)[..., 0]
 
-        p = np.ascontiguousarray(paths, dtype=np.float64)
-        if p.shape[-1] == 2:
-            p = np.concatenate([p, np.zeros((*p.shape[:-1], 1))], axis=-1)
-        # writable like ``p`` (a read-only array would be a second kernel signature to compile)
-        tt = np.require(np.broadcast_to(times, p.shape[:-1]), np.float64, ["C", "W"])
-        return np.asarray(timed_path_min_distance(p, tt, self.times, self.positions))
+
+def min_distances(
+    obstacles: Sequence[MovingObstacle], paths: ArrayLike, times: ArrayLike
+) -> FloatArray:
+    """:meth:`MovingObstacle.min_distance` to each of ``obstacles``, (pop, n - 1, K), the paths
+    (2-D ones at z = 0) and times prepared once for all of them."""
+    from uavplan.world.geometry import timed_path_min_distance
+
+    p = np.ascontiguousarray(paths, dtype=np.float64)
+    if p.shape[-1] == 2:
+        p = np.concatenate([p, np.zeros((*p.shape[:-1], 1))], axis=-1)
+    # writable like ``p`` (a read-only array would be a second kernel signature to compile)
+    tt = np.require(np.broadcast_to(times, p.shape[:-1]), np.float64, ["C", "W"])
+    out = [timed_path_min_distance(p, tt, o.times, o.positions) for o in obstacles]
+    return np.stack(out, axis=-1) if out else np.zeros((*p.shape[:-2], p.shape[-2] - 1, 0))
