@@ -29,6 +29,7 @@ import numpy as np
 from numba import njit, prange
 
 from _timing import best_time
+from uavplan.kernel_builds import set_mode
 from uavplan.problems import CartesianEncoding, PathProblem
 from uavplan.problems.costs import threat_cost_spso
 from uavplan.scenarios import load_builtin
@@ -185,6 +186,10 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=7)
     args = ap.parse_args()
+    # the population kernels' parallel builds when there are threads to run them (a CLI run
+    # switches to them after a second of serial calls: uavplan.kernel_builds)
+    set_mode("always" if numba.get_num_threads() > 1 else "never")
+    print(f"population kernels: {'parallel' if numba.get_num_threads() > 1 else 'serial'} builds")
     kernel_case("SPSO size", 500, 12, 6, args.repeats)
     kernel_case("large size", 1000, 50, 100, args.repeats)
     spso_cost_case(args.repeats)

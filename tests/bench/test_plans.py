@@ -1,28 +1,31 @@
-"""Every built-in plan runs end to end at smoke scale (what CI runs), with its report."""
+"""Every built-in plan runs end to end at smoke scale (what CI runs), with its report, and gives
+the numbers of its golden record (``tests/golden/smoke.json``): one sweep per plan checks both."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pandas as pd
 import pytest
 
+from golden.record import GOLDEN, differences, plan_rows
 from uavplan.bench.catalog import available_plans, get_plan
 from uavplan.bench.report import write_report
 from uavplan.bench.runner import run_sweep
+from uavplan.bench.store import ResultStore
 
-#: plans whose smoke sweep takes 25-100 s here: in the slow set (their golden records, which run
-#: the same sweep and compare its numbers, stay in the default run)
-SLOW = {"fleet-scale", "hrmaga-compare", "rscdwoa-dynamic", "functions", "functions-iterations"}
+WANT = json.loads(GOLDEN.read_text())
 
 
-@pytest.mark.parametrize(
-    "name",
-    [pytest.param(n, marks=pytest.mark.slow) if n in SLOW else n for n in available_plans()],
-)
+@pytest.mark.parametrize("name", available_plans())
 def test_plan_runs_at_smoke_scale(name: str, tmp_path: Path) -> None:
+    """One test per plan, so that the plans run in parallel (the longest is 25-40 s)."""
     plan = get_plan(name)
     summary = run_sweep(plan, tmp_path, scale="smoke", executor="serial")
+    diffs = differences(WANT["plans"][name], plan_rows(ResultStore(tmp_path).read()),
+                        f"/plans/{name}")  # fmt: skip
+    assert not diffs, "golden record differs:\n" + "\n".join(diffs[:40])
     assert summary.failed == 0, summary.failures
     assert summary.executed == len(plan.runs("smoke"))
     df = pd.read_parquet(tmp_path / "runs")

@@ -4,9 +4,9 @@
     python tests/golden/record.py            # write tests/golden/smoke.json
     python tests/golden/record.py --check    # compare a fresh run with it, print differences
 
-``tests/test_golden.py`` runs the same comparison inside the test suite (the plans it covers are
-already run at smoke scale there, by ``tests/bench/test_plans.py``; this file is the
-recorder). Floats are compared with a relative tolerance of 1e-9 (an ulp-level difference in a
+The test suite compares the same records: each plan's in ``tests/bench/test_plans.py``, on the
+smoke sweep it runs anyway, and the demo's in ``tests/golden/test_golden.py``; this file is the
+recorder. Floats are compared with a relative tolerance of 1e-9 (an ulp-level difference in a
 vectorized math function between CPUs stays far below it), integers and flags exactly.
 """
 

@@ -48,9 +48,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import dijkstra
-from scipy.spatial import cKDTree
 
 from uavplan.optimizers.base import Budget
 from uavplan.planners.base import Planner
@@ -227,6 +224,8 @@ class RGG:
         self.radius = connection_radius(self.n_samples, self.dim, self.region.measure, self.gamma)
         if len(new) == 0:
             return 0
+        from scipy.spatial import cKDTree  # lazy: SciPy's import is 0.3 s of a CLI start
+
         pairs = cKDTree(self.nodes).query_pairs(self.radius, output_type="ndarray")
         pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
         pairs = np.sort(pairs, axis=1)
@@ -244,6 +243,9 @@ class RGG:
         n = len(self.nodes)
         if len(self.edges) == 0:
             return None
+        from scipy.sparse import csr_matrix
+        from scipy.sparse.csgraph import dijkstra
+
         w = np.maximum(w, 1e-12)  # an explicit zero would be no edge for csgraph
         g = csr_matrix((w, (self.edges[:, 0], self.edges[:, 1])), shape=(n, n))
         dist, pred = dijkstra(g, directed=False, indices=0, return_predecessors=True)

@@ -13,13 +13,14 @@ the two on random batches.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from uavplan.kernel_builds import population_kernel
 from uavplan.world._terrain_kernels import _segment_min_clearance, bilinear_one, snap_one
 from uavplan.world.geometry import seg_cyl_dist
 
 
-@njit(cache=True, parallel=True)
+@population_kernel()
 def static_world_ok(
     paths,
     lo,

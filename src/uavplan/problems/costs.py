@@ -14,9 +14,10 @@ References:
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 from numpy.typing import NDArray
 
+from uavplan.kernel_builds import population_kernel
 from uavplan.world.geometry import (
     segment_circle_inside_fraction,
     segment_polygon_inside_fraction,
@@ -135,7 +136,7 @@ def smoothness_cost_spso(
     return np.asarray(_smoothness_spso_kernel(p, float(turning_max), float(climb_max)))
 
 
-@njit(cache=True, parallel=True)
+@population_kernel()
 def _smoothness_spso_kernel(p, turning_max, climb_max):  # pragma: no cover - numba
     P, N, _ = p.shape
     out = np.zeros(P)

@@ -18,6 +18,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from uavplan.kernel_builds import population_kernel
+
 _STACK = 256
 
 
@@ -233,7 +235,7 @@ def _segment_min_clearance(
     return best
 
 
-@njit(cache=True, parallel=True)
+@population_kernel()
 def min_clearance_batch(H, flat, offsets, shapes, u, v, z, cap, stop_below):  # pragma: no cover
     """Min of z - h along every segment of ``(P, N)`` polylines in cell coordinates, (P, N - 1).
 
@@ -310,7 +312,7 @@ def _crossings(x0, dx):  # pragma: no cover - numba
     return k_hi - 1, -1, n
 
 
-@njit(cache=True, parallel=True)
+@population_kernel()
 def mean_height_batch(H, u, v):  # pragma: no cover - numba
     """Exact mean of the bilinear terrain along the xy projection of each segment, (P, N - 1).
 
@@ -385,7 +387,7 @@ def mean_height_batch(H, u, v):  # pragma: no cover - numba
     return out
 
 
-@njit(cache=True, parallel=True)
+@population_kernel()
 def mean_height_batch_reference(H, u, v):  # pragma: no cover - numba
     """The first form of :func:`mean_height_batch` (breakpoints collected and sorted per
     segment), kept as the reference its tests compare against bit for bit.

@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
+from uavplan.kernel_builds import population_kernel
 from uavplan.world.tolerances import BOUNDS_TOL, HULL_GROWTH_REL
 
 FloatArray = NDArray[np.float64]
@@ -54,7 +55,7 @@ def _seg_point_dist(ax, ay, bx, by, cx, cy):  # pragma: no cover - numba
     return np.sqrt(dx * dx + dy * dy)
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
+@population_kernel(error_model="numpy")
 def segment_cylinder_distance(paths, centers, z_lo, z_hi):  # pragma: no cover - numba
     """Horizontal distance from each cylinder axis to the part of each segment inside the
     cylinder's vertical extent ``[z_lo, z_hi]``; ``inf`` where no part of the segment is at
@@ -137,7 +138,7 @@ def seg_cyl_dist(paths, p, s, centers, z_lo, z_hi, j):  # pragma: no cover - num
 FUSED_MATH = {"reassoc"}
 
 
-@njit(cache=True, parallel=True, error_model="numpy", fastmath=FUSED_MATH)
+@population_kernel(error_model="numpy", fastmath=FUSED_MATH)
 def cylinder_threat_batch(paths, cx, cy, z_lo, z_hi, r_in, r_out, strict):  # pragma: no cover
     """The linear threat cost summed over every segment and cylinder, (P,), in one pass (no
     (P, N - 1, J) distances; cylinders as structure of arrays: axes ``cx``, ``cy``): with d the
@@ -165,7 +166,7 @@ def cylinder_threat_batch(paths, cx, cy, z_lo, z_hi, r_in, r_out, strict):  # pr
     return out
 
 
-@njit(cache=True, parallel=True, error_model="numpy", fastmath=FUSED_MATH)
+@population_kernel(error_model="numpy", fastmath=FUSED_MATH)
 def cylinder_overlap_batch(paths, cx, cy, z_lo, z_hi, radii):  # pragma: no cover - numba
     """Per path, in one pass over segments and cylinders (as structure of arrays): the metres
     inside (the sum of ``max(0, R - d)``) and the least clearance ``min(d - R)`` (inf without
@@ -257,7 +258,7 @@ def by_content(kind: str, build: Callable[..., Any], *arrays: Any) -> Any:
     return out
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
+@population_kernel(error_model="numpy")
 def cylinder_grid_pass(
     paths, cx, cy, z_lo, z_hi, radii, r_in, r_out, strict, grid, starts, items, first
 ):  # pragma: no cover - numba
@@ -472,7 +473,7 @@ def segment_circle_inside_fraction_reference(
     return np.asarray(frac)
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
+@population_kernel(error_model="numpy")
 def _circle_fraction_kernel(paths, centers, radii):  # pragma: no cover - numba
     P, N, _ = paths.shape
     J = centers.shape[0]
@@ -602,7 +603,7 @@ def _box_gap2(ax, ay, bx, by, box, k):  # pragma: no cover - numba
     return gx * gx + gy * gy
 
 
-@njit(cache=True, parallel=True)
+@population_kernel()
 def segment_polygon_distance(paths, verts, starts, cap=np.inf):  # pragma: no cover - numba
     """Distance between each 2-D segment and each polygon (0 when they touch or overlap).
 
@@ -688,7 +689,7 @@ def _inside_fraction_one(ax, ay, bx, by, verts, v0, v1, ts):  # pragma: no cover
     return _inside_pieces(ax, ay, bx - ax, by - ay, verts, v0, v1, ts, n)
 
 
-@njit(cache=True, parallel=True)
+@population_kernel()
 def segment_polygon_inside_fraction(paths, verts, starts):  # pragma: no cover - numba
     """Fraction of each segment's parameter range inside each polygon, exact. (P, N - 1, K)."""
     P, N, _ = paths.shape
@@ -768,7 +769,7 @@ def _min_dist_linear(px, py, pz, vx, vy, vz, qx, qy, qz, wx, wy, wz, t0, t1):  #
     return np.sqrt(dx * dx + dy * dy + dz * dz)
 
 
-@njit(cache=True, parallel=True)
+@population_kernel()
 def timed_path_min_distance(paths, times, obs_t, obs_xyz):  # pragma: no cover - numba
     """Exact minimum distance over continuous time between timed polylines and one moving point.
 
@@ -1049,7 +1050,7 @@ def scene2d_batch(
     return scene2d_kernel(paths, centers, radii, verts, starts, margins, lo, hi, *prep)
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
+@population_kernel(error_model="numpy")
 def scene2d_kernel(
     paths,
     centers,

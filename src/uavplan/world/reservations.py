@@ -46,6 +46,8 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
+from uavplan.kernel_builds import population_kernel
+
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
@@ -329,7 +331,7 @@ def _piece_min_box(a0, a1, ta0, ta1, b0, b1, tb0, tb1, w):  # pragma: no cover -
     return best
 
 
-@njit(cache=True, parallel=True)
+@population_kernel()
 def _query(
     paths,
     times,

@@ -53,8 +53,6 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from uavplan.world.geometry import cylinder_distances, segment_polygon_distance
 from uavplan.world.scenario import Scenario, Task
@@ -242,6 +240,9 @@ def shortest_path(
     ok = _clear(xy[i], xy[j], centers, radii, verts, starts)
     i, j = i[ok], j[ok]
     w = np.hypot(xy[j, 0] - xy[i, 0], xy[j, 1] - xy[i, 1])
+    from scipy.sparse import coo_matrix  # lazy: SciPy's import is 0.3 s of a CLI start
+    from scipy.sparse.csgraph import dijkstra
+
     w = np.maximum(w, 1e-300)  # an explicit zero would read as "no edge"
     graph = coo_matrix((w, (i, j)), shape=(n, n)).tocsr()
     dist, pred = dijkstra(graph, directed=False, indices=0, return_predecessors=True)

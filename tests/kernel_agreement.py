@@ -1,0 +1,131 @@
+"""Record real calls of every population kernel and compare its serial and parallel builds on
+them, bit for bit (``uavplan.kernel_builds``).
+
+    NUMBA_NUM_THREADS=2 python tests/kernel_agreement.py
+
+runs a small workload (``uavplan plan`` on built-in scenarios covering 2-D scenes, terrain,
+cylinders, fleets and moving obstacles; a 200-cylinder world for the indexed pass; the reference
+kernels called directly), keeps the first calls of each kernel, runs both builds on copies of
+their arguments and prints one JSON line: the kernels compared, those never called, and those
+whose builds differ. ``tests/test_kernel_builds.py`` runs it (a slow test: it compiles every
+parallel build).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import sys
+import tempfile
+from typing import Any
+
+import numpy as np
+
+from uavplan import kernel_builds
+from uavplan.kernel_builds import ALL, PopulationKernel
+
+#: calls kept per kernel
+KEEP = 3
+#: (scenario, planner, extra CLI options) of the workload
+PLANS = [
+    ("simple2d", "spso", []),
+    ("simple2d", "rrt-star", []),
+    ("spso", "spso", []),
+    ("hrmaga-jacksboro", "hr-maga", []),
+    ("ppswarm1", "ppswarm", []),
+    ("rscdwoa-mixed", "rscdwoa-apf", []),
+    ("dense", "prioritized", []),
+]
+
+
+def _copy(a: Any) -> Any:
+    return a.copy() if isinstance(a, np.ndarray) else a
+
+
+def _same(x: Any, y: Any) -> bool:
+    if isinstance(x, tuple):
+        return isinstance(y, tuple) and len(x) == len(y) and all(map(_same, x, y))
+    if isinstance(x, np.ndarray):
+        return bool(x.shape == y.shape and x.dtype == y.dtype
+                    and np.array_equal(x, y, equal_nan=x.dtype.kind == "f"))  # fmt: skip
+    return bool(x == y or (x != x and y != y))
+
+
+def record() -> dict[str, list[tuple[Any, ...]]]:
+    """Run the workload with every kernel serial, keeping the first calls' arguments."""
+    calls: dict[str, list[tuple[Any, ...]]] = {}
+    original = PopulationKernel.__call__
+
+    def keep(self: PopulationKernel, *args: Any) -> Any:
+        kept = calls.setdefault(self.__qualname__, [])
+        if len(kept) < KEEP:
+            kept.append(tuple(_copy(a) for a in args))
+        return original(self, *args)
+
+    from uavplan.cli import app
+
+    kernel_builds.set_mode("never")
+    PopulationKernel.__call__ = keep  # type: ignore[method-assign]
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            for scenario, planner, extra in PLANS:
+                argv = ["plan", scenario, "-a", planner, "--iterations", "4", "-o", tmp, *extra]
+                with contextlib.ExitStack() as quiet:
+                    quiet.enter_context(contextlib.redirect_stdout(io.StringIO()))
+                    quiet.enter_context(contextlib.redirect_stderr(io.StringIO()))
+                    quiet.enter_context(contextlib.suppress(SystemExit))
+                    app(argv, standalone_mode=False)
+        _direct_calls()
+    finally:
+        PopulationKernel.__call__ = original  # type: ignore[method-assign]
+    return calls
+
+
+def _direct_calls() -> None:
+    """The kernels the plans above do not reach: the indexed cylinder pass (64 or more
+    cylinders), the per-pair distances and the reference kernels."""
+    from uavplan.world import geometry
+    from uavplan.world._terrain_kernels import mean_height_batch, mean_height_batch_reference
+
+    rng = np.random.default_rng(0)
+    paths = rng.uniform(0, 1000, (40, 12, 3))
+    centers = rng.uniform(0, 1000, (200, 2))
+    radii = rng.uniform(5, 30, 200)
+    z_lo, z_hi = np.zeros(200), rng.uniform(100, 900, 200)
+    geometry.cylinder_hits(paths, centers, z_lo, z_hi, radii)
+    geometry.cylinder_distances(paths, centers, z_lo, z_hi)
+    geometry.segment_circle_inside_fraction(paths[..., :2], centers[:20], radii[:20])
+    square = np.array([[0.0, 0.0], [200.0, 0.0], [200.0, 200.0], [0.0, 200.0]])
+    verts, starts = geometry.pack_polygons([square + 300.0, square[::-1] * 0.5 + 600.0])
+    flat = np.ascontiguousarray(paths[..., :2])
+    geometry.segment_polygon_distance(flat, verts, starts)
+    geometry.segment_polygon_inside_fraction(flat, verts, starts)
+    H = rng.uniform(0, 100, (50, 60))
+    u, v = rng.uniform(0, 59, (40, 12)), rng.uniform(0, 49, (40, 12))
+    mean_height_batch(H, u, v)
+    mean_height_batch_reference(H, u, v)
+
+
+def compare(calls: dict[str, list[tuple[Any, ...]]]) -> dict[str, Any]:
+    differ = []
+    for qualname, kept in sorted(calls.items()):
+        k = next(k for k in ALL if k.__qualname__ == qualname)
+        for args in kept:
+            a = k.serial(*(_copy(x) for x in args))
+            b = k.parallel(*(_copy(x) for x in args))
+            if not _same(a, b):
+                differ.append(qualname)
+                break
+    names = {k.__module__ + "." + k.__qualname__ for k in ALL}
+    seen = {k.__module__ + "." + k.__qualname__ for k in ALL if k.__qualname__ in calls}
+    return {"compared": sorted(seen), "not_called": sorted(names - seen), "differ": differ}
+
+
+if __name__ == "__main__":
+    import numba
+
+    report = compare(record())
+    report["threads"] = numba.get_num_threads()
+    print(json.dumps(report))
+    sys.exit(1 if report["differ"] or report["not_called"] else 0)
