@@ -61,3 +61,21 @@ def test_a_planner_reports_its_time_without_compilation() -> None:
     total, spent = time.perf_counter() - t0, compile_seconds() - c0
     assert spent > 0.0
     assert r.wall_time <= total - spent + 1e-6
+
+
+def _cached_twice(x):  # pragma: no cover - numba
+    return x + 1.0
+
+
+def test_loading_from_the_cache_is_left_out_but_is_not_compilation() -> None:
+    from uavplan.compile_clock import kernel_seconds
+
+    njit(cache=True)(_cached_twice)(1.0)  # compiled here or loaded: either way on disk now
+    clock = Stopwatch()
+    k0, c0 = kernel_seconds(), compile_seconds()
+    again = njit(cache=True)(_cached_twice)  # a new dispatcher: its first call loads the file
+    assert again(2.0) == 3.0
+    assert again.stats.cache_hits  # loaded, not compiled
+    assert compile_seconds() == c0
+    assert kernel_seconds() > k0
+    assert clock.kernels > 0.0 and clock.compile == 0.0

@@ -1,16 +1,20 @@
-"""Seconds spent compiling (or loading from the cache) Numba kernels in this process, so that
-reported planning times leave them out.
+"""Seconds spent compiling Numba kernels, and loading them from the cache, in this process, so
+that reported planning times leave them out.
 
-A kernel compiles on its first call with a new signature (about 10-30 s for those of a plan
-the first time on a machine, a fraction of a second to load them from the cache later); that is not
-the planner's time. Numba announces every compilation as a ``numba:compile`` event
-(:mod:`numba.core.event`); one listener, registered on import, adds up their durations (nested
-compilations, a kernel compiling the kernels it calls, count once). A timed section takes the
-difference of :func:`compile_seconds` around it::
+A kernel compiles on its first call with a new signature (about 10-20 s for those of a plan
+the first time on a machine); later processes load it from the cache, a tenth of a second or so
+per kernel and more for the first (Numba sets up its target then). Neither is the planner's time.
+Numba announces every compilation as a ``numba:compile`` event and every entry to its compiler
+lock, which a cache load holds too, as ``numba:compiler_lock`` (:mod:`numba.core.event`); two
+listeners, registered on import, add up the outermost intervals of each (nested ones, a kernel
+compiling the kernels it calls, count once). :func:`compile_seconds` is the compilation alone
+(what the CLI's "compiling kernels once" line reports), :func:`kernel_seconds` compilation and
+loading together (what :class:`Stopwatch` leaves out). A timed section takes the difference
+around it::
 
-    t0, c0 = time.perf_counter(), compile_seconds()
+    t0, k0 = time.perf_counter(), kernel_seconds()
     ...
-    wall = time.perf_counter() - t0 - (compile_seconds() - c0)
+    wall = time.perf_counter() - t0 - (kernel_seconds() - k0)
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ _lock = threading.Lock()
 
 
 class _CompileClock(event.Listener):
-    """Total seconds between the outermost start and end of ``numba:compile`` events."""
+    """Total seconds between the outermost start and end of one kind of event."""
 
     def __init__(self) -> None:
         self.depth = 0
@@ -46,21 +50,35 @@ class _CompileClock(event.Listener):
 
 _clock = _CompileClock()
 event.register("numba:compile", _clock)
+_locked = _CompileClock()
+event.register("numba:compiler_lock", _locked)
+
+
+def _seconds(clock: _CompileClock) -> float:
+    with _lock:
+        running = time.perf_counter() - clock.started if clock.depth else 0.0
+        return clock.total + running
 
 
 def compile_seconds() -> float:
     """Seconds of kernel compilation so far in this process, a compilation under way included."""
-    with _lock:
-        running = time.perf_counter() - _clock.started if _clock.depth else 0.0
-        return _clock.total + running
+    return _seconds(_clock)
+
+
+def kernel_seconds() -> float:
+    """Seconds so far in this process under Numba's compiler lock: compiling kernels and loading
+    them from the cache (at least :func:`compile_seconds`)."""
+    return max(_seconds(_locked), _seconds(_clock))
 
 
 class Stopwatch:
-    """Wall time since creation less the kernel compilation in it (:func:`compile_seconds`)."""
+    """Wall time since creation less the kernels' compilation and cache loading in it
+    (:func:`kernel_seconds`)."""
 
     def __init__(self) -> None:
         self.t0 = time.perf_counter()
         self.c0 = compile_seconds()
+        self.k0 = kernel_seconds()
 
     @property
     def compile(self) -> float:
@@ -68,9 +86,14 @@ class Stopwatch:
         return compile_seconds() - self.c0
 
     @property
+    def kernels(self) -> float:
+        """Seconds of compilation and cache loading since the start."""
+        return kernel_seconds() - self.k0
+
+    @property
     def elapsed(self) -> float:
-        """Wall seconds since the start, compilation excluded."""
-        return time.perf_counter() - self.t0 - self.compile
+        """Wall seconds since the start, compilation and cache loading excluded."""
+        return time.perf_counter() - self.t0 - self.kernels
 
 
-__all__ = ["Stopwatch", "compile_seconds"]
+__all__ = ["Stopwatch", "compile_seconds", "kernel_seconds"]
