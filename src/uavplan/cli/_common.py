@@ -48,7 +48,7 @@ def kernels_cached() -> bool:
 def compile_notice() -> None:
     """One line on stderr before the first plan on this machine: the kernels compile once."""
     if not kernels_cached():
-        err.print("compiling kernels once (about 10-30 s; later runs reuse them)",
+        err.print("compiling kernels once (about 10-20 s; later runs reuse them)",
                   markup=False, highlight=False)  # fmt: skip
 
 
