@@ -101,3 +101,12 @@ def test_parallel_builds_give_the_bits_of_the_serial_ones_on_real_calls(tmp_path
     assert not report["not_called"], report
     assert not report["differ"], report
     assert len(report["compared"]) == len(ALL)
+
+
+def test_an_unknown_mode_in_the_environment_warns_and_falls_back_to_auto() -> None:
+    env = {**os.environ, "UAVPLAN_PARALLEL_KERNELS": "fast"}
+    code = "import uavplan.kernel_builds as k; print(k._mode)"
+    proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                          timeout=120)  # fmt: skip
+    assert proc.stdout.strip() == "auto"
+    assert "UAVPLAN_PARALLEL_KERNELS='fast' is not one of auto, always, never" in proc.stderr

@@ -31,6 +31,7 @@ from __future__ import annotations
 import os
 import time
 import types
+import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -47,6 +48,8 @@ PARALLEL_MIN_CALL = 100e-6
 _MODES = ("auto", "always", "never")
 _mode = os.environ.get("UAVPLAN_PARALLEL_KERNELS", "auto")
 if _mode not in _MODES:
+    warnings.warn(f"UAVPLAN_PARALLEL_KERNELS={_mode!r} is not one of {', '.join(_MODES)}: "
+                  "using auto", stacklevel=1)  # fmt: skip
     _mode = "auto"
 
 
@@ -97,10 +100,11 @@ class PopulationKernel:
         return self.switched and numba.get_num_threads() > 1
 
     def __call__(self, *args: Any) -> Any:
-        if self.use_parallel():
-            return self.parallel(*args)
-        if _mode == "never" or self.switched or numba.get_num_threads() == 1:
-            return self.serial(*args)
+        if _mode != "auto":
+            return (self.parallel if _mode == "always" else self.serial)(*args)
+        threads = numba.get_num_threads()
+        if threads == 1 or self.switched:
+            return (self.parallel if threads > 1 else self.serial)(*args)
         n0, t0 = len(self.serial.overloads), time.perf_counter()
         result = self.serial(*args)
         if len(self.serial.overloads) != n0:
