@@ -119,7 +119,8 @@ def compare(calls: dict[str, list[tuple[Any, ...]]]) -> dict[str, Any]:
                 break
     names = {k.__module__ + "." + k.__qualname__ for k in ALL}
     seen = {k.__module__ + "." + k.__qualname__ for k in ALL if k.__qualname__ in calls}
-    return {"compared": sorted(seen), "not_called": sorted(names - seen), "differ": differ}
+    return {"compared": sorted(seen), "not_called": sorted(names - seen), "differ": differ,
+            "registered": sorted(names)}  # fmt: skip
 
 
 if __name__ == "__main__":

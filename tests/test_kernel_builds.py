@@ -4,6 +4,7 @@ real calls of every kernel."""
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import subprocess
@@ -19,6 +20,9 @@ from uavplan import kernel_builds
 from uavplan.kernel_builds import ALL, PopulationKernel, population_kernel
 
 HERE = Path(__file__).resolve().parent
+KERNEL_MODULES = ("uavplan.world.geometry", "uavplan.world._terrain_kernels",
+                  "uavplan.world.reservations", "uavplan.problems.costs",
+                  "uavplan.problems._validity_kernels")  # fmt: skip
 
 
 def _row_sums(x):  # pragma: no cover - numba
@@ -100,7 +104,12 @@ def test_parallel_builds_give_the_bits_of_the_serial_ones_on_real_calls(tmp_path
     assert report["threads"] == 2
     assert not report["not_called"], report
     assert not report["differ"], report
-    assert len(report["compared"]) == len(ALL)
+    assert report["compared"] == report["registered"]
+    # every kernel this process knows of was registered there too (ALL fills on import)
+    for module in KERNEL_MODULES:
+        importlib.import_module(module)
+    assert {k.__module__ + "." + k.__qualname__ for k in ALL} <= set(report["registered"])
+    assert len(report["registered"]) >= 15
 
 
 def test_an_unknown_mode_in_the_environment_warns_and_falls_back_to_auto() -> None:
