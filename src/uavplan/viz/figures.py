@@ -181,7 +181,8 @@ def draw_top(
         ax.plot(flown[:, 0], flown[:, 1], "-", color=col, lw=0.8 if many else 1.6,
                 path_effects=halo)  # fmt: skip
         if not many:
-            ax.plot(w[1:-1, 0], w[1:-1, 1], ".", color=col, ms=4)
+            if len(w) <= 60:  # a planner's waypoints, not a trajectory stepped in time
+                ax.plot(w[1:-1, 0], w[1:-1, 1], ".", color=col, ms=4)
             at = (float(w[0, 0]), float(w[0, 1]))
             ax.annotate(str(r.uav_id), at, xytext=(4, 4), textcoords="offset points", fontsize=7)
     ms = 3 if len(scenario.tasks) > 40 else 7
