@@ -72,6 +72,7 @@ def main() -> int:
     ap.add_argument("--rivals", default="spso,rgg-pso+,hr-maga,rrt-star")
     ap.add_argument("--rival-seeds", type=int, default=3)
     ap.add_argument("--single-only", action="store_true", help="single-UAV scenarios only")
+    ap.add_argument("--jsonl", default=None, help="also write every run as a JSON line here")
     a = ap.parse_args()
     names = a.scenarios.split(",") if a.scenarios else builtin_names()
     bad = 0
@@ -92,6 +93,12 @@ def main() -> int:
                 rival += [
                     r for r in (run(name, s, alg) for s in range(a.rival_seeds)) if r is not None
                 ]
+        if a.jsonl:
+            with open(a.jsonl, "a") as f:
+                for i, r in enumerate(rows):
+                    f.write(json.dumps({"scenario": name, "default": True, "seed": i, **r}) + "\n")
+                for r in rival:
+                    f.write(json.dumps({"scenario": name, "default": False, **r}) + "\n")
         ok = [r for r in rows + rival if r["feasible"]]
         mine = [r for r in rows if r["feasible"]]
         n_ok = len(mine)
