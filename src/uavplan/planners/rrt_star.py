@@ -117,6 +117,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from uavplan.optimizers.base import Budget
+from uavplan.planners import _rrt_star_kernels as K
 from uavplan.planners.base import Planner
 from uavplan.planners.grid_index import GridIndex, pad3
 from uavplan.planners.options import Options, PlannerConfig, PlannerError, option
@@ -133,6 +134,9 @@ BoolArray = NDArray[np.bool_]
 
 #: Samples drawn from the generator at a time.
 SAMPLE_BLOCK = 256
+#: Most RRT* iterations the planner runs per call of the Numba loop (between two looks at the
+#: wall clock).
+CHUNK = 256
 
 
 # ------------------------------------------------------------------------------ configuration
@@ -154,6 +158,10 @@ class RRTStarConfig(Options):
     informed: bool = option(
         False, "Informed RRT*: once a goal path exists, sample only where a shorter one can pass"
     )
+    loop: str = option(
+        "numba", "numba: whole iterations in Numba where the world has a compiled segment check "
+        "(the same tree); python: the reference loop", choices=("numba", "python"),
+    )  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -177,12 +185,9 @@ class RRTStarResult:
 
 
 # ------------------------------------------------------------------------------ tree kernels
-@njit(cache=True)
-def _dist(pts, i, j):
-    dx = pts[i, 0] - pts[j, 0]
-    dy = pts[i, 1] - pts[j, 1]
-    dz = pts[i, 2] - pts[j, 2]
-    return np.sqrt(dx * dx + dy * dy + dz * dz)
+def _d3(a: FloatArray, b: FloatArray) -> float:
+    """``|a - b|`` of two padded 3-vectors, with the Numba loop's arithmetic."""
+    return float(K.dist3(a[0], a[1], a[2], b[0], b[1], b[2]))
 
 
 @njit(cache=True)
@@ -194,53 +199,24 @@ def _insert_rewire(pts, parent, cost, first_child, next_sib, stack, new, cand, o
     bc = np.inf
     for t in range(cand.shape[0]):
         if ok[t]:
-            c = cost[cand[t]] + _dist(pts, cand[t], new)
+            c = cost[cand[t]] + K.dist3(
+                pts[cand[t], 0], pts[cand[t], 1], pts[cand[t], 2], pts[new, 0], pts[new, 1],
+                pts[new, 2],
+            )  # fmt: skip
             if c < bc:
                 bc = c
                 best = cand[t]
     if best < 0:
         return -1
-    parent[new] = best
-    cost[new] = bc
-    first_child[new] = -1
-    next_sib[new] = first_child[best]
-    first_child[best] = new
+    K.link(parent, cost, first_child, next_sib, new, best, bc)
     rewired = 0
     for t in range(cand.shape[0]):
         j = cand[t]
         if not ok[t] or j == best:
             continue
-        c = bc + _dist(pts, j, new)
+        c = bc + K.dist3(pts[j, 0], pts[j, 1], pts[j, 2], pts[new, 0], pts[new, 1], pts[new, 2])
         if c + REWIRE_TOL < cost[j]:
-            # unlink j from its old parent's children
-            p = parent[j]
-            if first_child[p] == j:
-                first_child[p] = next_sib[j]
-            else:
-                s = first_child[p]
-                while next_sib[s] != j:
-                    s = next_sib[s]
-                next_sib[s] = next_sib[j]
-            parent[j] = new
-            next_sib[j] = first_child[new]
-            first_child[new] = j
-            cost[j] = c
-            # recompute the subtree's costs, depth first
-            top = 0
-            ch = first_child[j]
-            while ch >= 0:
-                stack[top] = ch
-                top += 1
-                ch = next_sib[ch]
-            while top > 0:
-                top -= 1
-                u = stack[top]
-                cost[u] = cost[parent[u]] + _dist(pts, u, parent[u])
-                ch = first_child[u]
-                while ch >= 0:
-                    stack[top] = ch
-                    top += 1
-                    ch = next_sib[ch]
+            K.reparent(pts, parent, cost, first_child, next_sib, stack, j, new, c)
             rewired += 1
     return rewired
 
@@ -278,6 +254,11 @@ def _unit_ball_volume(d: int) -> float:
     return float(math.pi ** (d / 2) / math.gamma(d / 2 + 1))
 
 
+def _counter(i: int, doc: str) -> property:
+    """A read-only view of the loop's counter ``i`` as an int."""
+    return property(lambda self: int(self._ctr[i]), doc=doc)
+
+
 class RRTStarTree:
     """One RRT* run (PPSwarm Alg. 1), one loop pass per :meth:`iterate`.
 
@@ -285,11 +266,18 @@ class RRTStarTree:
     ``parent`` (-1 for the root), ``cost`` (cost-to-come, metres). ``goal_nodes`` are the nodes
     whose segment to the exact goal is free and within ``goal_radius``.
 
+    :meth:`iterate` is one pass in Python (the reference: every segment of the pass checked in
+    one batch by the validator). :meth:`run` and :meth:`advance` run many passes in Numba
+    (:func:`uavplan.planners._rrt_star_kernels.grow`) where the validator has a compiled
+    segment check (:attr:`MotionValidator.segment_kernel`; ``fast=False`` turns it off): the
+    same tree, node for node, with the segments checked lazily (fewer ``edge_checks``).
+
     Args:
         scenario, task: the world and the task (start = root, goal).
         config: :class:`RRTStarConfig`.
         rng: the only source of randomness.
         validator: the segment checker (default :func:`validity_problem`).
+        fast: use the Numba loop where it applies (default: ``config.loop == "numba"``).
     """
 
     def __init__(
@@ -299,6 +287,7 @@ class RRTStarTree:
         config: RRTStarConfig,
         rng: np.random.Generator,
         validator: MotionValidator | None = None,
+        fast: bool | None = None,
     ) -> None:
         self.scenario = scenario
         self.task = task if isinstance(task, Task) else scenario.task(task)
@@ -308,6 +297,7 @@ class RRTStarTree:
         self.dim = scenario.dim
         self.start = np.asarray(self.task.start, dtype=np.float64)
         self.goal = np.asarray(self.task.goal, dtype=np.float64)
+        self._start3, self._goal3 = pad3(self.start), pad3(self.goal)
         # sampling region
         lo = scenario.bounds.lo.astype(np.float64).copy()
         hi = scenario.bounds.hi.astype(np.float64).copy()
@@ -338,18 +328,32 @@ class RRTStarTree:
         self._first_child = np.full(cap, -1, dtype=np.int64)
         self._next_sib = np.full(cap, -1, dtype=np.int64)
         self._stack = np.zeros(cap, dtype=np.int64)
+        self._goal_nodes = np.zeros(cap, dtype=np.int64)
         self.grid.add(self.start)
-        self.goal_nodes: list[int] = []
-        self.iterations = 0
-        self.edge_checks = 0
-        self.rewires = 0
-        self.found_iteration: int | None = None
-        self.rejected = 0  # informed samples drawn again
+        #: the loop's counters (:mod:`uavplan.planners._rrt_star_kernels`'s ``ctr`` entries)
+        self._ctr = np.zeros(K.N_CTR, dtype=np.int64)
+        self._ctr[K.N] = 1
+        self._ctr[K.BEST] = -1
+        self._fl = np.array([math.inf, 0.0])
         self._samples = np.zeros((0, 3))
         self._goal_draw = np.zeros(0, dtype=bool)
-        self._pos = 0
+        if fast is None:
+            fast = config.loop == "numba"
+        kernel = self.validator.segment_kernel if fast and self.dim == 3 else None
+        self._kargs = None if kernel is None else kernel[1]
+        self._cfg = np.zeros(K.N_CFG)
+        self._cfg[[K.STEP, K.GOAL_RADIUS, K.NEAR_RADIUS, K.GAMMA, K.DIM]] = (
+            config.step, config.goal_radius, config.near_radius, self.gamma, d
+        )  # fmt: skip
+        self._cfg[K.MEASURE] = self.grid.measure
+        self._cfg[K.INFORMED] = float(config.informed)
 
     # ---------------------------------------------------------------- views
+    @property
+    def fast(self) -> bool:
+        """Whether :meth:`run` and :meth:`advance` run the Numba loop."""
+        return self._kargs is not None
+
     @property
     def n_nodes(self) -> int:
         return self.grid.n
@@ -366,6 +370,19 @@ class RRTStarTree:
     def cost(self) -> FloatArray:
         return self._cost[: self.n_nodes]
 
+    @property
+    def goal_nodes(self) -> list[int]:
+        return self._goal_nodes[: self._ctr[K.N_GOAL]].tolist()
+
+    iterations = _counter(K.ITER, "Loop passes run (Alg. 1 line 2).")
+    edge_checks = _counter(K.CHECKS, "Segments checked.")
+    rewires = _counter(K.REWIRES, "Nodes given a new parent (line 9).")
+    rejected = _counter(K.REJECTED, "Informed samples drawn again.")
+
+    @property
+    def found_iteration(self) -> int | None:
+        return int(self._ctr[K.FOUND]) or None
+
     def radius(self) -> float:
         """The near radius for the current tree (Alg. 1 line 7)."""
         card = self.n_nodes + 1
@@ -381,52 +398,56 @@ class RRTStarTree:
             p[:, 2] += self.scenario.ground(p[:, 0], p[:, 1])
         self._samples = np.zeros((b, 3))
         self._samples[:, : self.dim] = p
-        self._pos = 0
+        self._ctr[K.POS] = 0
 
     def _draw(self) -> FloatArray:
-        if self._pos >= len(self._samples):
+        if self._ctr[K.POS] >= len(self._samples):
             self._refill()
-        i = self._pos
-        self._pos += 1
-        return pad3(self.goal) if self._goal_draw[i] else self._samples[i]
+        i = int(self._ctr[K.POS])
+        self._ctr[K.POS] += 1
+        return self._goal3.copy() if self._goal_draw[i] else self._samples[i].copy()
 
     def informed_bound(self) -> float:
         """The length of the shortest goal path in the tree (inf if none): Informed RRT*'s
         ``c_best``."""
-        node = self.best_goal_node()
-        if node is None:
-            return math.inf
-        return float(
-            self._cost[node] + np.linalg.norm(self.grid.buffer[node, : self.dim] - self.goal)
+        return float(self._best()[1])
+
+    def _best(self) -> tuple[int, float]:
+        return K.best_goal(
+            self.grid.buffer, self._cost, self._goal_nodes, self._ctr[K.N_GOAL], self._goal3
         )
 
     def sample(self) -> FloatArray:
         """Alg. 1 line 3 (padded to 3 coordinates); with ``informed``, within the spheroid of
         the shortest goal path so far."""
         q = self._draw()
-        if not self.config.informed or not self.goal_nodes:
+        if not self.config.informed or not self._ctr[K.N_GOAL]:
             return q
         c = self.informed_bound()
-        d = self.dim
-        for _ in range(1000):
-            if float(np.linalg.norm(q[:d] - self.start) + np.linalg.norm(q[:d] - self.goal)) < c:
+        for _ in range(K.MAX_REJECTIONS):
+            if _d3(q, self._start3) + _d3(q, self._goal3) < c:
                 break
-            self.rejected += 1
+            self._ctr[K.REJECTED] += 1
             q = self._draw()
         return q
 
     def _grow(self) -> None:
+        self.grid.reserve()
         cap = len(self.grid.buffer)
-        for name, fill in (("_parent", -1), ("_cost", 0), ("_first_child", -1), ("_next_sib", -1)):
+        for name, fill in (("_parent", -1), ("_cost", 0), ("_first_child", -1), ("_next_sib", -1),
+                           ("_goal_nodes", 0)):  # fmt: skip
             old = getattr(self, name)
-            new = np.full(cap, fill, dtype=old.dtype)
-            new[: len(old)] = old
-            setattr(self, name, new)
-        self._stack = np.zeros(cap, dtype=np.int64)
+            if len(old) < cap:
+                new = np.full(cap, fill, dtype=old.dtype)
+                new[: len(old)] = old
+                setattr(self, name, new)
+        if len(self._stack) < cap:
+            self._stack = np.zeros(cap, dtype=np.int64)
 
     def iterate(self) -> bool:
-        """One pass of Alg. 1's loop (lines 3-10). True if ``x_new`` joined the goal."""
-        self.iterations += 1
+        """One pass of Alg. 1's loop (lines 3-10), in Python (the reference of the Numba loop).
+        True if ``x_new`` joined the goal."""
+        self._ctr[K.ITER] += 1
         cfg = self.config
         q = self.sample()
         r = self.radius()
@@ -441,8 +462,7 @@ class RRTStarTree:
         if pos == len(cand) or cand[pos] != i_near:
             cand = np.insert(cand, pos, i_near)
         d = self.dim
-        dg = float(np.linalg.norm(x_new[:d] - self.goal))
-        want_goal = dg <= cfg.goal_radius
+        want_goal = _d3(x_new, self._goal3) <= cfg.goal_radius
         k = len(cand)
         edges = np.empty((k + int(want_goal), 2, d))
         edges[:k, 0] = self.grid.buffer[cand, :d]
@@ -451,13 +471,13 @@ class RRTStarTree:
             edges[k, 0] = x_new[:d]
             edges[k, 1] = self.goal
         ok = self.validator.paths_valid(edges)
-        self.edge_checks += len(edges)
+        self._ctr[K.CHECKS] += len(edges)
         if not ok[pos]:
             return False
+        self._grow()
         new = self.grid.add(x_new)
-        if len(self._parent) < len(self.grid.buffer):
-            self._grow()
-        self.rewires += int(
+        self._ctr[K.N] = self.grid.n
+        self._ctr[K.REWIRES] += int(
             _insert_rewire(
                 self.grid.buffer,
                 self._parent,
@@ -471,15 +491,48 @@ class RRTStarTree:
             )
         )
         if want_goal and ok[k]:
-            self.goal_nodes.append(new)
-            if self.found_iteration is None:
-                self.found_iteration = self.iterations
+            self._goal_nodes[self._ctr[K.N_GOAL]] = new
+            self._ctr[K.N_GOAL] += 1
+            if not self._ctr[K.FOUND]:
+                self._ctr[K.FOUND] = self._ctr[K.ITER]
             return True
         return False
 
+    def advance(self, max_iterations: int, stop_at_goal: bool, stop_on_improve: bool) -> int:
+        """Run the Numba loop until ``max_iterations`` passes in all (``K.DONE``), a node joins
+        the goal with ``stop_at_goal`` (``K.GOAL``) or, with ``stop_on_improve``, the shortest
+        goal path gets shorter (``K.IMPROVED``); returns that status. Only where :attr:`fast`."""
+        if self._kargs is None:
+            raise RuntimeError("this tree's validator has no compiled segment check")
+        g = self.grid
+        cfg = self._cfg
+        while True:
+            self._grow()
+            cfg[K.SCAN_LIMIT] = g.scan_limit
+            status = K.grow(
+                g.buffer, g._nxt, g._head, g._lo, g.cell, g._dims, self._parent, self._cost,
+                self._first_child, self._next_sib, self._stack, self._goal_nodes,
+                self._samples, self._goal_draw, self._start3, self._goal3, self._ctr, self._fl,
+                cfg, int(max_iterations), bool(stop_at_goal), bool(stop_on_improve),
+                self._kargs,
+            )  # fmt: skip
+            g.n = int(self._ctr[K.N])
+            if status == K.NEED_SAMPLES:
+                self._refill()
+            elif status == K.REBUILD:
+                target = float(self._fl[K.TARGET])
+                g.set_cell(target)
+                if g.cell >= 2 * target:  # the grid cannot get finer (MAX_CELLS)
+                    cfg[K.MIN_CELL] = g.cell
+            elif status != K.GROW:
+                return int(status)
+
     def run(self, max_iterations: int, stop_at_goal: bool) -> None:
         """Iterate until ``max_iterations`` passes in all, or the goal when ``stop_at_goal``
-        (in :func:`serial_numba`)."""
+        (in :func:`serial_numba`; the Numba loop where :attr:`fast`)."""
+        if self.fast:
+            self.advance(max_iterations, stop_at_goal, False)
+            return
         with serial_numba():
             while self.iterations < max_iterations:
                 if self.iterate() and stop_at_goal:
@@ -488,13 +541,8 @@ class RRTStarTree:
     # ---------------------------------------------------------------- Alg. 1 line 11
     def best_goal_node(self) -> int | None:
         """The goal-connected node with the shortest start-goal path, None if none yet."""
-        if not self.goal_nodes:
-            return None
-        nodes = np.asarray(self.goal_nodes, dtype=np.int64)
-        total = self._cost[nodes] + np.linalg.norm(
-            self.grid.buffer[nodes, : self.dim] - self.goal, axis=1
-        )
-        return int(nodes[int(np.argmin(total))])
+        node = int(self._best()[0])
+        return None if node < 0 else node
 
     def path_indices(self, node: int) -> IntArray:
         """Node indices start .. ``node`` along the tree."""
@@ -597,10 +645,28 @@ class RRTStarPlanner(Planner):
         best_length = np.inf
         path_evaluations = shortcut_checks = 0
         last: IntArray | None = None
+        term = run.termination
+        # the Numba loop closes up to CHUNK iterations per call; one where a callback or an
+        # evaluation limit must see every iteration
+        chunk = 1 if term.callback is not None or term.max_evaluations is not None else CHUNK
+        limit = run.max_iterations
         with serial_numba():
             while True:
-                tree.iterate()
-                node = tree.best_goal_node()
+                if tree.fast:
+                    before = tree.iterations
+                    end = before + chunk if limit is None else min(before + chunk, limit)
+                    status = tree.advance(max(end, before + 1), cfg.stop_at_goal, True)
+                    changed = status in (K.IMPROVED, K.GOAL)
+                    n_done = tree.iterations - before
+                else:
+                    tree.iterate()
+                    changed, n_done = True, 1
+                stop = False
+                for _ in range(n_done - 1):  # passes that left the best path as it was
+                    if tr.end_iteration():
+                        stop = True
+                        break
+                node = tree.best_goal_node() if changed else None
                 if node is not None:
                     idx = tree.path_indices(node)
                     if last is None or not np.array_equal(idx, last):
@@ -614,6 +680,9 @@ class RRTStarPlanner(Planner):
                         if tr.offer(path, float(ev.cost[0]), bool(ev.feasible[0])):
                             best_length = _length(path)
                 tr.evaluations = tree.edge_checks + shortcut_checks
+                if stop:
+                    tr.amend(tr.cost, tr.cost if tr.feasible else math.inf)
+                    break
                 stop = tr.end_iteration()
                 if stop or (cfg.stop_at_goal and tree.found_iteration is not None):
                     break
