@@ -43,6 +43,7 @@ rate, the median ratio to OMPL's best median at ``--reference`` seconds (the tar
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import statistics
 import time
@@ -75,6 +76,7 @@ OMPL_SEED = 1
 OURS: dict[str, dict[str, Any]] = {
     "ours rrt-star (defaults: anytime)": {},
     "ours rrt-star informed": {"informed": True},
+    "ours rrt-star informed tighten": {"informed": True, "tighten": True},
 }
 
 
@@ -212,6 +214,81 @@ def ours_runner(sc: Scenario) -> Callable[[dict[str, Any], float, int], Run]:
     return run
 
 
+# ------------------------------------------------------------------------------ profile
+class KernelClock:
+    """Wall time spent inside the named functions (module attributes or methods, replaced by
+    timing wrappers while active; nested calls counted once)."""
+
+    def __init__(self, targets: list[tuple[Any, str]]) -> None:
+        self.targets = targets
+        self.seconds = 0.0
+        self._depth = 0
+        self._saved: list[tuple[Any, str, Any]] = []
+
+    def _wrap(self, f: Callable[..., Any]) -> Callable[..., Any]:
+        def timed(*a: Any, **k: Any) -> Any:
+            self._depth += 1
+            t0 = time.perf_counter()
+            try:
+                return f(*a, **k)
+            finally:
+                self._depth -= 1
+                if self._depth == 0:
+                    self.seconds += time.perf_counter() - t0
+
+        return timed
+
+    def __enter__(self) -> KernelClock:
+        for owner, name in self.targets:
+            f = owner.__dict__[name] if isinstance(owner, type) else getattr(owner, name)
+            self._saved.append((owner, name, f))
+            setattr(owner, name, self._wrap(f))
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for owner, name, f in reversed(self._saved):
+            setattr(owner, name, f)
+        self._saved.clear()
+
+
+def kernel_targets() -> list[tuple[Any, str]]:
+    """The compiled kernels and the validator's and cost's entry points an RRT* run calls:
+    the Numba loop, the tightening kernels, the Python loop's batched segment checks and tree
+    kernels, and the path evaluations."""
+    from uavplan.planners import _rrt_star_kernels as K
+    from uavplan.planners import _tighten_kernels as T
+    from uavplan.planners import grid_index as G
+    from uavplan.planners import rrt_star as R
+    from uavplan.problems.path_problem import PathProblem
+
+    return [(K, "grow"), (T, "band"), (T, "shortcut"), (MotionValidator, "paths_valid"),
+            (PathProblem, "evaluate"), (R, "_insert_rewire"), (G, "_grid_nearest"),
+            (G, "_grid_near")]  # fmt: skip
+
+
+def profile_share(sc: Scenario, seconds: float, seeds: int) -> None:
+    """Share of a planner run's wall time spent outside the kernels, before (the Python loop)
+    and after (the Numba loop, informed and tightened)."""
+    print(f"\nprofile: {seconds:g} s runs, {seeds} seeds, time outside the kernels "
+          "(validity, cost, tree and tightening kernels) / the run's wall time")  # fmt: skip
+    variants = (("before: loop=python, informed", {"informed": True, "loop": "python"}),
+                ("after: informed tighten", {"informed": True, "tighten": True}))  # fmt: skip
+    for label, opts in variants:
+        planner = get_planner("rrt-star", **opts)
+        planner.plan(sc, budget=Budget(max_time=0.2), seed=0)
+        shares, its = [], []
+        for s in range(seeds):
+            with KernelClock(kernel_targets()) as clock:
+                t0 = time.perf_counter()
+                r = planner.plan(sc, budget=Budget(max_time=seconds), seed=s)
+                wall = time.perf_counter() - t0
+            shares.append(1.0 - clock.seconds / wall)
+            its.append(r.info["rrt_iterations"] / wall)
+        print(f"  {label:<32} outside kernels {statistics.median(shares):6.1%} "
+              f"(seeds {min(shares):.1%}-{max(shares):.1%}), "
+              f"{statistics.median(its):,.0f} RRT* iterations/s")  # fmt: skip
+
+
 # ------------------------------------------------------------------------------ the table
 def summary(runs: list[Run]) -> tuple[float, float, float, float]:
     """Median length of the successful runs (inf if none), min, max, success rate."""
@@ -227,6 +304,8 @@ def main() -> None:
     ap.add_argument("--times", type=float, nargs="+", default=[0.5, 1.0, 2.0, 5.0])
     ap.add_argument("--reference", type=float, default=10.0, help="OMPL's reference time, s")
     ap.add_argument("--only-ours", action="store_true")
+    ap.add_argument("--profile", type=float, default=2.0, metavar="SECONDS",
+                    help="the profile's run length (0: no profile)")  # fmt: skip
     args = ap.parse_args()
     numba.set_num_threads(1)
     sc = field()
@@ -234,27 +313,32 @@ def main() -> None:
     area = sum(math.pi * c.radius**2 for c in sc.cylinders) / 1e6
     print(f"field: {len(sc.cylinders)} cylinders ({area:.1%} of the map), straight line "
           f"{straight:.0f} m; seeds {args.seeds}; wall times {args.times} s")  # fmt: skip
+    if args.profile > 0:
+        profile_share(sc, args.profile, min(args.seeds, 3))
     ours = ours_runner(sc)
     # warm-up: compile our kernels (cached) before timing
     ours({"informed": True}, 0.3, 0)
-    rows: list[tuple[str, float, list[Run]]] = []
     ompl = None if args.only_ours else ompl_runner(sc)
     if ompl is None and not args.only_ours:
         print("OMPL is not installed (pip install ompl): our rows only")
-    ref_runs: dict[str, list[Run]] = {}
+    # (label, times, run(t, seed)); every seed runs every planner at every time in turn, so
+    # that the shared machine's load drifts over all of them alike
+    planners: list[tuple[str, list[float], Callable[[float, int], Run]]] = []
     if ompl is not None:
         for name in ("RRTstar", "InformedRRTstar"):
-            for t in [*args.times, args.reference]:
-                runs = [ompl(name, t, s) for s in range(args.seeds)]
-                rows.append((f"OMPL {name}", t, runs))
-                if t == args.reference:
-                    ref_runs[name] = runs
-                _progress(rows[-1])
+            planners.append((f"OMPL {name}", [*args.times, args.reference],
+                             functools.partial(ompl, name)))  # fmt: skip
     for label, opts in OURS.items():
-        for t in args.times:
-            runs = [ours(opts, t, s) for s in range(args.seeds)]
-            rows.append((label, t, runs))
-            _progress(rows[-1])
+        planners.append((label, list(args.times), functools.partial(ours, opts)))
+    runs: dict[tuple[str, float], list[Run]] = {}
+    for seed in range(args.seeds):
+        for t in sorted({t for _, ts, _ in planners for t in ts}):
+            for label, ts, fn in planners:
+                if t in ts:
+                    runs.setdefault((label, t), []).append(fn(t, seed))
+        print(f"  seed {seed} done", flush=True)
+    rows = [(label, t, runs[label, t]) for label, ts, _ in planners for t in ts]
+    ref_runs = {lab: r for lab, t, r in rows if lab.startswith("OMPL") and t == args.reference}
     ref = min((summary(r)[0] for r in ref_runs.values()), default=math.nan)
     print()
     print(f"reference: OMPL's best median length at {args.reference:g} s = {ref:.1f} m")
@@ -272,12 +356,6 @@ def main() -> None:
         print(f"target ({label} at {min(args.times):g} s <= OMPL at {args.reference:g} s, 100 % "
               f"success): {'met' if met else 'NOT met'} ({med:.1f} m vs {ref:.1f} m, "
               f"{rate:.0%})")  # fmt: skip
-
-
-def _progress(row: tuple[str, float, list[Run]]) -> None:
-    label, t, runs = row
-    med, _, _, rate = summary(runs)
-    print(f"  {label} {t:g} s: median {med:.1f} m, success {rate:.0%}", flush=True)
 
 
 if __name__ == "__main__":

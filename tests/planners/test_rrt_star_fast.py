@@ -7,6 +7,7 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from uavplan.planners import _tighten_kernels as T
 from uavplan.planners import get_planner
 from uavplan.planners.rrt_star import RRTStarConfig, RRTStarTree, validity_problem
 from uavplan.problems.validity import MotionValidator
@@ -126,3 +127,51 @@ def test_planner_fast_and_reference_give_the_same_result() -> None:
     assert np.array_equal(a.history, b.history)
     assert a.info["rrt_iterations"] == b.info["rrt_iterations"] == 600
     assert a.info["edge_checks"] < b.info["edge_checks"]
+
+
+# ------------------------------------------------------------------------------ tightening
+def segment_ok(v: MotionValidator):  # type: ignore[no-untyped-def]
+    def ok(a: np.ndarray, b: np.ndarray) -> bool:
+        return bool(v.paths_valid(np.stack([a, b])[None])[0])
+
+    return ok
+
+
+@settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 10_000), n_cyl=st.integers(1, 20), spacing=st.sampled_from([7.0, 25.0]))
+def test_tightening_kernels_match_their_references(seed: int, n_cyl: int, spacing: float) -> None:
+    sc = random_world(seed, n_cyl, None)
+    tree = RRTStarTree(sc, None, RRTStarConfig(), np.random.default_rng(seed))
+    tree.run(1500, True)
+    path = tree.path()
+    if path is None:
+        return
+    v = tree.validator
+    sk = v.segment_kernel
+    assert sk is not None
+    ok = segment_ok(v)
+    p = np.ascontiguousarray(path)
+    short, _ = T.shortcut(p, sk[1])
+    assert np.array_equal(short, T.shortcut_reference(ok, p))
+    band, _, _ = T.band(short, spacing, 60, T.TOL, np.asarray(T.SHARES), sk[1])
+    ref = T.band_reference(ok, short, spacing, 60, T.TOL)
+    assert np.array_equal(band, ref)
+    # valid, never longer, the ends kept
+    for q in (short, band):
+        assert v.paths_valid(q[None])[0]
+        assert np.array_equal(q[0], p[0]) and np.array_equal(q[-1], p[-1])
+    assert T.length(band) <= T.length(short) + 1e-9 <= T.length(p) + 2e-9
+
+
+def test_tighten_option_shortens_and_stays_valid() -> None:
+    sc = random_world(11, 15, None)
+    plain = get_planner("rrt-star", informed=True).plan(sc, budget=1500, seed=2)
+    tight = get_planner("rrt-star", informed=True, tighten=True).plan(sc, budget=1500, seed=2)
+    assert plain.feasible and tight.feasible
+    assert tight.info["tightenings"] >= 1
+    assert tight.info["length"] < plain.info["length"]
+    again = get_planner("rrt-star", informed=True, tighten=True).plan(sc, budget=1500, seed=2)
+    assert np.array_equal(tight.waypoints, again.waypoints)  # deterministic per seed
+    # the Python references give the same plan
+    slow = get_planner("rrt-star", informed=True, tighten=True, loop="python")
+    assert np.array_equal(slow.plan(sc, budget=1500, seed=2).waypoints, tight.waypoints)

@@ -30,6 +30,8 @@ FloatArray = NDArray[np.float64]
 
 #: The shares of the move towards the neighbours' midpoint that the band tries, in order.
 SHARES = (1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125)
+#: The band stops after a sweep that shortens the path by less than this, metres.
+TOL = 1e-3
 
 
 @njit(cache=True)
@@ -120,7 +122,7 @@ def band(path, spacing, rounds, tol, shares, kargs):  # pragma: no cover - numba
 
 
 def tighten(
-    path: FloatArray, kargs: tuple[object, ...], spacing: float, rounds: int, tol: float = 1e-3
+    path: FloatArray, kargs: tuple[object, ...], spacing: float, rounds: int, tol: float = TOL
 ) -> tuple[FloatArray, int]:
     """Shortcut, band, shortcut: a valid path (n, 3) made shorter; returns it and the segment
     checks spent."""

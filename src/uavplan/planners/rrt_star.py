@@ -44,9 +44,10 @@ based on hybrid PSO in complex scenarios", Drones 8(5), 192, Sect. 3.2 and 4.2.1
     through any goal-connected node.
 12. ``break`` when ``stop_at_goal`` (the default of :class:`RRTStarConfig`, as Alg. 1).
 
-All segment checks of one iteration (every near candidate to ``x_new``, and ``x_new`` to the
-goal when in the region) go to **one** batched :meth:`PathProblem.evaluate` call; a segment is
-free in both directions, so rewiring reuses the choose-parent checks. The paper's Sect. 3.2 text
+In the Python loop (:meth:`RRTStarTree.iterate`, the reference) all segment checks of one
+iteration (every near candidate to ``x_new``, and ``x_new`` to the goal when in the region) go to
+**one** batched validator call; a segment is free in both directions, so rewiring reuses the
+choose-parent checks. The Numba loop (below) checks them lazily. The paper's Sect. 3.2 text
 takes the choose-parent set within the step size and the rewiring set within an unnamed
 "radius"; we use one near set for both, as RRT* does.
 
@@ -85,23 +86,53 @@ ChrismasTerrain world, 100-200 m above ground, that PPSwarm's experiments follow
   on a shorter path, since tree costs are Euclidean lengths; the others are rejected and drawn
   again (from the same sampler, so the samples stay uniform over the sampling region, altitude
   band included, within the spheroid; after 1,000 rejections in a row the next sample is
-  kept). Goal-biased samples always pass.
+  kept). Goal-biased samples always pass. The near radius (line 7) then takes gamma* of the
+  measure actually sampled: the spheroid's, ``zeta_d (c / 2) (sqrt(c^2 - c_min^2) / 2)^(d-1)``,
+  when less than the sampling region's (Gammell et al. Sect. IV; OMPL's pruned measure).
+* ``loop = "numba"``: how iterations run, not what they compute (see below).
 
-Runs that grow the tree (:meth:`RRTStarTree.run`, the planner) execute Numba's parallel
-feasibility kernels on one thread (:func:`serial_numba`): a batch is a few dozen segments, and
-waking threads for it costs more than the work. Measured numbers: ``benchmarks/rrt_star_nn.py``.
+**The Numba loop.** Where the tree's validator has a compiled segment check
+(:attr:`MotionValidator.segment_kernel`: a 3-D world of bounds, fewer than 64 cylinders,
+terrain read bilinearly and the band, as ``ppswarm``, ``dense`` and the RGG scenes), whole
+iterations run in Numba (:func:`uavplan.planners._rrt_star_kernels.grow`): sampling from the
+drawn blocks, the grid queries, steering, the checks, choose-parent, rewiring, the goal test.
+It builds the same tree as the Python loop, node for node (the tests compare them on random
+worlds), but checks segments lazily (OMPL's ``delayCC``): the nearest node's segment first,
+then the candidate parents in order of cost through them until one is free, then only the
+candidates that the new node would make cheaper; ``edge_checks`` counts the checks made, 4-10
+times fewer. Elsewhere (2-D, circles, polygons, moving obstacles, ``spso``'s nearest-node
+heights, 64+ cylinders) the Python loop runs, with Numba's parallel feasibility kernels on one
+thread (:func:`serial_numba`): a batch is a few dozen segments, and waking threads for it costs
+more than the work. ``loop="python"`` forces the reference. Measured numbers:
+``benchmarks/rrt_star_nn.py``, ``benchmarks/vs_ompl.py``.
 
-**Planner** (:class:`RRTStarPlanner`, ``rrt-star``). One planner iteration runs ``pop_size``
-RRT* iterations (default 1, so the budget counts RRT* iterations; named ``pop_size`` so that the
-common planner option applies). By default the planner is *anytime*: it keeps growing and
-rewiring the tree until its budget is spent (``stop_at_goal=False``), so that it spends the same
-budget as the other planners; pass ``stop_at_goal=True`` for Alg. 1's break. Whenever the
-tree's shortest goal path changes, that path is evaluated under the scenario's cost preset (one
-path evaluation); the result is the lowest-cost feasible path so evaluated. ``history`` is the
-best such cost so far per planner iteration (inf before the first path, as ``rgg``);
-``evaluations`` counts segment checks (and shortcut checks), the work that dominates; path
-evaluations are reported in ``config["run"]``. If no path is found, the result is the straight
-start-goal segment with ``feasible=False`` and ``"no_path"`` among its violations.
+**Planner** (:class:`RRTStarPlanner`, ``rrt-star``). One planner iteration is one RRT*
+iteration, so the budget counts RRT* iterations. By default the planner is *anytime*: it keeps
+growing and rewiring the tree until its budget is spent (``stop_at_goal=False``), so that it
+spends the same budget as the other planners; pass ``stop_at_goal=True`` for Alg. 1's break.
+Whenever the tree's shortest goal path changes, that path is evaluated under the scenario's cost
+preset (one path evaluation); the result is the lowest-cost feasible path so evaluated.
+``history`` is the best such cost so far per planner iteration (inf before the first path, as
+``rgg``); ``evaluations`` counts segment checks (and shortcut checks), the work that dominates;
+path evaluations are reported in ``config["run"]``. If no path is found, the result is the
+straight start-goal segment with ``feasible=False`` and ``"no_path"`` among its violations. The
+Numba loop runs up to :data:`CHUNK` iterations per call (returning early when the shortest goal
+path changes) and the tracker closes them together (:meth:`Tracker.end_iterations`), so a wall-
+time budget is looked at every few milliseconds; with a callback or an evaluation limit, one
+iteration per call.
+
+``tighten`` (planner option, default off; not in the paper): a new shortest tree path is
+shortcut, pulled tight by an elastic band (points at most ``step / 2`` apart, each moved towards
+its neighbours' midpoint by the largest of 1, 1/2, ..., 1/32 of the way whose two segments the
+validator accepts) and shortcut again (:mod:`uavplan.planners._tighten_kernels`; the compiled
+check where the Numba loop runs, else the Python references with the validator), then evaluated
+and offered like any tree path (kept only if its cost is lower); with ``informed``, its length
+bounds the spheroid (:meth:`RRTStarTree.bound_by`). It never lengthens a path and every segment
+is judged by the same exact validator. A tightening costs a few milliseconds, so it runs on the
+first path and then once the iterations have grown by 25 % (:data:`TIGHTEN_GROWTH`, at least
+:data:`TIGHTEN_GAP`) since the last; a run with an iteration budget stays a function of its
+seed. Its effect on the dense field of ``benchmarks/vs_ompl.py``: ``docs/results.md``.
+10-s Informed RRT* length in 0.5 s (see ``docs/results.md``).
 """
 
 from __future__ import annotations
@@ -118,6 +149,7 @@ from numpy.typing import NDArray
 
 from uavplan.optimizers.base import Budget
 from uavplan.planners import _rrt_star_kernels as K
+from uavplan.planners import _tighten_kernels as T
 from uavplan.planners.base import Planner
 from uavplan.planners.grid_index import GridIndex, pad3
 from uavplan.planners.options import Options, PlannerConfig, PlannerError, option
@@ -134,9 +166,17 @@ BoolArray = NDArray[np.bool_]
 
 #: Samples drawn from the generator at a time.
 SAMPLE_BLOCK = 256
+#: Blocks drawn at once once informed sampling is on (most samples are then rejected).
+INFORMED_BLOCKS = 16
 #: Most RRT* iterations the planner runs per call of the Numba loop (between two looks at the
 #: wall clock).
 CHUNK = 256
+#: ``tighten``: the next shortest tree path is tightened once the iterations have grown by this
+#: factor, and by at least this many, since the last tightening (a handful per run, each a few
+#: milliseconds), with at most this many sweeps of the band.
+TIGHTEN_GROWTH = 1.25
+TIGHTEN_GAP = 256
+TIGHTEN_ROUNDS = 1000
 
 
 # ------------------------------------------------------------------------------ configuration
@@ -334,7 +374,7 @@ class RRTStarTree:
         self._ctr = np.zeros(K.N_CTR, dtype=np.int64)
         self._ctr[K.N] = 1
         self._ctr[K.BEST] = -1
-        self._fl = np.array([math.inf, 0.0])
+        self._fl = np.array([math.inf, 0.0, math.inf])
         self._samples = np.zeros((0, 3))
         self._goal_draw = np.zeros(0, dtype=bool)
         if fast is None:
@@ -347,6 +387,10 @@ class RRTStarTree:
         )  # fmt: skip
         self._cfg[K.MEASURE] = self.grid.measure
         self._cfg[K.INFORMED] = float(config.informed)
+        self._cfg[[K.SAMPLE_MEASURE, K.REWIRE_FACTOR, K.ZETA, K.C_MIN]] = (
+            self.measure, config.rewire_factor, _unit_ball_volume(d),
+            _d3(self._start3, self._goal3),
+        )  # fmt: skip
 
     # ---------------------------------------------------------------- views
     @property
@@ -384,19 +428,31 @@ class RRTStarTree:
         return int(self._ctr[K.FOUND]) or None
 
     def radius(self) -> float:
-        """The near radius for the current tree (Alg. 1 line 7)."""
-        card = self.n_nodes + 1
+        """The near radius for the current tree (Alg. 1 line 7; with ``informed``, of the
+        measure of the spheroid once there is a path: :func:`_rrt_star_kernels.near_radius`)."""
+        n = self.n_nodes
+        if self.config.informed:
+            return float(K.near_radius(n, self._cfg, self.informed_bound()))
+        card = n + 1
         r = self.gamma * (math.log(card) / card) ** (1.0 / self.dim)
         return float(min(self.config.near_radius, r))
 
     # ---------------------------------------------------------------- Alg. 1
     def _refill(self) -> None:
+        """The next sample blocks: each ``SAMPLE_BLOCK`` goal draws, then as many samples, from
+        the generator; one block at a time, :data:`INFORMED_BLOCKS` once informed sampling
+        rejects most samples (the same stream: only how much is drawn ahead differs)."""
         b = SAMPLE_BLOCK
-        self._goal_draw = self.rng.random(b) < self.config.goal_bias
-        p = self._lo + self.rng.random((b, self.dim)) * (self._hi - self._lo)
+        k = INFORMED_BLOCKS if self.config.informed and self._ctr[K.N_GOAL] else 1
+        goal_draw, samples = [], []
+        for _ in range(k):
+            goal_draw.append(self.rng.random(b) < self.config.goal_bias)
+            samples.append(self._lo + self.rng.random((b, self.dim)) * (self._hi - self._lo))
+        p = np.concatenate(samples) if k > 1 else samples[0]
         if self._ground_z:
             p[:, 2] += self.scenario.ground(p[:, 0], p[:, 1])
-        self._samples = np.zeros((b, 3))
+        self._goal_draw = np.concatenate(goal_draw) if k > 1 else goal_draw[0]
+        self._samples = np.zeros((k * b, 3))
         self._samples[:, : self.dim] = p
         self._ctr[K.POS] = 0
 
@@ -408,9 +464,14 @@ class RRTStarTree:
         return self._goal3.copy() if self._goal_draw[i] else self._samples[i].copy()
 
     def informed_bound(self) -> float:
-        """The length of the shortest goal path in the tree (inf if none): Informed RRT*'s
-        ``c_best``."""
-        return float(self._best()[1])
+        """Informed RRT*'s ``c_best``: the length of the shortest goal path in the tree, or of
+        the path given to :meth:`bound_by` if shorter (inf if neither)."""
+        return min(float(self._best()[1]), float(self._fl[K.BOUND]))
+
+    def bound_by(self, length: float) -> None:
+        """A start-goal path of this ``length`` is known (e.g. the tree's, tightened): with
+        ``informed``, sample only where a shorter one can pass."""
+        self._fl[K.BOUND] = min(float(self._fl[K.BOUND]), float(length))
 
     def _best(self) -> tuple[int, float]:
         return K.best_goal(
@@ -506,9 +567,9 @@ class RRTStarTree:
             raise RuntimeError("this tree's validator has no compiled segment check")
         g = self.grid
         cfg = self._cfg
+        self._grow()
+        cfg[K.SCAN_LIMIT] = g.scan_limit
         while True:
-            self._grow()
-            cfg[K.SCAN_LIMIT] = g.scan_limit
             status = K.grow(
                 g.buffer, g._nxt, g._head, g._lo, g.cell, g._dims, self._parent, self._cost,
                 self._first_child, self._next_sib, self._stack, self._goal_nodes,
@@ -517,14 +578,16 @@ class RRTStarTree:
                 self._kargs,
             )  # fmt: skip
             g.n = int(self._ctr[K.N])
-            if status == K.NEED_SAMPLES:
+            if status == K.GROW:
+                self._grow()
+            elif status == K.NEED_SAMPLES:
                 self._refill()
             elif status == K.REBUILD:
                 target = float(self._fl[K.TARGET])
                 g.set_cell(target)
                 if g.cell >= 2 * target:  # the grid cannot get finer (MAX_CELLS)
                     cfg[K.MIN_CELL] = g.cell
-            elif status != K.GROW:
+            else:
                 return int(status)
 
     def run(self, max_iterations: int, stop_at_goal: bool) -> None:
@@ -600,6 +663,30 @@ def rrt_star(
     )
 
 
+def tightened(tree: RRTStarTree, path: FloatArray) -> tuple[FloatArray, int]:
+    """``path`` (valid) shortcut, tightened by an elastic band with points at most half a step
+    apart, and shortcut again (:mod:`uavplan.planners._tighten_kernels`), every segment judged
+    by the tree's validator (its compiled check where it has one, else the Python references);
+    returns it (never longer) and the segment checks spent."""
+    d = tree.dim
+    p3 = np.zeros((len(path), 3))
+    p3[:, :d] = path
+    spacing = 0.5 * tree.config.step
+    if tree._kargs is not None:
+        out, checks = T.tighten(p3, tree._kargs, spacing, TIGHTEN_ROUNDS)
+        return np.asarray(out[:, :d]), checks
+    count = [0]
+
+    def ok(a: FloatArray, b: FloatArray) -> bool:
+        count[0] += 1
+        return bool(tree.validator.paths_valid(np.stack([a[:d], b[:d]])[None])[0])
+
+    out = T.shortcut_reference(ok, p3)
+    out = T.band_reference(ok, out, spacing, TIGHTEN_ROUNDS, T.TOL)
+    out = T.shortcut_reference(ok, out)
+    return np.asarray(out[:, :d]), count[0]
+
+
 # ------------------------------------------------------------------------------ the planner
 @dataclass(frozen=True)
 class RRTStarPlannerConfig(RRTStarConfig, PlannerConfig):
@@ -608,6 +695,10 @@ class RRTStarPlannerConfig(RRTStarConfig, PlannerConfig):
     stop_at_goal: bool = option(
         False, "stop at the first goal connection (Alg. 1); the planner is anytime by default"
     )
+    tighten: bool = option(
+        False, "shortcut and tighten new shortest tree paths (an elastic band judged by the "
+        "exact segment check; not in the paper); informed sampling then uses their length",
+    )  # fmt: skip
 
 
 class RRTStarPlanner(Planner):
@@ -643,7 +734,8 @@ class RRTStarPlanner(Planner):
         tree = RRTStarTree(run.scenario, run.task, self.rrt_config(), rng)
         tr = run.tracker
         best_length = np.inf
-        path_evaluations = shortcut_checks = 0
+        path_evaluations = shortcut_checks = tightenings = 0
+        tighten_from = 0  # the iteration from which a new shortest tree path is tightened
         last: IntArray | None = None
         term = run.termination
         # the Numba loop closes up to CHUNK iterations per call; one where a callback or an
@@ -661,18 +753,21 @@ class RRTStarPlanner(Planner):
                 else:
                     tree.iterate()
                     changed, n_done = True, 1
-                stop = False
-                for _ in range(n_done - 1):  # passes that left the best path as it was
-                    if tr.end_iteration():
-                        stop = True
-                        break
+                stop = tr.end_iterations(n_done - 1)  # passes that left the best path as it was
                 node = tree.best_goal_node() if changed else None
                 if node is not None:
                     idx = tree.path_indices(node)
                     if last is None or not np.array_equal(idx, last):
                         last = idx
                         path = tree.path_of(idx)
-                        if cfg.shortcut:
+                        if cfg.tighten and tree.iterations >= tighten_from:
+                            path, k = tightened(tree, path)
+                            shortcut_checks += k
+                            tightenings += 1
+                            tree.bound_by(_length(path))
+                            tighten_from = max(tree.iterations + TIGHTEN_GAP,
+                                               int(TIGHTEN_GROWTH * tree.iterations))  # fmt: skip
+                        elif cfg.shortcut:
                             path, _, k = greedy_shortcut(tree.validator, path)
                             shortcut_checks += k
                         ev = problem.evaluate(path[None])
@@ -695,6 +790,7 @@ class RRTStarPlanner(Planner):
                 "n_nodes": tree.n_nodes,
                 "edge_checks": tree.edge_checks,
                 "shortcut_checks": shortcut_checks,
+                "tightenings": tightenings,
                 "path_evaluations": path_evaluations,
                 "rewires": tree.rewires,
                 "informed_rejections": tree.rejected,
