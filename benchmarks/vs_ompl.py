@@ -1,8 +1,14 @@
 """Our RRT* against OMPL's RRT* and Informed RRT* on a dense 3-D cylinder field (issue 18 items
 5 and 6): path length at matched wall times, success rates, ratios, all from this one run.
 
-Run: ``python benchmarks/vs_ompl.py [--seeds 5] [--times 0.5 1 2 5] [--reference 10]``
-(needs ``pip install ompl``, the ``peers`` extra; without it only our rows are printed).
+Run: ``python benchmarks/vs_ompl.py [--seeds 5] [--times 0.5 1 2 5] [--reference 10]
+[--profile 2] [--profile-only]`` (needs ``pip install ompl``, the ``peers`` extra; without it
+only our rows are printed).
+
+First a profile: the share of an RRT* run's wall time spent outside the kernels (the Numba
+loop, the tightening kernels, the validator's and the cost's calls, the Python loop's tree and
+grid kernels; timed by wrappers), before (``loop="python"``, the reference loop, as the planner
+ran until this change) and after, with the RRT* iterations per second.
 
 **The field** (:func:`field`, generated here, seed ``FIELD_SEED``): a 1000 m x 1000 m x 200 m box,
 no terrain, no altitude band; 48 vertical cylinders of radius 20-50 m from
@@ -271,7 +277,9 @@ def profile_share(sc: Scenario, seconds: float, seeds: int) -> None:
     and after (the Numba loop, informed and tightened)."""
     print(f"\nprofile: {seconds:g} s runs, {seeds} seeds, time outside the kernels "
           "(validity, cost, tree and tightening kernels) / the run's wall time")  # fmt: skip
-    variants = (("before: loop=python, informed", {"informed": True, "loop": "python"}),
+    variants = (("before: loop=python, defaults", {"loop": "python"}),
+                ("before: loop=python, informed", {"informed": True, "loop": "python"}),
+                ("after: defaults", {}),
                 ("after: informed tighten", {"informed": True, "tighten": True}))  # fmt: skip
     for label, opts in variants:
         planner = get_planner("rrt-star", **opts)
@@ -306,6 +314,7 @@ def main() -> None:
     ap.add_argument("--only-ours", action="store_true")
     ap.add_argument("--profile", type=float, default=2.0, metavar="SECONDS",
                     help="the profile's run length (0: no profile)")  # fmt: skip
+    ap.add_argument("--profile-only", action="store_true", help="the profile alone")
     args = ap.parse_args()
     numba.set_num_threads(1)
     sc = field()
@@ -315,6 +324,8 @@ def main() -> None:
           f"{straight:.0f} m; seeds {args.seeds}; wall times {args.times} s")  # fmt: skip
     if args.profile > 0:
         profile_share(sc, args.profile, min(args.seeds, 3))
+    if args.profile_only:
+        return
     ours = ours_runner(sc)
     # warm-up: compile our kernels (cached) before timing
     ours({"informed": True}, 0.3, 0)

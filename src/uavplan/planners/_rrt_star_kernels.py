@@ -36,10 +36,7 @@ BEST_TOTAL, TARGET, BOUND = range(3)
 N_FL = 3
 # ``cfg`` (float64) entries
 STEP, GOAL_RADIUS, NEAR_RADIUS, GAMMA, DIM, MEASURE, SCAN_LIMIT, INFORMED, MIN_CELL = range(9)
-# for the informed radius: the sampling region's measure, the factor on gamma*, the unit ball's
-# measure, the start-goal distance
-SAMPLE_MEASURE, REWIRE_FACTOR, ZETA, C_MIN = range(9, 13)
-N_CFG = 13
+N_CFG = 9
 # statuses of :func:`grow`
 DONE, NEED_SAMPLES, REBUILD, GROW, GOAL, IMPROVED = range(6)
 #: Informed sampling: rejections in a row after which the next sample is kept.
@@ -67,24 +64,6 @@ def best_goal(pts, cost, goal_nodes, n_goal, g):  # pragma: no cover - numba
             bt = tot
             best = u
     return best, bt
-
-
-@njit(cache=True)
-def near_radius(n, cfg, c_best):  # pragma: no cover - numba
-    """Alg. 1 line 7's radius for a tree of ``n`` nodes: ``min(near_radius, gamma (log(n + 1)
-    / (n + 1))^(1/d))`` with ``cfg[GAMMA]``; with informed sampling and a path of length
-    ``c_best``, gamma* of the measure actually sampled: the sampling region's or, if less, the
-    prolate spheroid's (Gammell et al. 2014, Sect. IV; OMPL's pruned measure)."""
-    d = cfg[DIM]
-    gamma = cfg[GAMMA]
-    if cfg[INFORMED] > 0 and c_best < np.inf:
-        c_min = cfg[C_MIN]
-        a = 0.5 * c_best
-        b = 0.5 * np.sqrt(max(c_best * c_best - c_min * c_min, 0.0))
-        mu = min(cfg[SAMPLE_MEASURE], cfg[ZETA] * a * b ** (d - 1.0))
-        gamma = cfg[REWIRE_FACTOR] * (2.0 * (1.0 + 1.0 / d) * mu / cfg[ZETA]) ** (1.0 / d)
-    card = n + 1.0
-    return min(cfg[NEAR_RADIUS], gamma * (np.log(card) / card) ** (1.0 / d))
 
 
 @njit(cache=True)
@@ -162,7 +141,8 @@ def grow(
         n = ctr[N]
         if n >= pts.shape[0] or n >= parent.shape[0]:
             return GROW
-        r = near_radius(n, cfg, min(fl[BEST_TOTAL], fl[BOUND]))
+        card = n + 1.0
+        r = min(cfg[NEAR_RADIUS], cfg[GAMMA] * (np.log(card) / card) ** (1.0 / d))
         target = max(r, (measure / max(n, 1)) ** (1.0 / d))
         if 0 < target < 0.5 * cell and cell > cfg[MIN_CELL]:
             fl[TARGET] = target

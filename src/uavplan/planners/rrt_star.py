@@ -86,9 +86,8 @@ ChrismasTerrain world, 100-200 m above ground, that PPSwarm's experiments follow
   on a shorter path, since tree costs are Euclidean lengths; the others are rejected and drawn
   again (from the same sampler, so the samples stay uniform over the sampling region, altitude
   band included, within the spheroid; after 1,000 rejections in a row the next sample is
-  kept). Goal-biased samples always pass. The near radius (line 7) then takes gamma* of the
-  measure actually sampled: the spheroid's, ``zeta_d (c / 2) (sqrt(c^2 - c_min^2) / 2)^(d-1)``,
-  when less than the sampling region's (Gammell et al. Sect. IV; OMPL's pruned measure).
+  kept). Goal-biased samples always pass. The near radius keeps the sampling region's
+  measure (see ``docs/decisions.md``).
 * ``loop = "numba"``: how iterations run, not what they compute (see below).
 
 **The Numba loop.** Where the tree's validator has a compiled segment check
@@ -387,10 +386,6 @@ class RRTStarTree:
         )  # fmt: skip
         self._cfg[K.MEASURE] = self.grid.measure
         self._cfg[K.INFORMED] = float(config.informed)
-        self._cfg[[K.SAMPLE_MEASURE, K.REWIRE_FACTOR, K.ZETA, K.C_MIN]] = (
-            self.measure, config.rewire_factor, _unit_ball_volume(d),
-            _d3(self._start3, self._goal3),
-        )  # fmt: skip
 
     # ---------------------------------------------------------------- views
     @property
@@ -428,12 +423,8 @@ class RRTStarTree:
         return int(self._ctr[K.FOUND]) or None
 
     def radius(self) -> float:
-        """The near radius for the current tree (Alg. 1 line 7; with ``informed``, of the
-        measure of the spheroid once there is a path: :func:`_rrt_star_kernels.near_radius`)."""
-        n = self.n_nodes
-        if self.config.informed:
-            return float(K.near_radius(n, self._cfg, self.informed_bound()))
-        card = n + 1
+        """The near radius for the current tree (Alg. 1 line 7)."""
+        card = self.n_nodes + 1
         r = self.gamma * (math.log(card) / card) ** (1.0 / self.dim)
         return float(min(self.config.near_radius, r))
 
