@@ -175,3 +175,27 @@ def test_tighten_option_shortens_and_stays_valid() -> None:
     # the Python references give the same plan
     slow = get_planner("rrt-star", informed=True, tighten=True, loop="python")
     assert np.array_equal(slow.plan(sc, budget=1500, seed=2).waypoints, tight.waypoints)
+
+
+def test_distinct_goal_nodes() -> None:
+    from uavplan.planners import _rrt_star_kernels as K
+
+    sc = random_world(3, 12, None)
+    tree = RRTStarTree(sc, None, RRTStarConfig(goal_radius=150.0), np.random.default_rng(1))
+    tree.run(3000, False)
+    assert len(tree.goal_nodes) > 10
+    args = (tree.grid.buffer, tree._parent, tree._cost, tree._goal_nodes, len(tree.goal_nodes),
+            tree._goal3)  # fmt: skip
+    total = {u: tree.cost[u] + np.linalg.norm(tree.points[u] - tree.goal) for u in tree.goal_nodes}
+    for k, slack in ((1, 0.0), (4, 0.05), (6, 1.0)):
+        nodes = [int(u) for u in K.distinct_goal_nodes(*args, k, slack)]
+        assert 1 <= len(nodes) <= k
+        assert nodes[0] == tree.best_goal_node()
+        tots = [total[u] for u in nodes]
+        assert tots == sorted(tots) and tots[-1] <= (1 + slack) * tots[0] + 1e-9
+        for i, u in enumerate(nodes):
+            path = set(tree.path_indices(u).tolist())
+            for v in nodes[:i]:
+                idx = tree.path_indices(v)
+                mid = int(idx[len(idx) - 1 - (len(idx) - 1) // 2])
+                assert mid not in path

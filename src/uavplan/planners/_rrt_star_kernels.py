@@ -67,6 +67,50 @@ def best_goal(pts, cost, goal_nodes, n_goal, g):  # pragma: no cover - numba
 
 
 @njit(cache=True)
+def distinct_goal_nodes(pts, parent, cost, goal_nodes, n_goal, g, k, slack):  # pragma: no cover
+    """Up to ``k`` goal nodes, shortest goal path first, each on a branch of its own and with
+    a goal path at most ``1 + slack`` times the shortest: a node is taken when its tree path
+    passes through none of the taken ones' middle nodes (the ancestor half way along their
+    paths), so the paths split before half way (often a different way between the
+    obstacles)."""
+    tot = np.empty(n_goal)
+    for t in range(n_goal):
+        u = goal_nodes[t]
+        tot[t] = cost[u] + dist3(pts[u, 0], pts[u, 1], pts[u, 2], g[0], g[1], g[2])
+    order = np.argsort(tot, kind="mergesort")
+    out = np.full(k, -1, dtype=np.int64)
+    mids = np.full(k, -1, dtype=np.int64)
+    m = 0
+    for oi in range(n_goal):
+        if tot[order[oi]] > (1.0 + slack) * tot[order[0]]:
+            break
+        u = goal_nodes[order[oi]]
+        ok = True
+        v = u
+        while v >= 0 and ok:
+            for c in range(m):
+                if v == mids[c]:
+                    ok = False
+            v = parent[v]
+        if not ok:
+            continue
+        depth = 0
+        v = u
+        while parent[v] >= 0:
+            depth += 1
+            v = parent[v]
+        v = u
+        for _ in range(depth // 2):
+            v = parent[v]
+        out[m] = u
+        mids[m] = v
+        m += 1
+        if m == k:
+            break
+    return out[:m]
+
+
+@njit(cache=True)
 def reparent(pts, parent, cost, first_child, next_sib, stack, j, new, c):  # pragma: no cover
     """Make ``new`` the parent of ``j`` at cost-to-come ``c`` and recompute the costs of ``j``'s
     subtree, depth first (cost = parent's cost + segment length, exactly)."""

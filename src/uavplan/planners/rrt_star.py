@@ -175,7 +175,12 @@ CHUNK = 256
 #: milliseconds), with at most this many sweeps of the band.
 TIGHTEN_GROWTH = 1.25
 TIGHTEN_GAP = 256
-TIGHTEN_ROUNDS = 1000
+TIGHTEN_ROUNDS = 200
+#: ``tighten``: the tree paths tightened each time (the shortest and others on branches of
+#: their own).
+TIGHTEN_PATHS = 3
+#: ... whose tree paths are at most this much longer than the shortest (relative).
+TIGHTEN_SLACK = 0.01
 
 
 # ------------------------------------------------------------------------------ configuration
@@ -678,6 +683,24 @@ def tightened(tree: RRTStarTree, path: FloatArray) -> tuple[FloatArray, int]:
     return np.asarray(out[:, :d]), count[0]
 
 
+def tightest(tree: RRTStarTree, path: FloatArray) -> tuple[FloatArray, int]:
+    """The shortest of ``path`` (the tree's shortest) and the tree paths of up to
+    :data:`TIGHTEN_PATHS` - 1 other goal nodes on branches of their own
+    (:func:`_rrt_star_kernels.distinct_goal_nodes`), each :func:`tightened`: a longer tree path
+    may lie in a way between the obstacles that tightens shorter. Returns it and the checks."""
+    best, checks = tightened(tree, path)
+    nodes = K.distinct_goal_nodes(
+        tree.grid.buffer, tree._parent, tree._cost, tree._goal_nodes, tree._ctr[K.N_GOAL],
+        tree._goal3, TIGHTEN_PATHS, TIGHTEN_SLACK,
+    )  # fmt: skip
+    for node in nodes[1:]:
+        p, k = tightened(tree, tree.path_of(tree.path_indices(int(node))))
+        checks += k
+        if _length(p) < _length(best):
+            best = p
+    return best, checks
+
+
 # ------------------------------------------------------------------------------ the planner
 @dataclass(frozen=True)
 class RRTStarPlannerConfig(RRTStarConfig, PlannerConfig):
@@ -752,7 +775,7 @@ class RRTStarPlanner(Planner):
                         last = idx
                         path = tree.path_of(idx)
                         if cfg.tighten and tree.iterations >= tighten_from:
-                            path, k = tightened(tree, path)
+                            path, k = tightest(tree, path)
                             shortcut_checks += k
                             tightenings += 1
                             tree.bound_by(_length(path))
