@@ -123,15 +123,19 @@ iteration per call.
 ``tighten`` (planner option, default off; not in the paper): a new shortest tree path is
 shortcut, pulled tight by an elastic band (points at most ``step / 2`` apart, each moved towards
 its neighbours' midpoint by the largest of 1, 1/2, ..., 1/32 of the way whose two segments the
-validator accepts) and shortcut again (:mod:`uavplan.planners._tighten_kernels`; the compiled
-check where the Numba loop runs, else the Python references with the validator), then evaluated
-and offered like any tree path (kept only if its cost is lower); with ``informed``, its length
-bounds the spheroid (:meth:`RRTStarTree.bound_by`). It never lengthens a path and every segment
-is judged by the same exact validator. A tightening costs a few milliseconds, so it runs on the
-first path and then once the iterations have grown by 25 % (:data:`TIGHTEN_GROWTH`, at least
-:data:`TIGHTEN_GAP`) since the last; a run with an iteration budget stays a function of its
-seed. Its effect on the dense field of ``benchmarks/vs_ompl.py``: ``docs/results.md``.
-10-s Informed RRT* length in 0.5 s (see ``docs/results.md``).
+validator accepts; at most :data:`TIGHTEN_ROUNDS` sweeps) and shortcut again
+(:mod:`uavplan.planners._tighten_kernels`; the compiled check where the Numba loop runs, else
+the Python references with the validator). So are the tree paths of up to two other goal nodes
+on branches of their own whose tree paths are within 1 % of the shortest
+(:data:`TIGHTEN_PATHS`, :data:`TIGHTEN_SLACK`, :func:`_rrt_star_kernels.distinct_goal_nodes`):
+a longer tree path may lie in a way between the obstacles that tightens shorter. The shortest
+result is evaluated and offered like any tree path (kept only if its cost is lower); with
+``informed``, its length bounds the spheroid (:meth:`RRTStarTree.bound_by`). It never lengthens
+a path and every segment is judged by the same exact validator. A tightening costs a few
+milliseconds, so it runs on the first path and then once the iterations have grown by 25 %
+(:data:`TIGHTEN_GROWTH`, at least :data:`TIGHTEN_GAP`) since the last; a run with an iteration
+budget stays a function of its seed. Its effect on the dense field of
+``benchmarks/vs_ompl.py``: ``docs/results.md``.
 """
 
 from __future__ import annotations
