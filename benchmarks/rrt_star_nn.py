@@ -14,7 +14,12 @@ It prints, measured in this one run:
   the brute force.
 * **RRT* on spso.** Alg. 1 with the defaults (stop at the goal) over ``--seeds`` seeds: time and
   iterations to the first path, iterations/s; and an anytime run of 5,000 iterations
-  (iterations/s, segment checks per iteration).
+  (iterations/s, segment checks per iteration). spso reads node heights as its cost does
+  (nearest node), which the compiled segment check does not, so these run the Python loop.
+* **The loops.** On ``dense`` and ``ppswarm1`` (terrain, cylinders, a band above ground: the
+  compiled check applies), 3,000 anytime iterations, plain and informed: iterations/s of the
+  Numba loop and of the Python reference loop (``loop="python"``), their ratio, and the segment
+  checks per iteration of each (lazy against batched); the two trees are checked equal.
 
 Timings are the best of ``--repeats`` runs (the machine is shared). ``--threads`` sets Numba's
 threads (default 1: the feasibility kernels are ``prange`` loops and RRT*'s batches are small,
@@ -159,6 +164,32 @@ def rrt_table(seeds: int, repeats: int) -> None:
     )
 
 
+def loop_table(repeats: int) -> None:
+    """The Numba loop against the Python reference loop (the same tree) on worlds where it
+    applies: anytime runs, plain and informed."""
+    print("\nRRT* loops (anytime, the same tree; Numba where the world has a compiled check)")
+    print(f"{'scenario':<10} {'informed':>8} {'iters':>6} {'numba it/s':>11} {'python it/s':>12} "
+          f"{'ratio':>6} {'checks/it numba':>16} {'python':>7}")  # fmt: skip
+    n_it = 3000
+    for name in ("dense", "ppswarm1"):
+        sc = load_builtin(name)
+        for informed in (False, True):
+
+            def grow(loop: str, informed: bool = informed, sc: object = sc) -> RRTStarTree:
+                cfg = RRTStarConfig(stop_at_goal=False, informed=informed, loop=loop)
+                tree = RRTStarTree(sc, None, cfg, np.random.default_rng(0))  # type: ignore[arg-type]
+                tree.run(n_it, stop_at_goal=False)
+                return tree
+
+            tf = best_time(lambda: grow("numba"), repeats)
+            tp = best_time(lambda: grow("python"), max(1, repeats - 2))
+            a, b = grow("numba"), grow("python")
+            assert a.fast and np.array_equal(a.points, b.points)  # the same tree
+            ca, cb = a.edge_checks / n_it, b.edge_checks / n_it
+            print(f"{name:<10} {informed!s:>8} {n_it:>6} {n_it / tf:>11,.0f} {n_it / tp:>12,.0f} "
+                  f"{tp / tf:>6.1f} {ca:>16.1f} {cb:>7.1f}")  # fmt: skip
+
+
 def _straight(sc) -> float:  # type: ignore[no-untyped-def]
     t = sc.tasks[0]
     return float(np.linalg.norm(np.subtract(t.goal, t.start)))
@@ -178,6 +209,7 @@ def main() -> None:
     print(f"numba threads: {numba.get_num_threads()}")
     nn_table(args.repeats)
     rrt_table(args.seeds, args.repeats)
+    loop_table(args.repeats)
 
 
 if __name__ == "__main__":

@@ -245,8 +245,8 @@ class GridIndex:
         self._head = np.full(int(np.prod(dims)), -1, dtype=np.int64)
         _grid_rebuild(self.buffer, self.n, self._head, self._nxt, self._lo, self.cell, self._dims)
 
-    def add(self, p: FloatArray) -> int:
-        """Add a point; returns its index."""
+    def reserve(self) -> None:
+        """Make room for one more point (the storage doubles when full)."""
         if self.n == len(self.buffer):
             cap = 2 * len(self.buffer)
             pts = np.zeros((cap, 3))
@@ -254,6 +254,10 @@ class GridIndex:
             nxt = np.full(cap, -1, dtype=np.int64)
             nxt[: self.n] = self._nxt
             self.buffer, self._nxt = pts, nxt
+
+    def add(self, p: FloatArray) -> int:
+        """Add a point; returns its index."""
+        self.reserve()
         i = self.n
         self.buffer[i] = pad3(p)
         _grid_insert(self.buffer, i, self._head, self._nxt, self._lo, self.cell, self._dims)

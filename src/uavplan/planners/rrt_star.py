@@ -44,9 +44,10 @@ based on hybrid PSO in complex scenarios", Drones 8(5), 192, Sect. 3.2 and 4.2.1
     through any goal-connected node.
 12. ``break`` when ``stop_at_goal`` (the default of :class:`RRTStarConfig`, as Alg. 1).
 
-All segment checks of one iteration (every near candidate to ``x_new``, and ``x_new`` to the
-goal when in the region) go to **one** batched :meth:`PathProblem.evaluate` call; a segment is
-free in both directions, so rewiring reuses the choose-parent checks. The paper's Sect. 3.2 text
+In the Python loop (:meth:`RRTStarTree.iterate`, the reference) all segment checks of one
+iteration (every near candidate to ``x_new``, and ``x_new`` to the goal when in the region) go to
+**one** batched validator call; a segment is free in both directions, so rewiring reuses the
+choose-parent checks. The Numba loop (below) checks them lazily. The paper's Sect. 3.2 text
 takes the choose-parent set within the step size and the rewiring set within an unnamed
 "radius"; we use one near set for both, as RRT* does.
 
@@ -85,23 +86,56 @@ ChrismasTerrain world, 100-200 m above ground, that PPSwarm's experiments follow
   on a shorter path, since tree costs are Euclidean lengths; the others are rejected and drawn
   again (from the same sampler, so the samples stay uniform over the sampling region, altitude
   band included, within the spheroid; after 1,000 rejections in a row the next sample is
-  kept). Goal-biased samples always pass.
+  kept). Goal-biased samples always pass. The near radius keeps the sampling region's
+  measure (see ``docs/decisions.md``).
+* ``loop = "numba"``: how iterations run, not what they compute (see below).
 
-Runs that grow the tree (:meth:`RRTStarTree.run`, the planner) execute Numba's parallel
-feasibility kernels on one thread (:func:`serial_numba`): a batch is a few dozen segments, and
-waking threads for it costs more than the work. Measured numbers: ``benchmarks/rrt_star_nn.py``.
+**The Numba loop.** Where the tree's validator has a compiled segment check
+(:attr:`MotionValidator.segment_kernel`: a 3-D world of bounds, fewer than 64 cylinders,
+terrain read bilinearly and the band, as ``ppswarm``, ``dense`` and the RGG scenes), whole
+iterations run in Numba (:func:`uavplan.planners._rrt_star_kernels.grow`): sampling from the
+drawn blocks, the grid queries, steering, the checks, choose-parent, rewiring, the goal test.
+It builds the same tree as the Python loop, node for node (the tests compare them on random
+worlds), but checks segments lazily (OMPL's ``delayCC``): the nearest node's segment first,
+then the candidate parents in order of cost through them until one is free, then only the
+candidates that the new node would make cheaper; ``edge_checks`` counts the checks made, 4-10
+times fewer. Elsewhere (2-D, circles, polygons, moving obstacles, ``spso``'s nearest-node
+heights, 64+ cylinders) the Python loop runs, with Numba's parallel feasibility kernels on one
+thread (:func:`serial_numba`): a batch is a few dozen segments, and waking threads for it costs
+more than the work. ``loop="python"`` forces the reference. Measured numbers:
+``benchmarks/rrt_star_nn.py``, ``benchmarks/vs_ompl.py``.
 
-**Planner** (:class:`RRTStarPlanner`, ``rrt-star``). One planner iteration runs ``pop_size``
-RRT* iterations (default 1, so the budget counts RRT* iterations; named ``pop_size`` so that the
-common planner option applies). By default the planner is *anytime*: it keeps growing and
-rewiring the tree until its budget is spent (``stop_at_goal=False``), so that it spends the same
-budget as the other planners; pass ``stop_at_goal=True`` for Alg. 1's break. Whenever the
-tree's shortest goal path changes, that path is evaluated under the scenario's cost preset (one
-path evaluation); the result is the lowest-cost feasible path so evaluated. ``history`` is the
-best such cost so far per planner iteration (inf before the first path, as ``rgg``);
-``evaluations`` counts segment checks (and shortcut checks), the work that dominates; path
-evaluations are reported in ``config["run"]``. If no path is found, the result is the straight
-start-goal segment with ``feasible=False`` and ``"no_path"`` among its violations.
+**Planner** (:class:`RRTStarPlanner`, ``rrt-star``). One planner iteration is one RRT*
+iteration, so the budget counts RRT* iterations. By default the planner is *anytime*: it keeps
+growing and rewiring the tree until its budget is spent (``stop_at_goal=False``), so that it
+spends the same budget as the other planners; pass ``stop_at_goal=True`` for Alg. 1's break.
+Whenever the tree's shortest goal path changes, that path is evaluated under the scenario's cost
+preset (one path evaluation); the result is the lowest-cost feasible path so evaluated.
+``history`` is the best such cost so far per planner iteration (inf before the first path, as
+``rgg``); ``evaluations`` counts segment checks (and shortcut checks), the work that dominates;
+path evaluations are reported in ``config["run"]``. If no path is found, the result is the
+straight start-goal segment with ``feasible=False`` and ``"no_path"`` among its violations. The
+Numba loop runs up to :data:`CHUNK` iterations per call (returning early when the shortest goal
+path changes) and the tracker closes them together (:meth:`Tracker.end_iterations`), so a wall-
+time budget is looked at every few milliseconds; with a callback or an evaluation limit, one
+iteration per call.
+
+``tighten`` (planner option, default off; not in the paper): a new shortest tree path is
+shortcut, pulled tight by an elastic band (points at most ``step / 2`` apart, each moved towards
+its neighbours' midpoint by the largest of 1, 1/2, ..., 1/32 of the way whose two segments the
+validator accepts; at most :data:`TIGHTEN_ROUNDS` sweeps) and shortcut again
+(:mod:`uavplan.planners._tighten_kernels`; the compiled check where the Numba loop runs, else
+the Python references with the validator). So are the tree paths of up to two other goal nodes
+on branches of their own whose tree paths are within 1 % of the shortest
+(:data:`TIGHTEN_PATHS`, :data:`TIGHTEN_SLACK`, :func:`_rrt_star_kernels.distinct_goal_nodes`):
+a longer tree path may lie in a way between the obstacles that tightens shorter. The shortest
+result is evaluated and offered like any tree path (kept only if its cost is lower); with
+``informed``, its length bounds the spheroid (:meth:`RRTStarTree.bound_by`). It never lengthens
+a path and every segment is judged by the same exact validator. A tightening costs a few
+milliseconds, so it runs on the first path and then once the iterations have grown by 25 %
+(:data:`TIGHTEN_GROWTH`, at least :data:`TIGHTEN_GAP`) since the last; a run with an iteration
+budget stays a function of its seed. Its effect on the dense field of
+``benchmarks/vs_ompl.py``: ``docs/results.md``.
 """
 
 from __future__ import annotations
@@ -117,6 +151,8 @@ from numba import njit
 from numpy.typing import NDArray
 
 from uavplan.optimizers.base import Budget
+from uavplan.planners import _rrt_star_kernels as K
+from uavplan.planners import _tighten_kernels as T
 from uavplan.planners.base import Planner
 from uavplan.planners.grid_index import GridIndex, pad3
 from uavplan.planners.options import Options, PlannerConfig, PlannerError, option
@@ -133,6 +169,22 @@ BoolArray = NDArray[np.bool_]
 
 #: Samples drawn from the generator at a time.
 SAMPLE_BLOCK = 256
+#: Blocks drawn at once once informed sampling is on (most samples are then rejected).
+INFORMED_BLOCKS = 16
+#: Most RRT* iterations the planner runs per call of the Numba loop (between two looks at the
+#: wall clock).
+CHUNK = 256
+#: ``tighten``: the next shortest tree path is tightened once the iterations have grown by this
+#: factor, and by at least this many, since the last tightening (a handful per run, each a few
+#: milliseconds), with at most this many sweeps of the band.
+TIGHTEN_GROWTH = 1.25
+TIGHTEN_GAP = 256
+TIGHTEN_ROUNDS = 200
+#: ``tighten``: the tree paths tightened each time (the shortest and others on branches of
+#: their own).
+TIGHTEN_PATHS = 3
+#: ... whose tree paths are at most this much longer than the shortest (relative).
+TIGHTEN_SLACK = 0.01
 
 
 # ------------------------------------------------------------------------------ configuration
@@ -154,6 +206,10 @@ class RRTStarConfig(Options):
     informed: bool = option(
         False, "Informed RRT*: once a goal path exists, sample only where a shorter one can pass"
     )
+    loop: str = option(
+        "numba", "numba: whole iterations in Numba where the world has a compiled segment check "
+        "(the same tree); python: the reference loop", choices=("numba", "python"),
+    )  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -177,12 +233,9 @@ class RRTStarResult:
 
 
 # ------------------------------------------------------------------------------ tree kernels
-@njit(cache=True)
-def _dist(pts, i, j):
-    dx = pts[i, 0] - pts[j, 0]
-    dy = pts[i, 1] - pts[j, 1]
-    dz = pts[i, 2] - pts[j, 2]
-    return np.sqrt(dx * dx + dy * dy + dz * dz)
+def _d3(a: FloatArray, b: FloatArray) -> float:
+    """``|a - b|`` of two padded 3-vectors, with the Numba loop's arithmetic."""
+    return float(K.dist3(a[0], a[1], a[2], b[0], b[1], b[2]))
 
 
 @njit(cache=True)
@@ -194,53 +247,24 @@ def _insert_rewire(pts, parent, cost, first_child, next_sib, stack, new, cand, o
     bc = np.inf
     for t in range(cand.shape[0]):
         if ok[t]:
-            c = cost[cand[t]] + _dist(pts, cand[t], new)
+            c = cost[cand[t]] + K.dist3(
+                pts[cand[t], 0], pts[cand[t], 1], pts[cand[t], 2], pts[new, 0], pts[new, 1],
+                pts[new, 2],
+            )  # fmt: skip
             if c < bc:
                 bc = c
                 best = cand[t]
     if best < 0:
         return -1
-    parent[new] = best
-    cost[new] = bc
-    first_child[new] = -1
-    next_sib[new] = first_child[best]
-    first_child[best] = new
+    K.link(parent, cost, first_child, next_sib, new, best, bc)
     rewired = 0
     for t in range(cand.shape[0]):
         j = cand[t]
         if not ok[t] or j == best:
             continue
-        c = bc + _dist(pts, j, new)
+        c = bc + K.dist3(pts[j, 0], pts[j, 1], pts[j, 2], pts[new, 0], pts[new, 1], pts[new, 2])
         if c + REWIRE_TOL < cost[j]:
-            # unlink j from its old parent's children
-            p = parent[j]
-            if first_child[p] == j:
-                first_child[p] = next_sib[j]
-            else:
-                s = first_child[p]
-                while next_sib[s] != j:
-                    s = next_sib[s]
-                next_sib[s] = next_sib[j]
-            parent[j] = new
-            next_sib[j] = first_child[new]
-            first_child[new] = j
-            cost[j] = c
-            # recompute the subtree's costs, depth first
-            top = 0
-            ch = first_child[j]
-            while ch >= 0:
-                stack[top] = ch
-                top += 1
-                ch = next_sib[ch]
-            while top > 0:
-                top -= 1
-                u = stack[top]
-                cost[u] = cost[parent[u]] + _dist(pts, u, parent[u])
-                ch = first_child[u]
-                while ch >= 0:
-                    stack[top] = ch
-                    top += 1
-                    ch = next_sib[ch]
+            K.reparent(pts, parent, cost, first_child, next_sib, stack, j, new, c)
             rewired += 1
     return rewired
 
@@ -278,6 +302,11 @@ def _unit_ball_volume(d: int) -> float:
     return float(math.pi ** (d / 2) / math.gamma(d / 2 + 1))
 
 
+def _counter(i: int, doc: str) -> property:
+    """A read-only view of the loop's counter ``i`` as an int."""
+    return property(lambda self: int(self._ctr[i]), doc=doc)
+
+
 class RRTStarTree:
     """One RRT* run (PPSwarm Alg. 1), one loop pass per :meth:`iterate`.
 
@@ -285,11 +314,18 @@ class RRTStarTree:
     ``parent`` (-1 for the root), ``cost`` (cost-to-come, metres). ``goal_nodes`` are the nodes
     whose segment to the exact goal is free and within ``goal_radius``.
 
+    :meth:`iterate` is one pass in Python (the reference: every segment of the pass checked in
+    one batch by the validator). :meth:`run` and :meth:`advance` run many passes in Numba
+    (:func:`uavplan.planners._rrt_star_kernels.grow`) where the validator has a compiled
+    segment check (:attr:`MotionValidator.segment_kernel`; ``fast=False`` turns it off): the
+    same tree, node for node, with the segments checked lazily (fewer ``edge_checks``).
+
     Args:
         scenario, task: the world and the task (start = root, goal).
         config: :class:`RRTStarConfig`.
         rng: the only source of randomness.
         validator: the segment checker (default :func:`validity_problem`).
+        fast: use the Numba loop where it applies (default: ``config.loop == "numba"``).
     """
 
     def __init__(
@@ -299,6 +335,7 @@ class RRTStarTree:
         config: RRTStarConfig,
         rng: np.random.Generator,
         validator: MotionValidator | None = None,
+        fast: bool | None = None,
     ) -> None:
         self.scenario = scenario
         self.task = task if isinstance(task, Task) else scenario.task(task)
@@ -308,6 +345,7 @@ class RRTStarTree:
         self.dim = scenario.dim
         self.start = np.asarray(self.task.start, dtype=np.float64)
         self.goal = np.asarray(self.task.goal, dtype=np.float64)
+        self._start3, self._goal3 = pad3(self.start), pad3(self.goal)
         # sampling region
         lo = scenario.bounds.lo.astype(np.float64).copy()
         hi = scenario.bounds.hi.astype(np.float64).copy()
@@ -338,18 +376,32 @@ class RRTStarTree:
         self._first_child = np.full(cap, -1, dtype=np.int64)
         self._next_sib = np.full(cap, -1, dtype=np.int64)
         self._stack = np.zeros(cap, dtype=np.int64)
+        self._goal_nodes = np.zeros(cap, dtype=np.int64)
         self.grid.add(self.start)
-        self.goal_nodes: list[int] = []
-        self.iterations = 0
-        self.edge_checks = 0
-        self.rewires = 0
-        self.found_iteration: int | None = None
-        self.rejected = 0  # informed samples drawn again
+        #: the loop's counters (:mod:`uavplan.planners._rrt_star_kernels`'s ``ctr`` entries)
+        self._ctr = np.zeros(K.N_CTR, dtype=np.int64)
+        self._ctr[K.N] = 1
+        self._ctr[K.BEST] = -1
+        self._fl = np.array([math.inf, 0.0, math.inf])
         self._samples = np.zeros((0, 3))
         self._goal_draw = np.zeros(0, dtype=bool)
-        self._pos = 0
+        if fast is None:
+            fast = config.loop == "numba"
+        kernel = self.validator.segment_kernel if fast and self.dim == 3 else None
+        self._kargs = None if kernel is None else kernel[1]
+        self._cfg = np.zeros(K.N_CFG)
+        self._cfg[[K.STEP, K.GOAL_RADIUS, K.NEAR_RADIUS, K.GAMMA, K.DIM]] = (
+            config.step, config.goal_radius, config.near_radius, self.gamma, d
+        )  # fmt: skip
+        self._cfg[K.MEASURE] = self.grid.measure
+        self._cfg[K.INFORMED] = float(config.informed)
 
     # ---------------------------------------------------------------- views
+    @property
+    def fast(self) -> bool:
+        """Whether :meth:`run` and :meth:`advance` run the Numba loop."""
+        return self._kargs is not None
+
     @property
     def n_nodes(self) -> int:
         return self.grid.n
@@ -366,6 +418,19 @@ class RRTStarTree:
     def cost(self) -> FloatArray:
         return self._cost[: self.n_nodes]
 
+    @property
+    def goal_nodes(self) -> list[int]:
+        return self._goal_nodes[: self._ctr[K.N_GOAL]].tolist()
+
+    iterations = _counter(K.ITER, "Loop passes run (Alg. 1 line 2).")
+    edge_checks = _counter(K.CHECKS, "Segments checked.")
+    rewires = _counter(K.REWIRES, "Nodes given a new parent (line 9).")
+    rejected = _counter(K.REJECTED, "Informed samples drawn again.")
+
+    @property
+    def found_iteration(self) -> int | None:
+        return int(self._ctr[K.FOUND]) or None
+
     def radius(self) -> float:
         """The near radius for the current tree (Alg. 1 line 7)."""
         card = self.n_nodes + 1
@@ -374,59 +439,76 @@ class RRTStarTree:
 
     # ---------------------------------------------------------------- Alg. 1
     def _refill(self) -> None:
+        """The next sample blocks: each ``SAMPLE_BLOCK`` goal draws, then as many samples, from
+        the generator; one block at a time, :data:`INFORMED_BLOCKS` once informed sampling
+        rejects most samples (the same stream: only how much is drawn ahead differs)."""
         b = SAMPLE_BLOCK
-        self._goal_draw = self.rng.random(b) < self.config.goal_bias
-        p = self._lo + self.rng.random((b, self.dim)) * (self._hi - self._lo)
+        k = INFORMED_BLOCKS if self.config.informed and self._ctr[K.N_GOAL] else 1
+        goal_draw, samples = [], []
+        for _ in range(k):
+            goal_draw.append(self.rng.random(b) < self.config.goal_bias)
+            samples.append(self._lo + self.rng.random((b, self.dim)) * (self._hi - self._lo))
+        p = np.concatenate(samples) if k > 1 else samples[0]
         if self._ground_z:
             p[:, 2] += self.scenario.ground(p[:, 0], p[:, 1])
-        self._samples = np.zeros((b, 3))
+        self._goal_draw = np.concatenate(goal_draw) if k > 1 else goal_draw[0]
+        self._samples = np.zeros((k * b, 3))
         self._samples[:, : self.dim] = p
-        self._pos = 0
+        self._ctr[K.POS] = 0
 
     def _draw(self) -> FloatArray:
-        if self._pos >= len(self._samples):
+        if self._ctr[K.POS] >= len(self._samples):
             self._refill()
-        i = self._pos
-        self._pos += 1
-        return pad3(self.goal) if self._goal_draw[i] else self._samples[i]
+        i = int(self._ctr[K.POS])
+        self._ctr[K.POS] += 1
+        return self._goal3.copy() if self._goal_draw[i] else self._samples[i].copy()
 
     def informed_bound(self) -> float:
-        """The length of the shortest goal path in the tree (inf if none): Informed RRT*'s
-        ``c_best``."""
-        node = self.best_goal_node()
-        if node is None:
-            return math.inf
-        return float(
-            self._cost[node] + np.linalg.norm(self.grid.buffer[node, : self.dim] - self.goal)
+        """Informed RRT*'s ``c_best``: the length of the shortest goal path in the tree, or of
+        the path given to :meth:`bound_by` if shorter (inf if neither)."""
+        return min(float(self._best()[1]), float(self._fl[K.BOUND]))
+
+    def bound_by(self, length: float) -> None:
+        """A start-goal path of this ``length`` is known (e.g. the tree's, tightened): with
+        ``informed``, sample only where a shorter one can pass."""
+        self._fl[K.BOUND] = min(float(self._fl[K.BOUND]), float(length))
+
+    def _best(self) -> tuple[int, float]:
+        return K.best_goal(
+            self.grid.buffer, self._cost, self._goal_nodes, self._ctr[K.N_GOAL], self._goal3
         )
 
     def sample(self) -> FloatArray:
         """Alg. 1 line 3 (padded to 3 coordinates); with ``informed``, within the spheroid of
         the shortest goal path so far."""
         q = self._draw()
-        if not self.config.informed or not self.goal_nodes:
+        if not self.config.informed or not self._ctr[K.N_GOAL]:
             return q
         c = self.informed_bound()
-        d = self.dim
-        for _ in range(1000):
-            if float(np.linalg.norm(q[:d] - self.start) + np.linalg.norm(q[:d] - self.goal)) < c:
+        for _ in range(K.MAX_REJECTIONS):
+            if _d3(q, self._start3) + _d3(q, self._goal3) < c:
                 break
-            self.rejected += 1
+            self._ctr[K.REJECTED] += 1
             q = self._draw()
         return q
 
     def _grow(self) -> None:
+        self.grid.reserve()
         cap = len(self.grid.buffer)
-        for name, fill in (("_parent", -1), ("_cost", 0), ("_first_child", -1), ("_next_sib", -1)):
+        for name, fill in (("_parent", -1), ("_cost", 0), ("_first_child", -1), ("_next_sib", -1),
+                           ("_goal_nodes", 0)):  # fmt: skip
             old = getattr(self, name)
-            new = np.full(cap, fill, dtype=old.dtype)
-            new[: len(old)] = old
-            setattr(self, name, new)
-        self._stack = np.zeros(cap, dtype=np.int64)
+            if len(old) < cap:
+                new = np.full(cap, fill, dtype=old.dtype)
+                new[: len(old)] = old
+                setattr(self, name, new)
+        if len(self._stack) < cap:
+            self._stack = np.zeros(cap, dtype=np.int64)
 
     def iterate(self) -> bool:
-        """One pass of Alg. 1's loop (lines 3-10). True if ``x_new`` joined the goal."""
-        self.iterations += 1
+        """One pass of Alg. 1's loop (lines 3-10), in Python (the reference of the Numba loop).
+        True if ``x_new`` joined the goal."""
+        self._ctr[K.ITER] += 1
         cfg = self.config
         q = self.sample()
         r = self.radius()
@@ -441,8 +523,7 @@ class RRTStarTree:
         if pos == len(cand) or cand[pos] != i_near:
             cand = np.insert(cand, pos, i_near)
         d = self.dim
-        dg = float(np.linalg.norm(x_new[:d] - self.goal))
-        want_goal = dg <= cfg.goal_radius
+        want_goal = _d3(x_new, self._goal3) <= cfg.goal_radius
         k = len(cand)
         edges = np.empty((k + int(want_goal), 2, d))
         edges[:k, 0] = self.grid.buffer[cand, :d]
@@ -451,13 +532,13 @@ class RRTStarTree:
             edges[k, 0] = x_new[:d]
             edges[k, 1] = self.goal
         ok = self.validator.paths_valid(edges)
-        self.edge_checks += len(edges)
+        self._ctr[K.CHECKS] += len(edges)
         if not ok[pos]:
             return False
+        self._grow()
         new = self.grid.add(x_new)
-        if len(self._parent) < len(self.grid.buffer):
-            self._grow()
-        self.rewires += int(
+        self._ctr[K.N] = self.grid.n
+        self._ctr[K.REWIRES] += int(
             _insert_rewire(
                 self.grid.buffer,
                 self._parent,
@@ -471,15 +552,50 @@ class RRTStarTree:
             )
         )
         if want_goal and ok[k]:
-            self.goal_nodes.append(new)
-            if self.found_iteration is None:
-                self.found_iteration = self.iterations
+            self._goal_nodes[self._ctr[K.N_GOAL]] = new
+            self._ctr[K.N_GOAL] += 1
+            if not self._ctr[K.FOUND]:
+                self._ctr[K.FOUND] = self._ctr[K.ITER]
             return True
         return False
 
+    def advance(self, max_iterations: int, stop_at_goal: bool, stop_on_improve: bool) -> int:
+        """Run the Numba loop until ``max_iterations`` passes in all (``K.DONE``), a node joins
+        the goal with ``stop_at_goal`` (``K.GOAL``) or, with ``stop_on_improve``, the shortest
+        goal path gets shorter (``K.IMPROVED``); returns that status. Only where :attr:`fast`."""
+        if self._kargs is None:
+            raise RuntimeError("this tree's validator has no compiled segment check")
+        g = self.grid
+        cfg = self._cfg
+        self._grow()
+        cfg[K.SCAN_LIMIT] = g.scan_limit
+        while True:
+            status = K.grow(
+                g.buffer, g._nxt, g._head, g._lo, g.cell, g._dims, self._parent, self._cost,
+                self._first_child, self._next_sib, self._stack, self._goal_nodes,
+                self._samples, self._goal_draw, self._start3, self._goal3, self._ctr, self._fl,
+                cfg, int(max_iterations), bool(stop_at_goal), bool(stop_on_improve),
+                self._kargs,
+            )  # fmt: skip
+            g.n = int(self._ctr[K.N])
+            if status == K.GROW:
+                self._grow()
+            elif status == K.NEED_SAMPLES:
+                self._refill()
+            elif status == K.REBUILD:
+                target = float(self._fl[K.TARGET])
+                g.set_cell(target)
+                if g.cell >= 2 * target:  # the grid cannot get finer (MAX_CELLS)
+                    cfg[K.MIN_CELL] = g.cell
+            else:
+                return int(status)
+
     def run(self, max_iterations: int, stop_at_goal: bool) -> None:
         """Iterate until ``max_iterations`` passes in all, or the goal when ``stop_at_goal``
-        (in :func:`serial_numba`)."""
+        (in :func:`serial_numba`; the Numba loop where :attr:`fast`)."""
+        if self.fast:
+            self.advance(max_iterations, stop_at_goal, False)
+            return
         with serial_numba():
             while self.iterations < max_iterations:
                 if self.iterate() and stop_at_goal:
@@ -488,13 +604,8 @@ class RRTStarTree:
     # ---------------------------------------------------------------- Alg. 1 line 11
     def best_goal_node(self) -> int | None:
         """The goal-connected node with the shortest start-goal path, None if none yet."""
-        if not self.goal_nodes:
-            return None
-        nodes = np.asarray(self.goal_nodes, dtype=np.int64)
-        total = self._cost[nodes] + np.linalg.norm(
-            self.grid.buffer[nodes, : self.dim] - self.goal, axis=1
-        )
-        return int(nodes[int(np.argmin(total))])
+        node = int(self._best()[0])
+        return None if node < 0 else node
 
     def path_indices(self, node: int) -> IntArray:
         """Node indices start .. ``node`` along the tree."""
@@ -552,6 +663,48 @@ def rrt_star(
     )
 
 
+def tightened(tree: RRTStarTree, path: FloatArray) -> tuple[FloatArray, int]:
+    """``path`` (valid) shortcut, tightened by an elastic band with points at most half a step
+    apart, and shortcut again (:mod:`uavplan.planners._tighten_kernels`), every segment judged
+    by the tree's validator (its compiled check where it has one, else the Python references);
+    returns it (never longer) and the segment checks spent."""
+    d = tree.dim
+    p3 = np.zeros((len(path), 3))
+    p3[:, :d] = path
+    spacing = 0.5 * tree.config.step
+    if tree._kargs is not None:
+        out, checks = T.tighten(p3, tree._kargs, spacing, TIGHTEN_ROUNDS)
+        return np.asarray(out[:, :d]), checks
+    count = [0]
+
+    def ok(a: FloatArray, b: FloatArray) -> bool:
+        count[0] += 1
+        return bool(tree.validator.paths_valid(np.stack([a[:d], b[:d]])[None])[0])
+
+    out = T.shortcut_reference(ok, p3)
+    out = T.band_reference(ok, out, spacing, TIGHTEN_ROUNDS, T.TOL)
+    out = T.shortcut_reference(ok, out)
+    return np.asarray(out[:, :d]), count[0]
+
+
+def tightest(tree: RRTStarTree, path: FloatArray) -> tuple[FloatArray, int]:
+    """The shortest of ``path`` (the tree's shortest) and the tree paths of up to
+    :data:`TIGHTEN_PATHS` - 1 other goal nodes on branches of their own
+    (:func:`_rrt_star_kernels.distinct_goal_nodes`), each :func:`tightened`: a longer tree path
+    may lie in a way between the obstacles that tightens shorter. Returns it and the checks."""
+    best, checks = tightened(tree, path)
+    nodes = K.distinct_goal_nodes(
+        tree.grid.buffer, tree._parent, tree._cost, tree._goal_nodes, tree._ctr[K.N_GOAL],
+        tree._goal3, TIGHTEN_PATHS, TIGHTEN_SLACK,
+    )  # fmt: skip
+    for node in nodes[1:]:
+        p, k = tightened(tree, tree.path_of(tree.path_indices(int(node))))
+        checks += k
+        if _length(p) < _length(best):
+            best = p
+    return best, checks
+
+
 # ------------------------------------------------------------------------------ the planner
 @dataclass(frozen=True)
 class RRTStarPlannerConfig(RRTStarConfig, PlannerConfig):
@@ -560,6 +713,10 @@ class RRTStarPlannerConfig(RRTStarConfig, PlannerConfig):
     stop_at_goal: bool = option(
         False, "stop at the first goal connection (Alg. 1); the planner is anytime by default"
     )
+    tighten: bool = option(
+        False, "shortcut and tighten new shortest tree paths (an elastic band judged by the "
+        "exact segment check; not in the paper); informed sampling then uses their length",
+    )  # fmt: skip
 
 
 class RRTStarPlanner(Planner):
@@ -595,18 +752,40 @@ class RRTStarPlanner(Planner):
         tree = RRTStarTree(run.scenario, run.task, self.rrt_config(), rng)
         tr = run.tracker
         best_length = np.inf
-        path_evaluations = shortcut_checks = 0
+        path_evaluations = shortcut_checks = tightenings = 0
+        tighten_from = 0  # the iteration from which a new shortest tree path is tightened
         last: IntArray | None = None
+        term = run.termination
+        # the Numba loop closes up to CHUNK iterations per call; one where a callback or an
+        # evaluation limit must see every iteration
+        chunk = 1 if term.callback is not None or term.max_evaluations is not None else CHUNK
+        limit = run.max_iterations
         with serial_numba():
             while True:
-                tree.iterate()
-                node = tree.best_goal_node()
+                if tree.fast:
+                    before = tree.iterations
+                    end = before + chunk if limit is None else min(before + chunk, limit)
+                    status = tree.advance(max(end, before + 1), cfg.stop_at_goal, True)
+                    changed = status in (K.IMPROVED, K.GOAL)
+                    n_done = tree.iterations - before
+                else:
+                    tree.iterate()
+                    changed, n_done = True, 1
+                stop = tr.end_iterations(n_done - 1)  # passes that left the best path as it was
+                node = tree.best_goal_node() if changed else None
                 if node is not None:
                     idx = tree.path_indices(node)
                     if last is None or not np.array_equal(idx, last):
                         last = idx
                         path = tree.path_of(idx)
-                        if cfg.shortcut:
+                        if cfg.tighten and tree.iterations >= tighten_from:
+                            path, k = tightest(tree, path)
+                            shortcut_checks += k
+                            tightenings += 1
+                            tree.bound_by(_length(path))
+                            tighten_from = max(tree.iterations + TIGHTEN_GAP,
+                                               int(TIGHTEN_GROWTH * tree.iterations))  # fmt: skip
+                        elif cfg.shortcut:
                             path, _, k = greedy_shortcut(tree.validator, path)
                             shortcut_checks += k
                         ev = problem.evaluate(path[None])
@@ -614,6 +793,9 @@ class RRTStarPlanner(Planner):
                         if tr.offer(path, float(ev.cost[0]), bool(ev.feasible[0])):
                             best_length = _length(path)
                 tr.evaluations = tree.edge_checks + shortcut_checks
+                if stop:
+                    tr.amend(tr.cost, tr.cost if tr.feasible else math.inf)
+                    break
                 stop = tr.end_iteration()
                 if stop or (cfg.stop_at_goal and tree.found_iteration is not None):
                     break
@@ -626,6 +808,7 @@ class RRTStarPlanner(Planner):
                 "n_nodes": tree.n_nodes,
                 "edge_checks": tree.edge_checks,
                 "shortcut_checks": shortcut_checks,
+                "tightenings": tightenings,
                 "path_evaluations": path_evaluations,
                 "rewires": tree.rewires,
                 "informed_rejections": tree.rejected,

@@ -85,6 +85,22 @@ class Tracker:
         self.evaluations_history.append(self.evaluations)
         return self.termination.reached(len(self.history), self.evaluations, self.history[-1])
 
+    def end_iterations(self, k: int) -> bool:
+        """Close ``k`` iterations in which the incumbent did not change, asking the termination
+        once, after the last (for planners that run iterations in compiled batches that stop
+        at their iteration limit; a run with a callback or an evaluation limit closes one at a
+        time, so that the callback sees every iteration). True when the run must stop."""
+        if k <= 0:
+            return False
+        b = self.cost
+        self.history.extend([min(self.history[-1], b) if self.history else b] * k)
+        if self.track_feasibility:
+            fb = self.cost if self.feasible else math.inf
+            prev = self.feasible_history[-1] if self.feasible_history else math.inf
+            self.feasible_history.extend([min(prev, fb)] * k)
+        self.evaluations_history.extend([self.evaluations] * k)
+        return self.termination.reached(len(self.history), self.evaluations, self.history[-1])
+
     def amend(self, best: float, feasible_best: float) -> None:
         """Fold a result found after the last iteration closed into that iteration's record."""
         self.history[-1] = min(self.history[-1], float(best))

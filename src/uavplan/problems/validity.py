@@ -426,6 +426,19 @@ class MotionValidator:
             BAND_TOL, strict,
         )  # fmt: skip
 
+    @cached_property
+    def segment_kernel(self) -> tuple[Any, tuple[object, ...]] | None:
+        """``(kernel, args)`` such that ``kernel(paths, *args)`` is :meth:`paths_valid` of
+        untimed 3-D paths, callable from other Numba code without a Python round trip (the fused
+        static kernel's serial build), where that kernel answers every applicable check alone:
+        a 3-D world of bounds, fewer than ``GRID_MIN_CYLINDERS`` cylinders, terrain read
+        bilinearly and the altitude band. None elsewhere (2-D, circles, polygons, moving
+        obstacles, reservations, kinematics, the cylinder grid): then ask :meth:`paths_valid`."""
+        args = self._static_args
+        if args is None or self._cylinders_by_grid or not set(self.checks()) <= STATIC:
+            return None
+        return VK.static_world_ok.serial, args
+
     def passing(self, b: Batch, skip: Iterable[str] = ()) -> NDArray[np.intp]:
         """The rows of ``b`` that pass every applicable check (but ``skip``), found by
         cascading: the cheap checks first, each later one only on the paths still passing
