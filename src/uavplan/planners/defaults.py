@@ -69,7 +69,8 @@ FALLBACK_STEP_SHARE = 0.02
 def fallback_planners(scenario: Scenario) -> list[tuple[str, dict[str, object]]]:
     """The planners (name, options) tried in order when the default's plan does not fly (the
     CLI without ``-a``): RRT* (every edge checked as flown; its step scaled to the map, at
-    least its default 50 m; informed and anytime within its iteration budget), then RGG-PSO+
+    least its default 50 m; informed, anytime within its iteration budget, its shortest tree
+    paths tightened), then RGG-PSO+
     (a graph path, then optimized). None for fleets (minutes per try)."""
     if len(scenario.tasks) > 1:
         return []
@@ -81,6 +82,7 @@ def fallback_planners(scenario: Scenario) -> list[tuple[str, dict[str, object]]]
         "near_radius": 2 * step,
         "informed": True,
         "stop_at_goal": False,
+        "tighten": True,
     }
     return [("rrt-star", rrt), ("rgg-pso+", {})]
 
