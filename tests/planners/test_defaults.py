@@ -19,8 +19,8 @@ from uavplan.world.geometry import track_crosses_itself
 
 
 def test_defaults_are_registered_planners_by_kind() -> None:
-    for name, _ in DEFAULTS.values():
-        assert name in available_planners()
+    for d in DEFAULTS.values():
+        assert d.planner in available_planners() and d.runs >= 1
     assert default_planner(resolve("simple2d"))[:2] == ("spso", "2-D scene")
     assert default_planner(resolve("spso"))[:2] == ("spso", "3-D single UAV")
     assert default_planner(resolve("ppswarm1"))[:2] == ("ppswarm", "fleet")
@@ -130,7 +130,7 @@ def test_a_default_plan_that_does_not_fly_falls_back(
     a planner that fails as well, then the RGG's shortest path)."""
     import uavplan.planners.defaults as D
 
-    monkeypatch.setitem(D.DEFAULTS, "2-D scene", ("rrt-star", "test"))
+    monkeypatch.setitem(D.DEFAULTS, "2-D scene", D.Default("rrt-star", "test"))
     monkeypatch.setattr(
         D, "fallback_planners", lambda sc: [("rrt-star", {"step": 1.0}), ("rgg", {})]
     )
@@ -174,3 +174,53 @@ def test_every_builtin_default_plan_flies_without_loops_seeds_0_to_9(
         doc = json.loads((out / "plan.json").read_text())
         assert doc["feasible"] is True, seed
         assert not track_crosses_itself(np.asarray(doc["uavs"][0]["waypoints"])), seed
+
+
+def test_run_seeds_start_with_the_root_and_are_reproducible() -> None:
+    from uavplan.planners.defaults import run_seeds
+
+    assert run_seeds(7, 1) == [7]
+    s = run_seeds(7, 3)
+    assert s[0] == 7 and len(set(s)) == 3 and s == run_seeds(7, 3)
+    assert run_seeds(8, 3)[1:] != s[1:]
+
+
+def test_best_plan_prefers_a_flying_plan_then_the_lowest_cost() -> None:
+    from types import SimpleNamespace as NS
+
+    from uavplan.planners.defaults import best_plan
+
+    def plan(cost: float, ok: bool) -> NS:
+        return NS(feasible=ok, results=(NS(cost=cost),))
+
+    a, b, c = plan(5.0, False), plan(9.0, True), plan(7.0, True)
+    assert best_plan([a, b, c]) is c  # type: ignore[list-item]
+    assert best_plan([a, plan(float("inf"), False)]) is a  # type: ignore[list-item]
+
+
+def test_the_default_keeps_the_best_of_its_runs(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A kind whose default makes several runs: each root seed planned, the console lists them,
+    the kept plan is the lowest cost and plan.json carries its own seed, which plans it alone."""
+    import uavplan.planners.defaults as D
+
+    monkeypatch.setitem(D.DEFAULTS, "2-D scene", D.Default("pso", "test", runs=3))
+    args = ["plan", "simple2d", "--iterations", "5", "--pop-size", "10", "--raw"]
+    r = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "a")])
+    assert r.exit_code in (0, 1), r.output
+    assert "the best of 3 runs" in r.output
+    line = next(x for x in r.output.splitlines() if x.startswith("runs by root seed"))
+    seeds = D.run_seeds(0, 3)
+    keys = []
+    for s in seeds:
+        assert f"{s}: " in line
+        one = CliRunner().invoke(app, ["plan", "simple2d", "-a", "pso", "--seed", str(s),
+                                       *args[2:], "--out", str(tmp_path / str(s))])  # fmt: skip
+        assert one.exit_code in (0, 1)
+        d = json.loads((tmp_path / str(s) / "plan.json").read_text())
+        keys.append((not d["feasible"], d["uavs"][0]["cost"]))
+    doc = json.loads((tmp_path / "a" / "plan.json").read_text())
+    k = min(range(3), key=lambda i: keys[i])
+    assert doc["seed"] == seeds[k]
+    assert doc["uavs"][0]["cost"] == pytest.approx(keys[k][1], rel=1e-12)

@@ -83,12 +83,21 @@ def _run_plan(
     except ScenarioFileError as exc:
         raise fail(getattr(exc, "problems", None) or [str(exc)]) from None
     fallbacks: list[tuple[str, dict[str, Any]]] = []
+    seeds = [seed]
     if algorithm is None:
-        from uavplan.planners.defaults import default_planner, fallback_planners
+        from uavplan.planners.defaults import (
+            DEFAULTS,
+            default_planner,
+            fallback_planners,
+            run_seeds,
+        )
 
         algorithm, kind, why = default_planner(scenario)
-        out.print(f"planner: {algorithm} (the default for a {kind}: {why}; docs/results.md; "
-                  "-a NAME for another)")  # fmt: skip
+        runs = DEFAULTS[kind].runs
+        seeds = run_seeds(seed, runs)
+        best_of = f"; the best of {runs} runs" if runs > 1 else ""
+        out.print(f"planner: {algorithm} (the default for a {kind}: {why}{best_of}; "
+                  "docs/results.md; -a NAME for another)")  # fmt: skip
         if not (params or pop_size or waypoints):  # options meant for the default
             fallbacks = fallback_planners(scenario)
     options: dict[str, Any] = parse_params(params)
@@ -128,6 +137,19 @@ def _run_plan(
         clock = Stopwatch()
         try:
             plan = plan_all(scenario, planner, budget, seed, make_cb, polish=not raw)
+            if len(seeds) > 1:
+                from uavplan.planners.defaults import best_plan
+
+                plans = [plan] + [plan_all(scenario, planner, budget, s, make_cb,
+                                           polish=not raw) for s in seeds[1:]]  # fmt: skip
+                plan = best_plan(plans)
+                costs = ", ".join(
+                    f"{s}: {sum(r.cost for r in p.results):.6g}"
+                    + ("" if p.feasible else " (does not fly)")
+                    for s, p in zip(seeds, plans, strict=True)
+                )
+                out.print(f"runs by root seed ({costs}); kept seed {plan.seed}, which "
+                          f"`-a {algorithm} --seed {plan.seed}` plans alone")  # fmt: skip
             tried = plan
             for name, extra in fallbacks if not plan.feasible else ():
                 bad = next(r for r in tried.results if not r.flown_feasible)
