@@ -210,11 +210,11 @@ def test_the_default_keeps_the_best_of_its_runs(
     r = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "a")])
     assert r.exit_code in (0, 1), r.output
     assert "the best of 3 runs" in r.output
-    line = next(x for x in r.output.splitlines() if x.startswith("runs by root seed"))
+    line = next(x for x in r.output.splitlines() if x.startswith("runs ("))
     seeds = D.run_seeds(0, 3)
     keys = []
     for s in seeds:
-        assert f"{s}: " in line
+        assert f"pso seed {s}: " in line
         one = CliRunner().invoke(app, ["plan", "simple2d", "-a", "pso", "--seed", str(s),
                                        *args[2:], "--out", str(tmp_path / str(s))])  # fmt: skip
         assert one.exit_code in (0, 1)
@@ -224,3 +224,21 @@ def test_the_default_keeps_the_best_of_its_runs(
     k = min(range(3), key=lambda i: keys[i])
     assert doc["seed"] == seeds[k]
     assert doc["uavs"][0]["cost"] == pytest.approx(keys[k][1], rel=1e-12)
+
+
+def test_the_default_also_runs_other_planners_and_keeps_the_best(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``also``: another planner runs once with the root seed; the best plan of all is written
+    under its own planner's name."""
+    import uavplan.planners.defaults as D
+
+    monkeypatch.setitem(D.DEFAULTS, "2-D scene", D.Default("pso", "test", also=("rgg",)))
+    args = ["plan", "simple2d", "--iterations", "3", "--out", str(tmp_path), "--raw"]
+    r = CliRunner().invoke(app, args)
+    assert r.exit_code in (0, 1), r.output
+    assert "and of rgg once" in r.output
+    line = next(x for x in r.output.splitlines() if x.startswith("runs ("))
+    assert "pso seed 0: " in line and "rgg seed 0: " in line
+    doc = json.loads((tmp_path / "plan.json").read_text())
+    assert doc["algorithm"] in ("pso", "rgg") and f"kept {doc['algorithm']} seed 0" in line

@@ -84,6 +84,7 @@ def _run_plan(
         raise fail(getattr(exc, "problems", None) or [str(exc)]) from None
     fallbacks: list[tuple[str, dict[str, Any]]] = []
     seeds = [seed]
+    also: tuple[str, ...] = ()
     if algorithm is None:
         from uavplan.planners.defaults import (
             DEFAULTS,
@@ -93,13 +94,16 @@ def _run_plan(
         )
 
         algorithm, kind, why = default_planner(scenario)
-        runs = DEFAULTS[kind].runs
-        seeds = run_seeds(seed, runs)
-        best_of = f"; the best of {runs} runs" if runs > 1 else ""
-        out.print(f"planner: {algorithm} (the default for a {kind}: {why}{best_of}; "
-                  "docs/results.md; -a NAME for another)")  # fmt: skip
+        d = DEFAULTS[kind]
+        seeds = run_seeds(seed, d.runs)
         if not (params or pop_size or waypoints):  # options meant for the default
             fallbacks = fallback_planners(scenario)
+            also = d.also
+        best_of = (f"; the best of {d.runs} runs" if d.runs > 1 else "") + (
+            f" and of {', '.join(also)} once" if also else ""
+        )
+        out.print(f"planner: {algorithm} (the default for a {kind}: {why}{best_of}; "
+                  "docs/results.md; -a NAME for another)")  # fmt: skip
     options: dict[str, Any] = parse_params(params)
     if pop_size is not None:
         options["pop_size"] = pop_size
@@ -135,21 +139,26 @@ def _run_plan(
             return cb
 
         clock = Stopwatch()
+        n_runs = 1
         try:
             plan = plan_all(scenario, planner, budget, seed, make_cb, polish=not raw)
-            if len(seeds) > 1:
+            if len(seeds) > 1 or also:
                 from uavplan.planners.defaults import best_plan
 
                 plans = [plan] + [plan_all(scenario, planner, budget, s, make_cb,
                                            polish=not raw) for s in seeds[1:]]  # fmt: skip
+                plans += [plan_all(scenario, get_planner(name), budget, seed, make_cb,
+                                   polish=not raw) for name in also]  # fmt: skip
                 plan = best_plan(plans)
                 costs = ", ".join(
-                    f"{s}: {sum(r.cost for r in p.results):.6g}"
+                    f"{p.algorithm} seed {p.seed}: {sum(r.cost for r in p.results):.6g}"
                     + ("" if p.feasible else " (does not fly)")
-                    for s, p in zip(seeds, plans, strict=True)
+                    for p in plans
                 )
-                out.print(f"runs by root seed ({costs}); kept seed {plan.seed}, which "
-                          f"`-a {algorithm} --seed {plan.seed}` plans alone")  # fmt: skip
+                out.print(f"runs ({costs}); kept {plan.algorithm} seed {plan.seed}, which "
+                          f"`-a {plan.algorithm} --seed {plan.seed}` plans alone")  # fmt: skip
+                algorithm = plan.algorithm
+                n_runs = len(plans)
             tried = plan
             for name, extra in fallbacks if not plan.feasible else ():
                 bad = next(r for r in tried.results if not r.flown_feasible)
@@ -173,7 +182,7 @@ def _run_plan(
         write_plan(plan, out_dir, figure=figure)
     except OSError as exc:
         raise fail(f"--out {out_dir}: cannot write: {exc}") from None
-    return plan, (planning, clock.compile)
+    return plan, (planning, clock.compile, n_runs)
 
 
 def verified_by_the_verifier(plan: Any, out_dir: Path) -> bool:
@@ -219,9 +228,10 @@ def _flown_cell(r: Any) -> str:
 _AS = {"smoothed": "dubins", "polyline": "line"}
 
 
-def _summary(plan: Any, times: tuple[float, float], out_dir: Path) -> None:
-    """The table and lines after a plan; ``times``: planning and kernel-compilation seconds."""
-    elapsed, compiled = times
+def _summary(plan: Any, times: tuple[float, float, int], out_dir: Path) -> None:
+    """The table and lines after a plan; ``times``: planning and kernel-compilation seconds,
+    and the number of runs they cover (the best of several is written)."""
+    elapsed, compiled, n_runs = times
     import numpy as np
     from rich import box
 
@@ -295,7 +305,12 @@ def _summary(plan: Any, times: tuple[float, float], out_dir: Path) -> None:
     evals = sum(int(r.evaluations) for r in plan.results)
     out.print(
         f"wrote {out_dir / 'plan.json'}, {out_dir / 'plan.png'} and {out_dir / 'plan.html'} "
-        f"({evals:,} cost evaluations in {elapsed:.1f} s of planning"
+        + (
+            f"({evals:,} cost evaluations in {elapsed:.1f} s of planning"
+            if n_runs == 1
+            else f"(the kept run: {evals:,} cost evaluations; {elapsed:.1f} s of planning for all "
+            f"{n_runs} runs"
+        )
         + (f", and {compiled:.1f} s compiling kernels once)" if compiled >= 0.5 else ")")
     )
     if not plan.feasible:
