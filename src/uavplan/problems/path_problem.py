@@ -176,6 +176,47 @@ PRESETS: dict[str, tuple[Term, ...]] = {
 LOOKUP = {"spso": "nearest"}
 
 
+def _spso_fused(ctx: Batch, weights: FloatArray, early: bool) -> tuple[FloatArray, FloatArray]:
+    """SPSO's four terms in one pass (:func:`uavplan.problems.costs.spso_cost_batch`): the
+    weighted total and the (pop, 4) terms, the same as the terms of :data:`PRESETS` ``spso``
+    (``_t_length`` ... ``_t_smooth_spso``, the references the tests compare it with)."""
+    w, sc = ctx.world, ctx.scenario
+    R = (w.cyl_radii - w.cyl_margin) + w.cyl_margin  # as _t_threat_spso
+    p, (cx, cy, lo, hi, r_in, r_out) = G.soa(
+        ctx.paths, w.cyl_centers, w.cyl_lo, w.cyl_hi, R, R + 10.0 * w.cyl_margin
+    )
+    threat = _t_threat_spso(ctx) if G.gridded(p, len(cx)) else None  # the indexed pass
+    t = sc.terrain
+    H, x0, y0, dx, dy = (
+        (t.heights, t.x0, t.y0, t.dx, t.dy) if t is not None else (np.zeros((1, 1)), 0, 0, 1, 1)
+    )
+    band = sc.altitude
+    z_lo, z_hi = (band.min, band.max) if band is not None else (0.0, 0.0)
+    total, terms = C.spso_cost_batch(
+        p, cx, cy, lo, hi, r_in, r_out, threat, H, float(x0), float(y0), float(dx), float(dy),
+        float(z_lo), float(z_hi), 45.0, 45.0, weights, bool(early),
+    )  # fmt: skip
+    return np.asarray(total), np.asarray(terms)
+
+
+@dataclass(frozen=True)
+class Fused:
+    """Cost terms computed together in one kernel: ``fns`` (the term functions it replaces, in
+    order, when they lead a problem's terms), ``compute(batch, weights, early) -> (total,
+    terms)`` and ``lookup``, the terrain lookup it reads heights with."""
+
+    fns: tuple[TermFn, ...]
+    compute: Callable[[Batch, FloatArray, bool], tuple[FloatArray, FloatArray]]
+    lookup: str
+    dim: int
+
+
+#: The fused kernels, tried in order by :class:`PathProblem`.
+FUSED = (
+    Fused((_t_length, _t_threat_spso, _t_altitude_spso, _t_smooth_spso), _spso_fused, "nearest", 3),
+)
+
+
 def cost_presets() -> list[str]:
     return sorted(PRESETS)
 
@@ -205,6 +246,8 @@ class PathProblem:
         name: the cost model's name (default: the preset's, ``"custom"`` for terms).
         cost_terrain: the map the cost terms read heights from (default: the scenario's; a
             terrain pyramid level's sampled map while the checks use its conservative one).
+        fused: compute the leading terms in one kernel where one does (:data:`FUSED`); False
+            computes every term apart (the references the fused kernels are tested against).
 
     Feasibility is the :attr:`validator`'s verdict; the cost terms and the checks of one
     evaluation share one :class:`~uavplan.problems.validity.Batch`.
@@ -221,6 +264,7 @@ class PathProblem:
         lookup: str | None = None,
         name: str | None = None,
         cost_terrain: Terrain | None = None,
+        fused: bool = True,
     ) -> None:
         self.scenario = scenario
         self.task = task if isinstance(task, Task) else scenario.task(task)
@@ -251,6 +295,14 @@ class PathProblem:
             cost_terrain=cost_terrain,
         )
         self.dim = scenario.dim
+        #: the kernel that computes the leading terms together (:data:`FUSED`), if one does
+        self.fused: Fused | None = None
+        fns = tuple(t.fn for t in terms)
+        for f in FUSED if fused else ():
+            if fns[: len(f.fns)] == f.fns and self.lookup == f.lookup and self.dim == f.dim:
+                self.fused = f
+                self._fused_weights = np.array([t.weight for t in terms[: len(f.fns)]], float)
+                break
         self.start = np.asarray(self.task.start, dtype=np.float64)
         self.goal = np.asarray(self.task.goal, dtype=np.float64)
 
@@ -260,8 +312,13 @@ class PathProblem:
 
     # ------------------------------------------------------------------ evaluation
     def _total(self, b: Batch, checks_too: bool = True) -> FloatArray:
-        total = np.zeros(b.paths.shape[0])
-        for t in self.terms:
+        terms = self.terms
+        if self.fused is not None:  # the leading terms in one kernel, stopping early
+            total = self.fused.compute(b, self._fused_weights, True)[0]
+            terms = terms[len(self.fused.fns) :]
+        else:
+            total = np.zeros(b.paths.shape[0])
+        for t in terms:
             if checks_too or t.check is None:
                 total = total + t.weight * np.asarray(t.fn(b), dtype=np.float64)
         return total
@@ -271,9 +328,16 @@ class PathProblem:
         dim), flown at ``times`` (pop, n_points) seconds (default: the UAV's speed from the
         task's start time)."""
         b = self.validator.batch(paths, times)
-        terms = {t.name: np.asarray(t.fn(b), dtype=np.float64) for t in self.terms}
-        total = np.zeros(b.paths.shape[0])
-        for t in self.terms:
+        rest = self.terms
+        if self.fused is not None:
+            total, fused = self.fused.compute(b, self._fused_weights, False)
+            k = len(self.fused.fns)
+            terms = {t.name: fused[:, i] for i, t in enumerate(self.terms[:k])}
+            rest = self.terms[k:]
+        else:
+            terms, total = {}, np.zeros(b.paths.shape[0])
+        for t in rest:
+            terms[t.name] = np.asarray(t.fn(b), dtype=np.float64)
             total = total + t.weight * terms[t.name]
         violations = self.validator.violations(b)
         feasible = np.ones(b.paths.shape[0], dtype=bool)
