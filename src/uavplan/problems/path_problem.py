@@ -176,44 +176,63 @@ PRESETS: dict[str, tuple[Term, ...]] = {
 LOOKUP = {"spso": "nearest"}
 
 
-def _spso_fused(ctx: Batch, weights: FloatArray, early: bool) -> tuple[FloatArray, FloatArray]:
+def _spso_prepare(v: MotionValidator) -> tuple[Any, ...]:
+    """The world's arguments of :func:`uavplan.problems.costs.spso_cost_batch` (cylinders as
+    structure of arrays, the terrain, the band), once per problem."""
+    w, sc = v.world, v.scenario
+    R = (w.cyl_radii - w.cyl_margin) + w.cyl_margin  # as _t_threat_spso
+    _, cyl = G.soa(
+        np.zeros((0, 2, 3)), w.cyl_centers, w.cyl_lo, w.cyl_hi, R, R + 10.0 * w.cyl_margin
+    )
+    t = sc.terrain
+    if t is not None:
+        H, x0, y0, dx, dy = t.heights, t.x0, t.y0, t.dx, t.dy
+    else:
+        H, x0, y0, dx, dy = np.zeros((1, 1)), 0.0, 0.0, 1.0, 1.0
+        H.setflags(write=False)  # read-only as a terrain's heights: one kernel signature
+    band = sc.altitude
+    z_lo, z_hi = (band.min, band.max) if band is not None else (0.0, 0.0)
+    return (*cyl, H, float(x0), float(y0), float(dx), float(dy), float(z_lo), float(z_hi))
+
+
+def _spso_fused(
+    ctx: Batch, args: tuple[Any, ...], weights: FloatArray, early: bool
+) -> tuple[FloatArray, FloatArray]:
     """SPSO's four terms in one pass (:func:`uavplan.problems.costs.spso_cost_batch`): the
     weighted total and the (pop, 4) terms, the same as the terms of :data:`PRESETS` ``spso``
     (``_t_length`` ... ``_t_smooth_spso``, the references the tests compare it with)."""
-    w, sc = ctx.world, ctx.scenario
-    R = (w.cyl_radii - w.cyl_margin) + w.cyl_margin  # as _t_threat_spso
-    p, (cx, cy, lo, hi, r_in, r_out) = G.soa(
-        ctx.paths, w.cyl_centers, w.cyl_lo, w.cyl_hi, R, R + 10.0 * w.cyl_margin
-    )
+    cx, cy, lo, hi, r_in, r_out, *world = args
+    p = ctx.paths  # 3-D, C-contiguous float64 (MotionValidator.check_paths)
     threat = _t_threat_spso(ctx) if G.gridded(p, len(cx)) else None  # the indexed pass
-    t = sc.terrain
-    H, x0, y0, dx, dy = (
-        (t.heights, t.x0, t.y0, t.dx, t.dy) if t is not None else (np.zeros((1, 1)), 0, 0, 1, 1)
-    )
-    band = sc.altitude
-    z_lo, z_hi = (band.min, band.max) if band is not None else (0.0, 0.0)
     total, terms = C.spso_cost_batch(
-        p, cx, cy, lo, hi, r_in, r_out, threat, H, float(x0), float(y0), float(dx), float(dy),
-        float(z_lo), float(z_hi), 45.0, 45.0, weights, bool(early),
-    )  # fmt: skip
+        p, cx, cy, lo, hi, r_in, r_out, threat, *world, 45.0, 45.0, weights, bool(early)
+    )
     return np.asarray(total), np.asarray(terms)
 
 
 @dataclass(frozen=True)
 class Fused:
     """Cost terms computed together in one kernel: ``fns`` (the term functions it replaces, in
-    order, when they lead a problem's terms), ``compute(batch, weights, early) -> (total,
-    terms)`` and ``lookup``, the terrain lookup it reads heights with."""
+    order, when they lead a problem's terms), ``prepare(validator) -> args`` (what the kernel
+    needs of the world, once per problem), ``compute(batch, args, weights, early) -> (total,
+    terms)``, the terrain ``lookup`` it reads heights with and the dimension it serves."""
 
     fns: tuple[TermFn, ...]
-    compute: Callable[[Batch, FloatArray, bool], tuple[FloatArray, FloatArray]]
+    prepare: Callable[[MotionValidator], tuple[Any, ...]]
+    compute: Callable[[Batch, tuple[Any, ...], FloatArray, bool], tuple[FloatArray, FloatArray]]
     lookup: str
     dim: int
 
 
 #: The fused kernels, tried in order by :class:`PathProblem`.
 FUSED = (
-    Fused((_t_length, _t_threat_spso, _t_altitude_spso, _t_smooth_spso), _spso_fused, "nearest", 3),
+    Fused(
+        (_t_length, _t_threat_spso, _t_altitude_spso, _t_smooth_spso),
+        _spso_prepare,
+        _spso_fused,
+        "nearest",
+        3,
+    ),
 )
 
 
@@ -302,6 +321,7 @@ class PathProblem:
             if fns[: len(f.fns)] == f.fns and self.lookup == f.lookup and self.dim == f.dim:
                 self.fused = f
                 self._fused_weights = np.array([t.weight for t in terms[: len(f.fns)]], float)
+                self._fused_args = f.prepare(self.validator)
                 break
         self.start = np.asarray(self.task.start, dtype=np.float64)
         self.goal = np.asarray(self.task.goal, dtype=np.float64)
@@ -314,7 +334,7 @@ class PathProblem:
     def _total(self, b: Batch, checks_too: bool = True) -> FloatArray:
         terms = self.terms
         if self.fused is not None:  # the leading terms in one kernel, stopping early
-            total = self.fused.compute(b, self._fused_weights, True)[0]
+            total = self.fused.compute(b, self._fused_args, self._fused_weights, True)[0]
             terms = terms[len(self.fused.fns) :]
         else:
             total = np.zeros(b.paths.shape[0])
@@ -330,7 +350,7 @@ class PathProblem:
         b = self.validator.batch(paths, times)
         rest = self.terms
         if self.fused is not None:
-            total, fused = self.fused.compute(b, self._fused_weights, False)
+            total, fused = self.fused.compute(b, self._fused_args, self._fused_weights, False)
             k = len(self.fused.fns)
             terms = {t.name: fused[:, i] for i, t in enumerate(self.terms[:k])}
             rest = self.terms[k:]
