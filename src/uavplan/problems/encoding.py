@@ -99,9 +99,22 @@ class CartesianEncoding:
         """:meth:`evaluate` of decoded paths (the evaluation is not counted here)."""
         f = self.problem.cost(paths)
         if self.track_feasibility:
-            prev = self.feasible_history[-1] if self.feasible_history else np.inf
-            self.feasible_history.append(min(prev, best_feasible(self.problem, paths, f, prev)))
+            self._record(paths, f)
         return f
+
+    def _record(self, paths: FloatArray, f: FloatArray) -> float:
+        prev = self.feasible_history[-1] if self.feasible_history else np.inf
+        self.feasible_history.append(min(prev, best_feasible(self.problem, paths, f, prev)))
+        return self.feasible_history[-1]
+
+    def track(self, X: FloatArray, f: FloatArray) -> float:
+        """Append to :attr:`feasible_history` the best cost so far among feasible gene vectors,
+        after ``X`` (pop, dim) with costs ``f`` (pop,) (any constraint rule's number: a feasible
+        point's is its cost), and return it; only the points that could lower it are decoded and
+        checked. For a caller that tracks what an optimizer kept rather than every evaluation."""
+        prev = self.feasible_history[-1] if self.feasible_history else np.inf
+        rows = np.flatnonzero(np.asarray(f) < prev)
+        return self._record(self.decode(np.asarray(X)[rows]), np.asarray(f)[rows])
 
     def evaluate_cv(self, X: FloatArray, exact: bool = True) -> tuple[FloatArray, FloatArray]:
         """Cost and constraint violation apart (see :meth:`PathProblem.evaluate_cv`); with
@@ -356,6 +369,13 @@ class SphericalEncoding:
         self.evaluations += len(X)
         self.cart.evaluations += len(X)
         return self.cart.evaluate_cv_paths(self.decode(X), exact)
+
+    def track(self, X: FloatArray, f: FloatArray) -> float:
+        """:meth:`CartesianEncoding.track` of spherical genes."""
+        return CartesianEncoding.track(self, X, f)  # type: ignore[arg-type]
+
+    def _record(self, paths: FloatArray, f: FloatArray) -> float:
+        return self.cart._record(paths, f)
 
     def evaluate_full(self, X: FloatArray) -> Evaluation:
         return self.problem.evaluate(self.decode(X))
