@@ -111,7 +111,8 @@ def test_async_through_the_planner_counts_and_reports() -> None:
     from uavplan.scenarios import load_builtin
 
     sc = load_builtin("spso")
-    r = get_planner("spso", pop_size=40, update="async").plan(sc, budget=Budget(max_iterations=8))
+    planner = get_planner("spso", pop_size=40, update="async")
+    r = planner.plan(sc, budget=Budget(max_iterations=8), seed=1)
     assert r.evaluations == 8 * 40
     assert r.info["speculative_evaluations"] > 0
     assert len(r.feasible_history) == 8

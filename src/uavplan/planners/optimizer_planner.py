@@ -91,8 +91,10 @@ class OptimizerPlanner(Planner):
                 break
         assert opt.best_x is not None
         path = enc.decode(opt.best_x[None])[0]
-        extra = int(getattr(opt, "speculative_evaluations", 0))
-        return Outcome(path, info={"speculative_evaluations": extra}) if extra else path
+        if getattr(opt.config, "update", "sync") == "async":  # SPSO's re-evaluations
+            extra = int(getattr(opt, "speculative_evaluations", 0))
+            return Outcome(path, info={"speculative_evaluations": extra})
+        return path
 
 
 def _summary(name: str) -> str:

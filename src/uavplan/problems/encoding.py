@@ -18,7 +18,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from uavplan.problems.path_problem import Evaluation, PathProblem
-from uavplan.world._terrain_kernels import bilinear_one, nearest_one
+from uavplan.world._terrain_kernels import ground_one
 
 FloatArray = NDArray[np.float64]
 
@@ -238,10 +238,7 @@ def decode_kernel(
             for i in range(1, n + 1):
                 x = out[p, i, 0]
                 y = out[p, i, 1]
-                if nearest:
-                    out[p, i, 2] += nearest_one(H, x0, y0, dx, dy, x, y)
-                else:
-                    out[p, i, 2] += bilinear_one(H, x0, y0, dx, dy, x, y)
+                out[p, i, 2] += ground_one(H, True, nearest, x0, y0, dx, dy, x, y)
     return out
 
 

@@ -176,14 +176,12 @@ PRESETS: dict[str, tuple[Term, ...]] = {
 LOOKUP = {"spso": "nearest"}
 
 
-def _spso_prepare(v: MotionValidator) -> tuple[Any, ...]:
-    """The world's arguments of :func:`uavplan.problems.costs.spso_cost_batch` (cylinders as
-    structure of arrays, the terrain, the band), once per problem."""
+def _world_args(v: MotionValidator, r_in: FloatArray, r_out: FloatArray) -> tuple[Any, ...]:
+    """The world's arguments of :func:`uavplan.problems.costs.path_cost_batch` after
+    ``model, paths`` (cylinders as structure of arrays, the terrain, the band), once per
+    problem; ``threat`` and ``moving`` are left as None, for each batch to set."""
     w, sc = v.world, v.scenario
-    R = (w.cyl_radii - w.cyl_margin) + w.cyl_margin  # as _t_threat_spso
-    _, cyl = G.soa(
-        np.zeros((0, 2, 3)), w.cyl_centers, w.cyl_lo, w.cyl_hi, R, R + 10.0 * w.cyl_margin
-    )
+    _, cyl = G.soa(np.zeros((0, 2, 3)), w.cyl_centers, w.cyl_lo, w.cyl_hi, r_in, r_out)
     t = sc.terrain
     if t is not None:
         H, x0, y0, dx, dy = t.heights, t.x0, t.y0, t.dx, t.dy
@@ -191,21 +189,41 @@ def _spso_prepare(v: MotionValidator) -> tuple[Any, ...]:
         H, x0, y0, dx, dy = np.zeros((1, 1)), 0.0, 0.0, 1.0, 1.0
         H.setflags(write=False)  # read-only as a terrain's heights: one kernel signature
     band = sc.altitude
-    z_lo, z_hi = (band.min, band.max) if band is not None else (0.0, 0.0)
-    return (*cyl, H, float(x0), float(y0), float(dx), float(dy), float(z_lo), float(z_hi))
+    lo, hi = (band.min, band.max) if band is not None else (0.0, 0.0)
+    ground = band is not None and band.reference == "ground"
+    return (*cyl, None, None, H, t is not None, v.lookup == "nearest", float(x0), float(y0),
+            float(dx), float(dy), band is not None, ground, float(lo), float(hi))  # fmt: skip
 
 
-def _spso_fused(
+def _spso_prepare(v: MotionValidator) -> tuple[Any, ...]:
+    w = v.world
+    R = (w.cyl_radii - w.cyl_margin) + w.cyl_margin  # as _t_threat_spso
+    return (C.SPSO, *_world_args(v, R, R + 10.0 * w.cyl_margin))
+
+
+def _ppswarm_prepare(v: MotionValidator) -> tuple[Any, ...]:
+    R = v.world.cyl_radii  # as _t_threat
+    return (C.PPSWARM, *_world_args(v, R, R + v.scenario.uav.s1))
+
+
+def _fused(
     ctx: Batch, args: tuple[Any, ...], weights: FloatArray, early: bool
 ) -> tuple[FloatArray, FloatArray]:
-    """SPSO's four terms in one pass (:func:`uavplan.problems.costs.spso_cost_batch`): the
-    weighted total and the (pop, 4) terms, the same as the terms of :data:`PRESETS` ``spso``
-    (``_t_length`` ... ``_t_smooth_spso``, the references the tests compare it with)."""
-    cx, cy, lo, hi, r_in, r_out, *world = args
+    """The four terms of SPSO's or PPSwarm's cost in one pass
+    (:func:`uavplan.problems.costs.path_cost_batch`): the weighted total and the (pop, 4)
+    terms, the same as the terms of the :data:`PRESETS` (``_t_length`` ...), the references
+    the tests compare it with."""
+    model, cx, cy, lo, hi, r_in, r_out, _, _, *world = args
     p = ctx.paths  # 3-D, C-contiguous float64 (MotionValidator.check_paths)
-    threat = _t_threat_spso(ctx) if G.gridded(p, len(cx)) else None  # the indexed pass
-    total, terms = C.spso_cost_batch(
-        p, cx, cy, lo, hi, r_in, r_out, threat, *world, 45.0, 45.0, weights, bool(early)
+    threat = moving = None
+    if G.gridded(p, len(cx)):  # the indexed pass, then the kernel
+        threat = G.cylinder_threat(p, ctx.world.cyl_centers, lo, hi, r_in, r_out, model == C.SPSO)
+    moving_obstacles = ctx.scenario.moving_obstacles
+    if model == C.PPSWARM and moving_obstacles:
+        radii = np.array([o.radius for o in moving_obstacles])
+        moving = C.moving_threat_cost(ctx.moving_dist, radii, ctx.scenario.uav.s1)
+    total, terms = C.path_cost_batch(
+        model, p, cx, cy, lo, hi, r_in, r_out, threat, moving, *world, weights, bool(early)
     )
     return np.asarray(total), np.asarray(terms)
 
@@ -215,12 +233,12 @@ class Fused:
     """Cost terms computed together in one kernel: ``fns`` (the term functions it replaces, in
     order, when they lead a problem's terms), ``prepare(validator) -> args`` (what the kernel
     needs of the world, once per problem), ``compute(batch, args, weights, early) -> (total,
-    terms)``, the terrain ``lookup`` it reads heights with and the dimension it serves."""
+    terms)``, the terrain ``lookups`` it can read heights with and the dimension it serves."""
 
     fns: tuple[TermFn, ...]
     prepare: Callable[[MotionValidator], tuple[Any, ...]]
     compute: Callable[[Batch, tuple[Any, ...], FloatArray, bool], tuple[FloatArray, FloatArray]]
-    lookup: str
+    lookups: tuple[str, ...]
     dim: int
 
 
@@ -229,8 +247,15 @@ FUSED = (
     Fused(
         (_t_length, _t_threat_spso, _t_altitude_spso, _t_smooth_spso),
         _spso_prepare,
-        _spso_fused,
-        "nearest",
+        _fused,
+        ("nearest",),
+        3,
+    ),
+    Fused(
+        (_t_length, _t_threat, _t_altitude, _t_smooth),
+        _ppswarm_prepare,
+        _fused,
+        ("bilinear", "nearest"),
         3,
     ),
 )
@@ -318,7 +343,7 @@ class PathProblem:
         self.fused: Fused | None = None
         fns = tuple(t.fn for t in terms)
         for f in FUSED if fused else ():
-            if fns[: len(f.fns)] == f.fns and self.lookup == f.lookup and self.dim == f.dim:
+            if fns[: len(f.fns)] == f.fns and self.lookup in f.lookups and self.dim == f.dim:
                 self.fused = f
                 self._fused_weights = np.array([t.weight for t in terms[: len(f.fns)]], float)
                 self._fused_args = f.prepare(self.validator)

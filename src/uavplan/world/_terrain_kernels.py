@@ -479,6 +479,17 @@ def nearest_one(H, x0, y0, dx, dy, x, y):  # pragma: no cover - numba
     return H[min(max(j, 0), ny - 1), min(max(i, 0), nx - 1)]
 
 
+@njit(cache=True, inline="always")
+def ground_one(H, has_terrain, nearest, x0, y0, dx, dy, x, y):  # pragma: no cover - numba
+    """The ground's height at ``(x, y)`` read at the ``nearest`` node or bilinear; 0 without a
+    terrain (``has_terrain`` False, ``H`` then a placeholder)."""
+    if not has_terrain:
+        return 0.0
+    if nearest:
+        return nearest_one(H, x0, y0, dx, dy, x, y)
+    return bilinear_one(H, x0, y0, dx, dy, x, y)
+
+
 @njit(cache=True)
 def bilinear_heights(H, x0, y0, dx, dy, x, y):  # pragma: no cover - numba
     """Bilinear height at the points ``(x[k], y[k])`` (flat float64 arrays), clamped to the grid:
