@@ -16,8 +16,8 @@ size (1,000 paths x 50 points x 100 cylinders). For each it prints, measured in 
 * for the SPSO size, the whole SPSO cost of a population (``PathProblem.cost``: the fused
   kernel of the four terms) against the previous implementation, the terms apart
   (``PathProblem(..., fused=False)``), on a uniform random population and on SPSO's swarm
-  during a run; and the whole evaluation with feasibility (``PathProblem.evaluate``: exact
-  terrain, obstacles), in ms.
+  during a run, and PPSwarm's cost on its first scenario likewise; and the whole evaluation
+  with feasibility (``PathProblem.evaluate``: exact terrain, obstacles), in ms.
 
 Timings are the best of ``--repeats`` runs (the machine is shared; the best is the least noisy).
 """
@@ -35,6 +35,7 @@ from _timing import best_time
 from uavplan.kernel_builds import set_mode
 from uavplan.problems import CartesianEncoding, PathProblem
 from uavplan.problems.costs import threat_cost_spso
+from uavplan.problems.encoding import SphericalEncoding
 from uavplan.scenarios import load_builtin
 from uavplan.world.geometry import (
     cylinder_threat_batch,
@@ -169,7 +170,6 @@ def spso_swarms() -> dict[str, np.ndarray]:
     iterations: the populations the cost sees in a run (a uniform random population in the box
     collides almost everywhere, where the fused kernel stops early)."""
     from uavplan.optimizers.spso import SPSO
-    from uavplan.problems.encoding import SphericalEncoding
 
     enc = SphericalEncoding(PathProblem(load_builtin("spso")))
     opt = SPSO(enc, seed=0)
@@ -200,6 +200,18 @@ def spso_cost_case(repeats: int) -> None:
         t_b = best_time(lambda p=paths: before.cost(p), repeats)
         print(f"  {name:28} {int(np.isfinite(f).sum()):>6} {t_f * 1e3:8.3f} {t_b * 1e3:8.3f}"
               f" {t_b / t_f:7.1f}x")  # fmt: skip
+    # PPSwarm's preset, fused the same way: its first scenario (terrain, cylinders, the band)
+    pp = load_builtin("ppswarm1")
+    fused_pp, before_pp = PathProblem(pp), PathProblem(pp, fused=False)
+    sph = SphericalEncoding(fused_pp)
+    Y = sph.lower + np.random.default_rng(2).random((500, sph.dim)) * (sph.upper - sph.lower)
+    pp_paths = sph.decode(Y)
+    f = fused_pp.cost(pp_paths)
+    np.testing.assert_allclose(f, before_pp.cost(pp_paths), rtol=1e-12)
+    t_f = best_time(lambda: fused_pp.cost(pp_paths), repeats)
+    t_b = best_time(lambda: before_pp.cost(pp_paths), repeats)
+    print(f"  {'PPSwarm cost, ppswarm1':28} {int(np.isfinite(f).sum()):>6} {t_f * 1e3:8.3f}"
+          f" {t_b * 1e3:8.3f} {t_b / t_f:7.1f}x")  # fmt: skip
     paths = pops["uniform in the box"]
     t_cost = best_time(lambda: problem.cost(paths), repeats)
     t_dec = best_time(lambda: enc.evaluate(X), repeats)
