@@ -24,6 +24,9 @@ def test_defaults_are_registered_planners_by_kind() -> None:
     assert default_planner(resolve("simple2d"))[:2] == ("spso", "2-D scene")
     assert default_planner(resolve("spso"))[:2] == ("spso", "3-D single UAV")
     assert default_planner(resolve("ppswarm1"))[:2] == ("ppswarm", "fleet")
+    assert default_planner(resolve("ppswarm1-traffic"))[:2] == ("ppswarm", "fleet")
+    for name in ("rscdwoa-static", "rscdwoa-mixed"):  # fixed-wing, one speed
+        assert default_planner(resolve(name))[:2] == ("rscdwoa-apf", "fleet of constant-speed UAVs")
     assert default_planner(resolve("hrmaga-jacksboro"))[:2] == (
         "hr-maga",
         "3-D single UAV with danger or uncertain areas",

@@ -41,3 +41,19 @@ def test_plan_figures_render_with_legend_and_units(tmp_path: Path, name: str) ->
     path = save_plan_figure(sc, results, tmp_path / "p.png", name)
     img = image.imread(path)[..., :3]
     assert (img < 0.95).any(axis=2).mean() > 0.1  # not blank
+
+
+def test_a_large_fleet_gets_a_colour_key(tmp_path: Path) -> None:
+    """More than 10 UAVs: no line each in the legend, a colour key from the first UAV's id to
+    the last's instead, and the failing count in the legend."""
+    sc = resolve("ppswarm1@15")
+    results = [_straight(sc, k, ok=k != 3) for k in range(15)]
+    fig = plan_figure(sc, results, "fleet")
+    legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert "15 UAVs (colour key), 1 failing (red)" in legend
+    keys = [a for a in fig.axes if "in plan.json's order" in a.get_xlabel()]
+    assert len(keys) == 1
+    assert [t.get_text() for t in keys[0].get_xticklabels()] == [sc.tasks[0].id, sc.tasks[14].id]
+    path = save_plan_figure(sc, results, tmp_path / "f.png", "fleet")
+    img = image.imread(path)[..., :3]
+    assert (img < 0.95).any(axis=2).mean() > 0.1

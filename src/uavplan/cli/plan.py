@@ -306,8 +306,8 @@ def plan(
             "-a",
             help="Planner name (default: the best for the scenario's kind by our results: "
             "spso for one UAV, 2-D or 3-D; hr-maga with danger or uncertain areas; ppswarm "
-            "for a fleet; for one UAV, when that plan does not fly, rrt-star and then "
-            "rgg-pso+ are tried).",
+            "for a fleet; rscdwoa-apf for a fleet of constant-speed UAVs; for one UAV, when "
+            "that plan does not fly, rrt-star and then rgg-pso+ are tried).",
         ),
     ] = None,
     seed: Annotated[int, typer.Option(help="Root random seed.")] = 0,

@@ -24,6 +24,16 @@ scenario (``docs/results.md``).
 * **Several UAVs**: ``ppswarm``. Every UAV's flown trajectory is checked while planning and
   reserved for the others; 40 of 40 UAVs verified as flown on the PPSwarm scenarios and among
   ten moving obstacles (``ppswarm1-traffic``).
+* **Several UAVs that fly at one constant speed** (``min_speed`` equal to the cruise speed:
+  fixed-wing aircraft that can neither wait nor slow down, the RSCDWOA layouts):
+  ``rscdwoa-apf``. It steps each UAV in time at its speed within its turn and climb limits,
+  with the UAVs before it as moving obstacles. On ``rscdwoa-static`` every fused planner led
+  400 of 400 UAV flights through, verified (100 runs each), and RSCDWOA-APF had the lowest
+  median final cost (4.45e8; WOA-APF 4.49e8, PSO-APF 4.65e8, GA-APF 5.05e8); on
+  ``rscdwoa-dynamic`` 80 of 80 (20 runs). PPSwarm's rescues (waiting, slower speeds) are not
+  open to such UAVs: on ``rscdwoa-dynamic`` it led 19 of 20 flights through in 220-745 s per
+  run, and ``uavplan plan rscdwoa-static -a ppswarm`` took 38 minutes (a loaded machine) for
+  four UAVs.
 """
 
 from __future__ import annotations
@@ -44,6 +54,10 @@ DEFAULTS = {
         "its loss sees danger areas, its levels uncertain ones, and it repairs locally",
     ),
     "fleet": ("ppswarm", "every UAV's flight checked while planning: 40/40 verified as flown"),
+    "fleet of constant-speed UAVs": (
+        "rscdwoa-apf",
+        "it flies each UAV at its one speed in time around the others: 400/400 verified",
+    ),
 }
 
 
@@ -72,9 +86,13 @@ def fallback_planners(scenario: Scenario) -> list[tuple[str, dict[str, object]]]
 
 
 def scenario_kind(scenario: Scenario) -> str:
-    """``2-D scene``, ``3-D single UAV`` (``... with danger or uncertain areas``) or ``fleet``
-    (more than one task)."""
+    """``2-D scene``, ``3-D single UAV`` (``... with danger or uncertain areas``), ``fleet``
+    (more than one task) or ``fleet of constant-speed UAVs`` (``min_speed`` equal to the
+    speed, 3-D)."""
     if len(scenario.tasks) > 1:
+        uav = scenario.uav
+        if scenario.dim == 3 and uav.min_speed > 0 and uav.min_speed >= uav.v_max:
+            return "fleet of constant-speed UAVs"
         return "fleet"
     if scenario.dim == 2:
         return "2-D scene"

@@ -117,8 +117,10 @@ def pose_times(
     the first pose at ``planned[0]``. ``"planned"``: each pose at its planned time where the
     speed range allows, else as close to it as it can: never sooner than the piece's curve
     length (``curve_lengths``, m, at least its samples') at ``v_max`` and never later than its
-    samples' length (``sample_lengths``) at ``v_min``; ``"constant"``: every piece's samples
-    at ``cruise``."""
+    samples' length (``sample_lengths``) at ``v_min``; where those two bounds cross (a speed
+    range narrower than the curve's excess over its chords, e.g. ``min_speed == speed``), the
+    samples' length at ``v_max`` is the bound instead, so the flight as declared (straight
+    between samples) keeps the range; ``"constant"``: every piece's samples at ``cruise``."""
     Lc = np.asarray(curve_lengths, dtype=np.float64)
     Ls = np.asarray(sample_lengths, dtype=np.float64)
     tp = np.asarray(planned, dtype=np.float64)
@@ -133,7 +135,9 @@ def pose_times(
     for k in range(1, len(tp)):
         earliest = out[k - 1] + Lc[k - 1] / v_max
         latest = out[k - 1] + Ls[k - 1] / v_min
-        out[k] = min(max(tp[k], earliest), max(latest, earliest))
+        if latest < earliest:  # a range too narrow for the curve's length beyond its samples'
+            earliest = out[k - 1] + Ls[k - 1] / v_max  # (a constant-speed UAV): the samples
+        out[k] = min(max(tp[k], earliest), latest)
     return out
 
 

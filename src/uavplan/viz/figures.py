@@ -82,8 +82,8 @@ def _legend(ax: Axes, scenario: Scenario, results: Sequence[Any]) -> None:
             handles.append(Line2D([], [], color=color(k), lw=1.6 if ok else 3, label=label))
     elif results:
         bad = sum(not _flown(r)[1] for r in results)
-        label = f"{len(results)} UAVs" + (f", {bad} failing (red edge)" if bad else "")
-        handles.append(Line2D([], [], color="tab:blue", lw=1, label=label))
+        label = f"{len(results)} UAVs (colour key)" + (f", {bad} failing (red)" if bad else "")
+        handles.append(Line2D([], [], color=_colors(len(results))(0), lw=1, label=label))
     if results:
         handles.append(Line2D([], [], color="k", lw=1.6, label="flown trajectory"))
         handles.append(Line2D([], [], color="k", lw=0.8, ls="--", label="planned polyline"))
@@ -181,7 +181,8 @@ def draw_top(
         ax.plot(flown[:, 0], flown[:, 1], "-", color=col, lw=0.8 if many else 1.6,
                 path_effects=halo)  # fmt: skip
         if not many:
-            ax.plot(w[1:-1, 0], w[1:-1, 1], ".", color=col, ms=4)
+            if len(w) <= 60:  # a planner's waypoints, not a trajectory stepped in time
+                ax.plot(w[1:-1, 0], w[1:-1, 1], ".", color=col, ms=4)
             at = (float(w[0, 0]), float(w[0, 1]))
             ax.annotate(str(r.uav_id), at, xytext=(4, 4), textcoords="offset points", fontsize=7)
     ms = 3 if len(scenario.tasks) > 40 else 7
@@ -255,17 +256,36 @@ def draw_3d(ax: Any, scenario: Scenario, results: Sequence[PlanResult] = ()) -> 
     _label_axes(ax, scenario, zlabel=True)
 
 
+def _uav_key(fig: Figure, ax: Any, results: Sequence[Any]) -> None:
+    """The colour key of a fleet's paths (more than 10 UAVs, no line each in the legend): UAV
+    number in plan.json's order, its ids at the ends."""
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+
+    n = len(results)
+    sm = ScalarMappable(norm=Normalize(0, n - 1), cmap=plt.get_cmap("turbo"))
+    bar = fig.colorbar(sm, ax=ax, orientation="horizontal", fraction=0.035, pad=0.1, aspect=40)
+    bar.set_ticks([0, n - 1])
+    bar.set_ticklabels([str(results[0].uav_id), str(results[-1].uav_id)])
+    bar.set_label(f"UAV, in plan.json's order ({n}); failing ones in red", fontsize=8)
+    bar.ax.tick_params(labelsize=7)
+
+
 def plan_figure(scenario: Scenario, results: Sequence[PlanResult], title: str = "") -> Figure:
-    """A figure with the top view and, for 3-D scenarios, a 3-D view."""
+    """A figure with the top view and, for 3-D scenarios, a 3-D view; a fleet of more than 10
+    UAVs gets a colour key for its paths."""
     if scenario.dim == 3:
-        fig = plt.figure(figsize=(13, 6))
+        fig = plt.figure(figsize=(13, 6.6 if len(results) > 10 else 6))
         ax1 = fig.add_subplot(1, 2, 1)
         ax2 = fig.add_subplot(1, 2, 2, projection="3d")
         draw_top(ax1, scenario, results)
         draw_3d(ax2, scenario, results)
     else:
-        fig = plt.figure(figsize=(7, 7))
-        draw_top(fig.add_subplot(1, 1, 1), scenario, results)
+        fig = plt.figure(figsize=(7, 7.6 if len(results) > 10 else 7))
+        ax2 = ax1 = fig.add_subplot(1, 1, 1)
+        draw_top(ax1, scenario, results)
+    if len(results) > 10:
+        _uav_key(fig, ax2, results)
     if title:
         fig.suptitle(title)
     fig.tight_layout()
