@@ -13,8 +13,11 @@ size (1,000 paths x 50 points x 100 cylinders). For each it prints, measured in 
   against the limit reference: a minimal fused branchless kernel doing the same work (the same
   clipped distance and threat sum, written with min/max only, no per-pair function) -- the
   ratio to it says how near the machine's limit the production kernel is;
-* for the SPSO size, the whole SPSO cost of a population (``PathProblem.cost``) and the whole
-  evaluation with feasibility (``PathProblem.evaluate``: exact terrain, obstacles), in ms.
+* for the SPSO size, the whole SPSO cost of a population (``PathProblem.cost``: the fused
+  kernel of the four terms) against the previous implementation, the terms apart
+  (``PathProblem(..., fused=False)``), on a uniform random population and on SPSO's swarm
+  during a run, and PPSwarm's cost on its first scenario likewise; and the whole evaluation
+  with feasibility (``PathProblem.evaluate``: exact terrain, obstacles), in ms.
 
 Timings are the best of ``--repeats`` runs (the machine is shared; the best is the least noisy).
 """
@@ -32,6 +35,7 @@ from _timing import best_time
 from uavplan.kernel_builds import set_mode
 from uavplan.problems import CartesianEncoding, PathProblem
 from uavplan.problems.costs import threat_cost_spso
+from uavplan.problems.encoding import SphericalEncoding
 from uavplan.scenarios import load_builtin
 from uavplan.world.geometry import (
     cylinder_threat_batch,
@@ -161,19 +165,58 @@ def kernel_case(name: str, pop: int, n: int, J: int, repeats: int, seed: int = 0
     print(f"  limit reference (minimal)  {t_l * 1e3:9.2f} ms  {tests / t_l / 1e6:9.1f} M tests/s")
 
 
+def spso_swarms() -> dict[str, np.ndarray]:
+    """Paths of SPSO's swarm on its benchmark (500 particles, seed 0) after 1, 20 and 200
+    iterations: the populations the cost sees in a run (a uniform random population in the box
+    collides almost everywhere, where the fused kernel stops early)."""
+    from uavplan.optimizers.spso import SPSO
+
+    enc = SphericalEncoding(PathProblem(load_builtin("spso")))
+    opt = SPSO(enc, seed=0)
+    out = {}
+    for it in range(1, 201):
+        X = opt.ask()
+        opt.tell(X, enc.evaluate(X))
+        if it in (1, 20, 200):
+            out[f"SPSO swarm, iteration {it}"] = enc.decode(X)
+    return out
+
+
 def spso_cost_case(repeats: int) -> None:
     sc = load_builtin("spso")
     problem = PathProblem(sc)
+    before = PathProblem(sc, fused=False)  # the four terms apart: the previous implementation
     enc = CartesianEncoding(problem)
     rng = np.random.default_rng(1)
     X = enc.lower + rng.random((500, enc.dim)) * (enc.upper - enc.lower)
-    paths = enc.decode(X)
+    pops = {"uniform in the box": enc.decode(X), **spso_swarms()}
+    print("\nSPSO scenario, populations of 500 paths x 12 points (6 cylinders, 1045 x 879 DEM):")
+    print("  whole SPSO cost (PathProblem.cost), ms per population; before = the terms apart")
+    print(f"  {'population':28} {'finite':>6} {'fused':>8} {'before':>8} {'speed-up':>8}")
+    for name, paths in pops.items():
+        f = problem.cost(paths)
+        np.testing.assert_allclose(f, before.cost(paths), rtol=1e-12)
+        t_f = best_time(lambda p=paths: problem.cost(p), repeats)
+        t_b = best_time(lambda p=paths: before.cost(p), repeats)
+        print(f"  {name:28} {int(np.isfinite(f).sum()):>6} {t_f * 1e3:8.3f} {t_b * 1e3:8.3f}"
+              f" {t_b / t_f:7.1f}x")  # fmt: skip
+    # PPSwarm's preset, fused the same way: its first scenario (terrain, cylinders, the band)
+    pp = load_builtin("ppswarm1")
+    fused_pp, before_pp = PathProblem(pp), PathProblem(pp, fused=False)
+    sph = SphericalEncoding(fused_pp)
+    Y = sph.lower + np.random.default_rng(2).random((500, sph.dim)) * (sph.upper - sph.lower)
+    pp_paths = sph.decode(Y)
+    f = fused_pp.cost(pp_paths)
+    np.testing.assert_allclose(f, before_pp.cost(pp_paths), rtol=1e-12)
+    t_f = best_time(lambda: fused_pp.cost(pp_paths), repeats)
+    t_b = best_time(lambda: before_pp.cost(pp_paths), repeats)
+    print(f"  {'PPSwarm cost, ppswarm1':28} {int(np.isfinite(f).sum()):>6} {t_f * 1e3:8.3f}"
+          f" {t_b * 1e3:8.3f} {t_b / t_f:7.1f}x")  # fmt: skip
+    paths = pops["uniform in the box"]
     t_cost = best_time(lambda: problem.cost(paths), repeats)
     t_dec = best_time(lambda: enc.evaluate(X), repeats)
     t_eval = best_time(lambda: problem.evaluate(paths), repeats)
     t_loop = best_time(lambda: [problem.cost(paths[i : i + 1]) for i in range(50)], 1) * 10
-    print("\nSPSO scenario, population of 500 paths x 12 points (6 cylinders, 1045 x 879 DEM):")
-    print(f"  SPSO cost (PathProblem.cost)              {t_cost * 1e3:7.3f} ms per population")
     print(f"  genes -> paths -> cost (encoding.evaluate) {t_dec * 1e3:7.3f} ms per population")
     print(f"  cost + feasibility (exact terrain etc.)  {t_eval * 1e3:7.3f} ms per population")
     print(

@@ -84,7 +84,9 @@ def record() -> dict[str, list[tuple[Any, ...]]]:
 
 def _direct_calls() -> None:
     """The kernels the plans above do not reach: the indexed cylinder pass (64 or more
-    cylinders), the per-pair distances and the reference kernels."""
+    cylinders), the per-pair distances and the reference kernels (those of the fused costs
+    among them)."""
+    from uavplan.problems import costs
     from uavplan.world import geometry
     from uavplan.world._terrain_kernels import mean_height_batch, mean_height_batch_reference
 
@@ -94,6 +96,10 @@ def _direct_calls() -> None:
     radii = rng.uniform(5, 30, 200)
     z_lo, z_hi = np.zeros(200), rng.uniform(100, 900, 200)
     geometry.cylinder_hits(paths, centers, z_lo, z_hi, radii)
+    # the fused costs' references: SPSO's smoothness and the threat pass over every pair
+    costs.smoothness_cost_spso(paths)
+    r10 = radii[:10]
+    geometry.cylinder_threat(paths, centers[:10], z_lo[:10], z_hi[:10], r10, r10 + 5.0, False)
     geometry.cylinder_distances(paths, centers, z_lo, z_hi)
     geometry.segment_circle_inside_fraction(paths[..., :2], centers[:20], radii[:20])
     square = np.array([[0.0, 0.0], [200.0, 0.0], [200.0, 200.0], [0.0, 200.0]])

@@ -387,3 +387,69 @@ def test_fused_pso_move_matches_its_numpy_reference() -> None:
     np.testing.assert_allclose(got_x, want_x, rtol=1e-14, atol=1e-14)
     np.testing.assert_allclose(got_v, want_v, rtol=1e-14, atol=1e-14)
     assert np.any(got_x == upper) and np.any(got_v == -v_max)  # clamp and walls exercised
+
+
+@pytest.mark.parametrize("n", [4, 5, 17, 300])
+def test_distinct_indices_fast_draws_and_returns_the_same(n: int) -> None:
+    from uavplan.optimizers.de import distinct_indices, distinct_indices_fast
+
+    for seed in range(5):
+        a, b = np.random.default_rng(seed), np.random.default_rng(seed)
+        want, got = distinct_indices(a, n, 3), distinct_indices_fast(b, n, 3)
+        np.testing.assert_array_equal(got, want)
+        assert a.random() == b.random()  # the same numbers drawn
+        rows = np.arange(n)[:, None]
+        assert np.all(got != rows) and np.all(got[:, 0] != got[:, 1])
+        assert np.all(got[:, 1] != got[:, 2]) and np.all(got[:, 0] != got[:, 2])
+
+
+def test_de_trial_kernel_matches_its_numpy_reference() -> None:
+    from uavplan.optimizers.de import distinct_indices, trial, trial_reference
+
+    rng = np.random.default_rng(2)
+    NP, D = 40, 9
+    lower, upper = np.full(D, -1.0), np.linspace(0.5, 3.0, D)
+    x = rng.uniform(lower, upper, (NP, D))
+    r = distinct_indices(rng, NP, 3)
+    u, c = rng.random((NP, D)), rng.random((NP, D))
+    j_rand = rng.integers(D, size=NP)
+    for F in (0.8, 2.5):  # 2.5: many mutants outside the box, bounced back
+        args = (x, r, F, u, c, 0.7, j_rand, lower, upper)
+        got, want = trial(*args), trial_reference(*args)
+        np.testing.assert_array_equal(got, want)
+    assert np.any(got == x) and np.any(got != x)
+
+
+def test_ga_offspring_kernel_matches_its_numpy_reference() -> None:
+    from uavplan.optimizers.ga import offspring, offspring_reference
+
+    rng = np.random.default_rng(4)
+    N, D, n_off = 30, 12, 27
+    n_pairs = (n_off + 1) // 2
+    lower, upper = np.zeros(D), np.full(D, 10.0)
+    P = rng.uniform(lower, upper, (N, D))
+    f = rng.choice([1.0, 2.0, 3.0, np.inf], N)  # ties: the first of equals wins
+    entrants = rng.integers(N, size=(2 * n_pairs, 3))
+    cut = np.where(rng.random(n_pairs) < 0.8, rng.integers(1, 4, n_pairs), 4)
+    block = np.arange(D) // 3
+    mutate = rng.random((n_off, D)) < 0.3
+    z = rng.standard_normal((n_off, D)) * 20.0  # some leave the box
+    sigma = np.full(D, 1.0)
+    args = (P, f, entrants, cut, block, n_off, mutate, z, sigma, lower, upper)
+    np.testing.assert_array_equal(offspring(*args), offspring_reference(*args))
+
+
+def test_pso_best_update_kernel_matches_numpy() -> None:
+    from uavplan.optimizers.pso import update_bests
+
+    rng = np.random.default_rng(8)
+    X = rng.random((50, 4))
+    f = rng.choice([0.5, 1.0, np.inf], 50)
+    pbest_x, pbest_f = rng.random((50, 4)), rng.choice([0.5, 1.0, 2.0, np.inf], 50)
+    want_x, want_f = pbest_x.copy(), pbest_f.copy()
+    better = f < want_f
+    want_x[better], want_f[better] = X[better], f[better]
+    i = update_bests(X, f, pbest_x, pbest_f)
+    np.testing.assert_array_equal(pbest_x, want_x)
+    np.testing.assert_array_equal(pbest_f, want_f)
+    assert i == np.argmin(want_f)

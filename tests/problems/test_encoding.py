@@ -79,3 +79,63 @@ def test_clipped_cumsum_matches_its_numpy_reference() -> None:
         want = clipped_cumsum_reference(steps, start, lo, hi)
         np.testing.assert_array_equal(got, want)
         assert (got == 0.0).any() and (got == 100.0).any()  # the clip was exercised
+
+
+@pytest.mark.parametrize(
+    ("scene", "encoding", "lookup"),
+    [
+        ("spso", SphericalEncoding, None),
+        ("spso", CartesianEncoding, None),
+        ("spso", SphericalEncoding, "bilinear"),
+        ("ppswarm1", SphericalEncoding, None),
+        ("ppswarm1", CartesianEncoding, None),
+        ("simple2d", SphericalEncoding, None),
+        ("simple2d", CartesianEncoding, None),
+    ],
+)
+def test_decode_kernel_gives_the_bits_of_the_numpy_form(scene, encoding, lookup) -> None:
+    """One Numba pass (steps, clipping, terrain, endpoints) against the NumPy chain it replaced,
+    bit for bit, also outside the gene box (the optimizers' velocities never leave it, but a
+    user's genes may)."""
+    problem = PathProblem(load_builtin(scene), lookup=lookup)
+    enc = encoding(problem)
+    rng = np.random.default_rng(3)
+    span = enc.upper - enc.lower
+    X = enc.lower - 0.2 * span + rng.random((64, enc.dim)) * 1.4 * span
+    got, want = enc.decode(X), enc.decode_reference(X)
+    assert got.shape == want.shape
+    np.testing.assert_array_equal(got, want)
+
+
+def test_decode_refuses_a_wrong_gene_shape(spso_problem: PathProblem) -> None:
+    enc = SphericalEncoding(spso_problem)
+    with pytest.raises(ValueError, match=r"genes must be \(pop, 30\)"):
+        enc.decode(np.zeros((4, 29)))
+
+
+@pytest.mark.parametrize("encoding", [SphericalEncoding, CartesianEncoding])
+def test_feasibility_tracking_checks_only_what_can_lower_the_record(encoding) -> None:
+    """The best feasible cost after each call equals the running minimum over every path's
+    full evaluation, though only the paths that could lower it are checked."""
+    problem = PathProblem(load_builtin("spso"))
+    enc = encoding(problem, track_feasibility=True)
+    rng = np.random.default_rng(7)
+    want, best, checked = [], np.inf, []
+    original = problem.feasible
+    problem.feasible = lambda p: (checked.append(len(p)), original(p))[1]  # type: ignore[method-assign]
+    sph = SphericalEncoding(problem)  # swarms drawn as spherical genes, then encoded
+    centre = sph.lower + 0.5 * (sph.upper - sph.lower)
+    for k in range(12):
+        scale = 0.5 if k < 6 else 0.05  # wide swarms, then tight ones (most paths feasible)
+        X = np.clip(centre + scale * rng.standard_normal((60, sph.dim)) * (sph.upper - sph.lower),
+                    sph.lower, sph.upper)  # fmt: skip
+        if encoding is CartesianEncoding:
+            X = enc.encode(sph.decode(X))
+        f = enc.evaluate(X)
+        ev = problem.evaluate(enc.decode(X))
+        np.testing.assert_array_equal(f, ev.cost)
+        best = min(best, float(np.min(ev.cost[ev.feasible], initial=np.inf)))
+        want.append(best)
+    assert enc.feasible_history == want
+    assert np.isfinite(want[-1])
+    assert sum(checked) < 12 * 60 / 2  # far fewer paths checked than evaluated

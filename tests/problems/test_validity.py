@@ -221,7 +221,10 @@ def test_bad_shapes_are_refused() -> None:
     "name", ["ppswarm2", "spso", "jacksboro", "open", "topobathy", "w3s", "many"]
 )
 @pytest.mark.parametrize("strict", [False, True])
-def test_fused_static_checks_agree_with_the_checks_one_by_one(name: str, strict: bool) -> None:
+@pytest.mark.parametrize("lookup", ["bilinear", "nearest"])
+def test_fused_static_checks_agree_with_the_checks_one_by_one(
+    name: str, strict: bool, lookup: str
+) -> None:
     """``passing`` (one fused kernel for bounds, cylinders, terrain and band in 3-D) gives
     exactly the verdicts of the checks run one by one (:meth:`violations`); ``many``: 300
     cylinders, which the grid-indexed check tests after the kernel."""
@@ -244,7 +247,7 @@ def test_fused_static_checks_agree_with_the_checks_one_by_one(name: str, strict:
         sc = resolve(name)
     if name == "jacksboro":  # finite cylinders on a real DEM; its revealed area is a polygon
         sc = dataclasses.replace(sc, uncertain_areas=())
-    v = MotionValidator(sc, sc.tasks[0], strict_altitude=strict)
+    v = MotionValidator(sc, sc.tasks[0], strict_altitude=strict, lookup=lookup)
     assert v._static_args is not None
     rng = np.random.default_rng(11)
     lo, hi = np.asarray(sc.bounds.lo), np.asarray(sc.bounds.hi)
@@ -272,5 +275,3 @@ def test_fused_static_checks_agree_with_the_checks_one_by_one(name: str, strict:
     if name == "many":
         assert v._cylinders_by_grid and v.violations(b)["cylinders"][:200].any()
     np.testing.assert_array_equal(v.paths_valid(paths), want)
-    if sc.terrain is not None:  # the nearest-node lookup has no fused form
-        assert MotionValidator(sc, sc.tasks[0], lookup="nearest")._static_args is None

@@ -174,6 +174,11 @@ class Optimizer(ABC):
         self.history: list[float] = []
         self.evaluations_history: list[int] = []
         self._pending: FloatArray | None = None
+        #: the population of the last iteration as the algorithm took it, and its costs: what
+        #: was told, unless the algorithm evaluated points of its own within the iteration
+        #: (SPSO's asynchronous update re-evaluates the particles after a new global best)
+        self.last_x: FloatArray = np.empty((0, self.dim))
+        self.last_f: FloatArray = np.empty(0)
         self._initialized = False
         self.init = self._check_init(init)
         self._setup()
@@ -236,11 +241,12 @@ class Optimizer(ABC):
             raise OptimizerError(f"{self.name}: tell() got NaN costs (use inf for infeasible)")
         self._pending = None
         self.evaluations += X.shape[0]
-        i = int(np.argmin(f))
-        if f[i] < self.best_f or self.best_x is None:
-            self.best_f = float(f[i])
-            self.best_x = X[i].copy()
-        self._tell(X, f)
+        self.last_x, self.last_f = X, f
+        self._tell(X, f)  # may replace last_x, last_f (an optimizer that evaluates on its own)
+        i = int(np.argmin(self.last_f))
+        if self.last_f[i] < self.best_f or self.best_x is None:
+            self.best_f = float(self.last_f[i])
+            self.best_x = self.last_x[i].copy()
         self.iterations += 1
         self.history.append(self.best_f)
         self.evaluations_history.append(self.evaluations)

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
+from numba import njit
 
 from uavplan.optimizers.base import (
     FloatArray,
@@ -43,7 +44,10 @@ from uavplan.optimizers.base import (
 def distinct_indices(rng: np.random.Generator, n: int, k: int) -> np.ndarray:
     """For every row ``i`` of ``n``, ``k`` distinct indices in ``[0, n)`` all different from ``i``,
     uniformly, as an (n, k) int64 array (sequential sampling without replacement: draw from the
-    ``n - 1 - m`` indices left and step over the ones already taken, in increasing order)."""
+    ``n - 1 - m`` indices left and step over the ones already taken, in increasing order).
+
+    The NumPy form; :func:`distinct_indices_fast` draws the same numbers and steps over the
+    taken indices in one Numba loop (tests compare the two)."""
     if k > n - 1:
         raise OptimizerError(f"need at least {k + 1} individuals, got {n}")
     taken = np.arange(n, dtype=np.int64)[:, None]  # (n, 1): i itself
@@ -54,6 +58,80 @@ def distinct_indices(rng: np.random.Generator, n: int, k: int) -> np.ndarray:
             r = r + (r >= c)
         out[:, m] = r
         taken = np.concatenate([taken, r[:, None]], axis=1)
+    return out
+
+
+def distinct_indices_fast(rng: np.random.Generator, n: int, k: int) -> np.ndarray:
+    """:func:`distinct_indices`: the same draws, in the same order, the same result."""
+    if k > n - 1:
+        raise OptimizerError(f"need at least {k + 1} individuals, got {n}")
+    draws = np.empty((k, n), dtype=np.int64)
+    for m in range(k):
+        draws[m] = rng.integers(0, n - 1 - m, size=n)
+    return np.asarray(_step_over(draws))
+
+
+@njit(cache=True)
+def _step_over(draws):  # pragma: no cover - numba
+    k, n = draws.shape
+    out = np.empty((n, k), dtype=np.int64)
+    taken = np.empty(k + 1, dtype=np.int64)  # the row's taken indices, in increasing order
+    for i in range(n):
+        taken[0] = i
+        for m in range(k):
+            r = draws[m, i]
+            for t in range(m + 1):  # step over the taken ones, smallest first
+                if r >= taken[t]:
+                    r += 1
+            out[i, m] = r
+            t = m + 1  # insert r in order
+            while t > 0 and taken[t - 1] > r:
+                taken[t] = taken[t - 1]
+                t -= 1
+            taken[t] = r
+    return out
+
+
+def trial_reference(
+    x: FloatArray,
+    r: np.ndarray,
+    F: float,
+    u: FloatArray,
+    c: FloatArray,
+    CR: float,
+    j_rand: np.ndarray,
+    lower: FloatArray,
+    upper: FloatArray,
+) -> FloatArray:
+    """DE/rand/1/bin's trial vectors with bounce-back, from the drawn numbers (``u`` for the
+    bounce, ``c`` against ``CR``): the NumPy form :func:`trial` computes in one pass."""
+    x_r1 = x[r[:, 0]]
+    v = x_r1 + F * (x[r[:, 1]] - x[r[:, 2]])
+    v = np.where(v < lower, x_r1 + u * (lower - x_r1), v)
+    v = np.where(v > upper, x_r1 + u * (upper - x_r1), v)
+    v = np.minimum(np.maximum(v, lower), upper)
+    take = c <= CR
+    take[np.arange(len(x)), j_rand] = True
+    return np.where(take, v, x)
+
+
+@njit(cache=True)
+def trial(x, r, F, u, c, CR, j_rand, lower, upper):  # pragma: no cover - numba
+    """:func:`trial_reference` in one loop."""
+    NP, D = x.shape
+    out = np.empty((NP, D))
+    for i in range(NP):
+        for j in range(D):
+            if c[i, j] <= CR or j == j_rand[i]:
+                b = x[r[i, 0], j]
+                v = b + F * (x[r[i, 1], j] - x[r[i, 2], j])
+                if v < lower[j]:
+                    v = b + u[i, j] * (lower[j] - b)
+                if v > upper[j]:
+                    v = b + u[i, j] * (upper[j] - b)
+                out[i, j] = min(max(v, lower[j]), upper[j])
+            else:
+                out[i, j] = x[i, j]
     return out
 
 
@@ -103,23 +181,11 @@ class DE(Optimizer):
         rng = self.rng
         x = self.x
         NP, D = x.shape
-        rows = np.arange(NP)
-
-        r = self.r = distinct_indices(rng, NP, 3)
-        x_r1 = x[r[:, 0]]
-        v = x_r1 + cfg.F * (x[r[:, 1]] - x[r[:, 2]])
-
-        # bounce back between the base vector and the violated bound
-        u_rand = rng.random((NP, D))
-        v = np.where(v < self.lower, x_r1 + u_rand * (self.lower - x_r1), v)
-        v = np.where(v > self.upper, x_r1 + u_rand * (self.upper - x_r1), v)
-        v = self.clip(v)
-
-        # binomial crossover with one guaranteed mutant gene j_rand
-        take = rng.random((NP, D)) <= cfg.CR
+        r = self.r = distinct_indices_fast(rng, NP, 3)
+        u = rng.random((NP, D))  # bounce back between the base vector and the violated bound
+        c = rng.random((NP, D))  # binomial crossover with one guaranteed mutant gene j_rand
         self.j_rand = np.asarray(rng.integers(D, size=NP), dtype=np.int64)
-        take[rows, self.j_rand] = True
-        return np.where(take, v, x)
+        return np.asarray(trial(x, r, cfg.F, u, c, cfg.CR, self.j_rand, self.lower, self.upper))
 
     def _tell(self, X: FloatArray, f: FloatArray) -> None:
         if self.iterations == 0:

@@ -38,6 +38,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
+from numba import njit
 
 from uavplan.optimizers.base import (
     FloatArray,
@@ -46,6 +47,60 @@ from uavplan.optimizers.base import (
     OptimizerError,
     register,
 )
+
+
+def offspring_reference(
+    P: FloatArray,
+    f: FloatArray,
+    entrants: np.ndarray,
+    cut: np.ndarray,
+    gene_block: np.ndarray,
+    n_off: int,
+    mutate: np.ndarray,
+    z: FloatArray,
+    sigma: FloatArray,
+    lower: FloatArray,
+    upper: FloatArray,
+) -> FloatArray:
+    """The children from the drawn numbers (tournament ``entrants``, crossover ``cut`` per pair,
+    ``mutate`` mask and normals ``z``): the NumPy form :func:`offspring` computes in one pass."""
+    n_pairs = len(cut)
+    winners = entrants[np.arange(2 * n_pairs), np.argmin(f[entrants], axis=1)]
+    p1, p2 = P[winners[:n_pairs]], P[winners[n_pairs:]]
+    head = gene_block[None, :] < cut[:, None]  # genes taken from the own parent
+    children = np.concatenate([np.where(head, p1, p2), np.where(head, p2, p1)])[:n_off]
+    children = children + mutate * z * sigma
+    return np.minimum(np.maximum(children, lower), upper)
+
+
+@njit(cache=True)
+def offspring(
+    P, f, entrants, cut, gene_block, n_off, mutate, z, sigma, lower, upper
+):  # pragma: no cover
+    """:func:`offspring_reference` in one loop."""
+    n_pairs = cut.shape[0]
+    T = entrants.shape[1]
+    D = P.shape[1]
+    winners = np.empty(2 * n_pairs, dtype=np.int64)
+    for k in range(2 * n_pairs):
+        w = entrants[k, 0]
+        for t in range(1, T):  # the first of the least costs, as np.argmin
+            if f[entrants[k, t]] < f[w]:
+                w = entrants[k, t]
+        winners[k] = w
+    out = np.empty((n_off, D))
+    for c in range(n_off):
+        q = c % n_pairs  # children of pair q: own head first (c < n_pairs), then the other's
+        a, b = (
+            (winners[q], winners[n_pairs + q])
+            if c < n_pairs
+            else (winners[n_pairs + q], winners[q])
+        )
+        for j in range(D):
+            g = P[a, j] if gene_block[j] < cut[q] else P[b, j]
+            g = g + (mutate[c, j] * z[c, j]) * sigma[j]
+            out[c, j] = min(max(g, lower[j]), upper[j])
+    return out
 
 
 @dataclass(frozen=True)
@@ -114,9 +169,6 @@ class GA(Optimizer):
 
         # tournament selection: 2 parents per pair
         entrants = rng.integers(N, size=(2 * n_pairs, cfg.tournament_size))
-        winners = entrants[np.arange(2 * n_pairs), np.argmin(f[entrants], axis=1)]
-        p1, p2 = P[winners[:n_pairs]], P[winners[n_pairs:]]
-
         # single-point crossover between waypoints
         cross = rng.random(n_pairs) < cfg.crossover_rate
         if self.n_waypoints >= 2:
@@ -124,13 +176,13 @@ class GA(Optimizer):
         else:
             c = np.full(n_pairs, self.n_waypoints)  # one waypoint: nothing to cut
         c = np.where(cross, c, self.n_waypoints)  # no crossover: cut after the last waypoint
-        head = self.gene_block[None, :] < c[:, None]  # genes taken from the own parent
-        children = np.concatenate([np.where(head, p1, p2), np.where(head, p2, p1)])[:n_off]
-
         # Gaussian mutation, gene-wise with probability p_m
-        mutate = rng.random(children.shape) < self.p_m
-        children = children + mutate * rng.standard_normal(children.shape) * self.sigma
-        return self.clip(children)
+        mutate = rng.random((n_off, self.dim)) < self.p_m
+        z = rng.standard_normal((n_off, self.dim))
+        return np.asarray(
+            offspring(P, f, entrants, np.asarray(c, dtype=np.int64), self.gene_block, n_off,
+                      mutate, z, self.sigma, self.lower, self.upper)
+        )  # fmt: skip
 
     def _tell(self, X: FloatArray, f: FloatArray) -> None:
         if self.iterations == 0:

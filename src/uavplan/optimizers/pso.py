@@ -89,6 +89,22 @@ def move(x, v, pbest, gbest, r1, r2, w, c1, c2, v_max, lower, upper):  # pragma:
     return x_new, v_new
 
 
+@njit(cache=True)
+def update_bests(X, f, pbest_x, pbest_f):  # pragma: no cover - numba
+    """Personal bests replaced, in place, where ``f`` is strictly lower; returns the index of
+    the least personal best (the first of equals, as ``np.argmin``)."""
+    n, d = X.shape
+    best = 0
+    for i in range(n):
+        if f[i] < pbest_f[i]:
+            pbest_f[i] = f[i]
+            for j in range(d):
+                pbest_x[i, j] = X[i, j]
+        if pbest_f[i] < pbest_f[best]:
+            best = i
+    return best
+
+
 @dataclass(frozen=True)
 class PSOConfig(OptimizerConfig):
     """PSO hyperparameters; defaults from RGG-PSO+ Sect. 5.2.2 / SPSO (Phung & Ha 2021)."""
@@ -159,19 +175,17 @@ class PSO(Optimizer):
             self.upper,
         )
         self.x, self.v = x, v
-        return x.copy()
+        return x  # tell() keeps a copy of what was evaluated
 
     def _tell(self, X: FloatArray, f: FloatArray) -> None:
         first = self.iterations == 0
-        self.x = X.copy()
+        self.x = X.copy()  # a caller may have repaired the points it evaluated
         if first:
             self.pbest_x = X.copy()
             self.pbest_f = f.copy()
+            i = int(np.argmin(self.pbest_f))
         else:
-            better = f < self.pbest_f
-            self.pbest_x[better] = X[better]
-            self.pbest_f[better] = f[better]
-        i = int(np.argmin(self.pbest_f))
+            i = int(update_bests(X, f, self.pbest_x, self.pbest_f))
         if first or self.pbest_f[i] < self.gbest_f:
             self.gbest_x = self.pbest_x[i].copy()
             self.gbest_f = float(self.pbest_f[i])

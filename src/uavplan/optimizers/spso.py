@@ -13,6 +13,21 @@ has a finite cost (``while ~isInit``). Here every such re-initialization is an e
 population and counts as an iteration and its evaluations (an honest budget), up to
 ``max_init_attempts``; after that the swarm proceeds from its last initial population.
 On a problem without infinite costs SPSO behaves exactly as PSO.
+
+**Global-best update** (``update``). The reference code (``SPSO_MAIN.m``) moves and evaluates
+the particles one at a time and replaces the global best as soon as one improves on it, so the
+particles after it in the same iteration already follow the new best (an asynchronous PSO).
+``update="sync"`` (the default, :class:`~uavplan.optimizers.pso.PSO`'s) moves the whole swarm
+against the global best of the previous iteration and evaluates it as one batch.
+``update="async"`` reproduces the reference's order exactly while still evaluating in batches:
+the swarm is moved against the current global best and evaluated; the first particle that
+improves on the global best becomes it, and every particle after it is moved again (the same
+random numbers, the new global best) and re-evaluated; and so on to the end of the swarm. The
+result is that of moving and evaluating one particle at a time (a test compares the two); the
+re-evaluations are work the batching costs, not evaluations of the algorithm: they are counted
+apart (:attr:`SPSO.speculative_evaluations`), the budget and histories count ``pop_size`` per
+iteration, and the best point and the tracked feasibility see only the particles as the
+algorithm took them (:attr:`~uavplan.optimizers.base.Optimizer.last_x`).
 """
 
 from __future__ import annotations
@@ -23,7 +38,10 @@ from typing import ClassVar
 import numpy as np
 
 from uavplan.optimizers.base import FloatArray, OptimizerConfig, OptimizerError, register
-from uavplan.optimizers.pso import PSO, PSOConfig
+from uavplan.optimizers.pso import PSO, PSOConfig, move
+
+#: :class:`SPSOConfig` ``update``: the global best per iteration or per particle
+UPDATES = ("sync", "async")
 
 
 @dataclass(frozen=True)
@@ -32,11 +50,14 @@ class SPSOConfig(PSOConfig):
 
     pop_size: int = 500  # SPSO's swarm size on its benchmark
     max_init_attempts: int = 100  # re-initializations while every cost is infinite
+    update: str = "sync"  # "async": the global best replaced particle by particle, as SPSO_MAIN.m
 
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.max_init_attempts < 1:
             raise OptimizerError(f"max_init_attempts must be >= 1, got {self.max_init_attempts}")
+        if self.update not in UPDATES:
+            raise OptimizerError(f"update must be one of {', '.join(UPDATES)}, got {self.update!r}")
 
 
 @register
@@ -55,6 +76,10 @@ class SPSO(PSO):
         self._init_attempts = 0
         self._initializing = True  # every evaluated population so far was an initial swarm
         self._reinit = False
+        #: asynchronous update: particles evaluated again after a new global best (batching's
+        #: extra work, not counted in ``evaluations``)
+        self.speculative_evaluations = 0
+        self._move_from: tuple[FloatArray, ...] | None = None
 
     def _ask(self) -> FloatArray:
         if self._reinit:
@@ -62,11 +87,28 @@ class SPSO(PSO):
             self.x = self.uniform(self.config.pop_size)
             self.v = np.zeros_like(self.x)
             return self.x.copy()
-        return super()._ask()
+        if self.config.update == "sync":
+            return super()._ask()
+        r1 = self.rng.random(self.x.shape)
+        r2 = self.rng.random(self.x.shape)
+        self._move_from = (self.x, self.v, r1, r2)
+        self.x, self.v = self._move(0, self.x, self.v, r1, r2)
+        return self.x
+
+    def _move(
+        self, start: int, x: FloatArray, v: FloatArray, r1: FloatArray, r2: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """The particles ``start:`` of ``x``, ``v`` moved against the current global best."""
+        c, s = self.config, slice(start, None)
+        return move(x[s], v[s], self.pbest_x[s], self.gbest_x, r1[s], r2[s], self.w, c.c1, c.c2,
+                    self.v_max, self.lower, self.upper)  # fmt: skip
 
     def _tell(self, X: FloatArray, f: FloatArray) -> None:
         if not self._initializing:
-            super()._tell(X, f)
+            if self.config.update == "async":
+                self._tell_async(X, f)
+            else:
+                super()._tell(X, f)
             return
         # X is an initial swarm: it replaces the previous (all-infinite) one
         self._init_attempts += 1
@@ -81,3 +123,36 @@ class SPSO(PSO):
             self._initializing = False
         else:
             self._reinit = True
+
+    def _tell_async(self, X: FloatArray, f: FloatArray) -> None:
+        """Take the particles in order; at the first that improves on the global best, replace
+        it, move the rest again against it and evaluate them again (see the module)."""
+        assert self._move_from is not None
+        x0, v0, r1, r2 = self._move_from
+        self._move_from = None
+        X, f, V = X.copy(), f.copy(), self.v.copy()
+        n = len(f)
+        start = 0
+        while start < n:
+            ahead = np.flatnonzero(f[start:] < self.gbest_f)  # gbest_f <= every pbest_f
+            stop = start + int(ahead[0]) if ahead.size else n
+            rows = slice(start, stop)
+            better = start + np.flatnonzero(f[rows] < self.pbest_f[rows])
+            self.pbest_x[better] = X[better]
+            self.pbest_f[better] = f[better]
+            if stop == n:
+                break
+            self.pbest_x[stop] = X[stop]
+            self.pbest_f[stop] = f[stop]
+            self.gbest_x = X[stop].copy()
+            self.gbest_f = float(f[stop])
+            start = stop + 1
+            if start < n:  # the rest follow the new global best: moved and evaluated again
+                X[start:], V[start:] = self._move(start, x0, v0, r1, r2)
+                f[start:] = np.asarray(self.problem.evaluate(X[start:]), dtype=np.float64)
+                self.speculative_evaluations += n - start
+                if np.any(np.isnan(f[start:])):
+                    raise OptimizerError(f"{self.name}: NaN costs (use inf for infeasible)")
+        self.x, self.v = X, V
+        self.last_x, self.last_f = X, f
+        self.w *= self.config.w_damp

@@ -27,7 +27,7 @@ from uavplan.planners.registry import (
     is_registered,
     register_planner,
 )
-from uavplan.planners.run import Run
+from uavplan.planners.run import Outcome, Run
 from uavplan.problems.encoding import ENCODINGS
 
 
@@ -74,7 +74,7 @@ class OptimizerPlanner(Planner):
     def _plan(self, run: Run) -> Any:
         cfg = self.config
         assert self.optimizer_config is not None
-        enc = ENCODINGS[self.encoding](run.problem, cfg.n_waypoints, cfg.track_feasibility)
+        enc = ENCODINGS[self.encoding](run.problem, cfg.n_waypoints)
         objective = Constrained(enc, cfg.constraints)
         config = fit_schedule(self.optimizer_config, run.budget, cfg.optimizer_options)
         opt = optimizers.get(cfg.optimizer)(objective, config, seed=run.seed)
@@ -84,11 +84,17 @@ class OptimizerPlanner(Planner):
             f = objective.evaluate(X)
             opt.tell(X, f)
             tr.evaluations += len(X)
-            feasible_best = enc.feasible_history[-1] if cfg.track_feasibility else None
+            # the feasible record of the particles as the optimizer took them (not of points
+            # it evaluated and dropped within the iteration: SPSO's asynchronous update)
+            feasible_best = enc.track(opt.last_x, opt.last_f) if cfg.track_feasibility else None
             if tr.end_iteration(best=opt.best_f, feasible_best=feasible_best):
                 break
         assert opt.best_x is not None
-        return enc.decode(opt.best_x[None])[0]
+        path = enc.decode(opt.best_x[None])[0]
+        if getattr(opt.config, "update", "sync") == "async":  # SPSO's re-evaluations
+            extra = int(getattr(opt, "speculative_evaluations", 0))
+            return Outcome(path, info={"speculative_evaluations": extra})
+        return path
 
 
 def _summary(name: str) -> str:

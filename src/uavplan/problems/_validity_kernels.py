@@ -5,7 +5,7 @@ asks most) runs the bounds, cylinder, terrain and altitude-band checks of a 3-D 
 single kernel, path by path, stopping at a path's first failure, instead of one NumPy pass per
 check. It calls the same scalar functions as the per-check kernels
 (:func:`uavplan.world.geometry.seg_cyl_dist`, the terrain's branch-and-bound
-``_segment_min_clearance``, :func:`uavplan.world._terrain_kernels.bilinear_one`), so its verdicts
+``_segment_min_clearance``, :func:`uavplan.world._terrain_kernels.ground_one`), so its verdicts
 are those of :meth:`~uavplan.problems.validity.MotionValidator.violations`; the tests compare
 the two on random batches.
 """
@@ -16,7 +16,7 @@ import numpy as np
 from numba import prange
 
 from uavplan.kernel_builds import population_kernel
-from uavplan.world._terrain_kernels import _segment_min_clearance, bilinear_one, snap_one
+from uavplan.world._terrain_kernels import _segment_min_clearance, ground_one, snap_one
 from uavplan.world.geometry import seg_cyl_dist
 
 
@@ -43,6 +43,7 @@ def static_world_ok(
     need,
     has_band,
     band_ground,
+    nearest,
     bmin,
     bmax,
     band_tol,
@@ -53,8 +54,9 @@ def static_world_ok(
     ``grid``: (x0, y0, dx, dy, nx - 1, ny - 1, tol_u, tol_v) of the terrain; ``H``/``flat``/
     ``off``/``shp`` its heights and max-pyramid, ``nH``/... those of the negated heights (the
     band's ceiling along segments); ``need``: the least clearance above the terrain; the band
-    ``[bmin, bmax]`` above ground (``band_ground``) or absolute, within ``band_tol``, and
-    along whole segments when ``strict`` (ground band over terrain only).
+    ``[bmin, bmax]`` above ground (``band_ground``; at the waypoints the ground is read at the
+    ``nearest`` node, else bilinear) or absolute, within ``band_tol``, and along whole segments
+    when ``strict`` (ground band over terrain only).
     """
     P, N, _ = paths.shape
     J = cyl_c.shape[0]
@@ -74,10 +76,8 @@ def static_world_ok(
                 z = paths[p, k, 2]
                 h = z
                 if band_ground:
-                    g = 0.0
-                    if has_terrain:
-                        g = bilinear_one(H, x0, y0, dx, dy, paths[p, k, 0], paths[p, k, 1])
-                    h = z - g
+                    x, y = paths[p, k, 0], paths[p, k, 1]
+                    h = z - ground_one(H, has_terrain, nearest, x0, y0, dx, dy, x, y)
                 if h < bmin - band_tol or h > bmax + band_tol:
                     ok = False
                     break

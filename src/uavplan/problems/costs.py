@@ -14,11 +14,14 @@ References:
 from __future__ import annotations
 
 import numpy as np
-from numba import prange
+from numba import njit, prange
 from numpy.typing import NDArray
 
 from uavplan.kernel_builds import population_kernel
+from uavplan.world._terrain_kernels import ground_one
 from uavplan.world.geometry import (
+    clipped_dist,
+    seg_setup,
     segment_circle_inside_fraction,
     segment_polygon_inside_fraction,
 )
@@ -136,38 +139,248 @@ def smoothness_cost_spso(
     return np.asarray(_smoothness_spso_kernel(p, float(turning_max), float(climb_max)))
 
 
+@njit(cache=True, inline="always")
+def _spso_projections(p, q, i):  # pragma: no cover - numba
+    """The xy projections J4 compares at interior node ``i + 1`` of path ``q``: the last non-zero
+    one among segments i, i-1, ..., 0 (else segment 0's) and the first non-zero one among
+    segments i+1, ..., N-2 (else segment N-2's), as ``MyCost.m``'s loops find them."""
+    N = p.shape[1]
+    j1 = i
+    while j1 > 0 and p[q, j1 + 1, 0] == p[q, j1, 0] and p[q, j1 + 1, 1] == p[q, j1, 1]:
+        j1 -= 1
+    j2 = i + 1
+    while j2 < N - 2 and p[q, j2 + 1, 0] == p[q, j2, 0] and p[q, j2 + 1, 1] == p[q, j2, 1]:
+        j2 += 1
+    ax = p[q, j1 + 1, 0] - p[q, j1, 0]
+    ay = p[q, j1 + 1, 1] - p[q, j1, 1]
+    bx = p[q, j2 + 1, 0] - p[q, j2, 0]
+    by = p[q, j2 + 1, 1] - p[q, j2, 1]
+    return ax, ay, bx, by
+
+
+@njit(cache=True, inline="always")
+def _spso_node_smoothness(p, q, i, turning_max, climb_max):  # pragma: no cover - numba
+    """J4's two additions at interior node ``i + 1`` of path ``q`` (see
+    :func:`smoothness_cost_spso`): the turning angle and the climb change, each 0 within its
+    limit; the caller adds them in that order."""
+    ax, ay, bx, by = _spso_projections(p, q, i)
+    n1 = np.sqrt(ax * ax + ay * ay)
+    n2 = np.sqrt(bx * bx + by * by)
+    deg = 180.0 / np.pi
+    climb1 = np.arctan2(p[q, i + 1, 2] - p[q, i, 2], n1) * deg
+    climb2 = np.arctan2(p[q, i + 2, 2] - p[q, i + 1, 2], n2) * deg
+    turning = abs(np.arctan2(abs(ax * by - ay * bx), ax * bx + ay * by) * deg)
+    dclimb = abs(climb2 - climb1)
+    return (turning if turning > turning_max else 0.0), (dclimb if dclimb > climb_max else 0.0)
+
+
 @population_kernel()
 def _smoothness_spso_kernel(p, turning_max, climb_max):  # pragma: no cover - numba
     P, N, _ = p.shape
     out = np.zeros(P)
-    deg = 180.0 / np.pi
     for q in prange(P):
         total = 0.0
         for i in range(N - 2):
-            # segment1: last non-zero xy projection among segments i, i-1, ..., 0 (else 0)
-            j1 = i
-            while j1 > 0 and p[q, j1 + 1, 0] == p[q, j1, 0] and p[q, j1 + 1, 1] == p[q, j1, 1]:
-                j1 -= 1
-            # segment2: first non-zero among segments i+1, ..., N-2 (else N-2)
-            j2 = i + 1
-            while j2 < N - 2 and p[q, j2 + 1, 0] == p[q, j2, 0] and p[q, j2 + 1, 1] == p[q, j2, 1]:
-                j2 += 1
-            ax = p[q, j1 + 1, 0] - p[q, j1, 0]
-            ay = p[q, j1 + 1, 1] - p[q, j1, 1]
-            bx = p[q, j2 + 1, 0] - p[q, j2, 0]
-            by = p[q, j2 + 1, 1] - p[q, j2, 1]
-            n1 = np.sqrt(ax * ax + ay * ay)
-            n2 = np.sqrt(bx * bx + by * by)
-            climb1 = np.arctan2(p[q, i + 1, 2] - p[q, i, 2], n1) * deg
-            climb2 = np.arctan2(p[q, i + 2, 2] - p[q, i + 1, 2], n2) * deg
-            turning = abs(np.arctan2(abs(ax * by - ay * bx), ax * bx + ay * by) * deg)
-            if turning > turning_max:
-                total += turning
-            dclimb = abs(climb2 - climb1)
-            if dclimb > climb_max:
-                total += dclimb
+            turn, climb = _spso_node_smoothness(p, q, i, turning_max, climb_max)
+            total += turn
+            total += climb
         out[q] = total
     return out
+
+
+# ---------------------------------------------------------------------------- SPSO, fused
+#: :func:`path_cost_batch`'s columns of terms (SPSO's names; PPSwarm's F1-F4 are the same four)
+SPSO_TERMS = ("length", "threat", "altitude", "smoothness")
+#: :func:`path_cost_batch`, SPSO: an angle is taken as within its limit without computing it when
+#: the limit's test, made on the vectors, holds with this relative margin (far above the
+#: rounding of the vectors' products and of ``arctan2``, so the decision is the reference's)
+ANGLE_MARGIN = 1e-9
+
+
+@njit(cache=True, inline="always")
+def _spso_node_smoothness_fast(p, q, i, turning_max, climb_max):  # pragma: no cover - numba
+    """:func:`_spso_node_smoothness` with the angles computed only where they may exceed their
+    limits (the same values where it matters, so the same additions): with the 45-degree limits
+    of SPSO, the turning angle ``atan2(c, d)`` is below 45 degrees when ``c < d`` and the climb
+    change, the angle between ``(n1, dz1)`` and ``(n2, dz2)``, when ``|dz2 n1 - dz1 n2| <
+    n1 n2 + dz1 dz2``; each test is made with :data:`ANGLE_MARGIN` and otherwise the angles
+    are computed as the reference does."""
+    ax, ay, bx, by = _spso_projections(p, q, i)
+    deg = 180.0 / np.pi
+    turn = 0.0
+    c = abs(ax * by - ay * bx)
+    d = ax * bx + ay * by
+    if not (turning_max == 45.0 and c < d * (1.0 - ANGLE_MARGIN)):
+        turning = abs(np.arctan2(c, d) * deg)
+        if turning > turning_max:
+            turn = turning
+    n1 = np.sqrt(ax * ax + ay * ay)
+    n2 = np.sqrt(bx * bx + by * by)
+    dz1 = p[q, i + 1, 2] - p[q, i, 2]
+    dz2 = p[q, i + 2, 2] - p[q, i + 1, 2]
+    climb = 0.0
+    cross = abs(dz2 * n1 - dz1 * n2)
+    dot = n1 * n2 + dz1 * dz2
+    scale = (n1 + abs(dz1)) * (n2 + abs(dz2))
+    if not (climb_max == 45.0 and n1 > 0.0 and n2 > 0.0 and cross < dot - ANGLE_MARGIN * scale):
+        dclimb = abs(np.arctan2(dz2, n2) * deg - np.arctan2(dz1, n1) * deg)
+        if dclimb > climb_max:
+            climb = dclimb
+    return turn, climb
+
+
+@njit(cache=True, inline="always")
+def _ppswarm_node_turn(p, q, i):  # pragma: no cover - numba
+    """PPSwarm's turning angle at interior node ``i + 1`` of path ``q`` (:func:`turn_angles`,
+    3-D, the same operations)."""
+    a0 = p[q, i + 1, 0] - p[q, i, 0]
+    a1 = p[q, i + 1, 1] - p[q, i, 1]
+    a2 = p[q, i + 1, 2] - p[q, i, 2]
+    b0 = p[q, i + 2, 0] - p[q, i + 1, 0]
+    b1 = p[q, i + 2, 1] - p[q, i + 1, 1]
+    b2 = p[q, i + 2, 2] - p[q, i + 1, 2]
+    c0 = a1 * b2 - a2 * b1
+    c1 = a2 * b0 - a0 * b2
+    c2 = a0 * b1 - a1 * b0
+    dot = 0.0 + a0 * b0  # from +0, as NumPy's sum: a zero segment's dot is +0 (angle 0, not pi)
+    return np.arctan2(np.sqrt(c0 * c0 + c1 * c1 + c2 * c2), dot + a1 * b1 + a2 * b2)
+
+
+#: :func:`path_cost_batch`'s cost models
+SPSO, PPSWARM = 0, 1
+
+
+@population_kernel(error_model="numpy")
+def path_cost_batch(
+    model,
+    p,
+    cx,
+    cy,
+    z_lo,
+    z_hi,
+    r_in,
+    r_out,
+    threat,
+    moving,
+    H,
+    has_terrain,
+    nearest,
+    x0,
+    y0,
+    dx,
+    dy,
+    has_band,
+    ground_ref,
+    z_min,
+    z_max,
+    weights,
+    early,
+):  # pragma: no cover - numba
+    """A whole cost of four terms -- length J1, threat J2, altitude J3, smoothness J4 -- of every
+    path in one pass over the population: ``(total, terms)``, (P,) and (P, 4), ``total = ((w0
+    J1 + w1 J2) + w2 J3) + w3 J4`` as :class:`~uavplan.problems.path_problem.PathProblem` adds
+    the terms. ``model``: :data:`SPSO` (``MyCost.m``, the terms of :data:`SPSO_TERMS`) or
+    :data:`PPSWARM` (PPSwarm's F1-F4, Eqs. 2-10).
+
+    The same terms as the separate ones (the references the tests compare it with), per path one
+    loop over its segments for J1 and J2, one over its nodes for J3 and one over its interior
+    nodes for J4:
+
+    * J2: cylinders as structure of arrays, ``r_in``, ``r_out`` as
+      :func:`uavplan.world.geometry.cylinder_threat_batch` takes them (SPSO strict, PPSwarm
+      not); ``threat``: None to compute it here from every pair, or each path's static J2
+      computed apart (the indexed pass); ``moving``: None, or PPSwarm's moving-obstacle term
+      per path, added to it.
+    * J3: heights of the terrain ``H`` (when ``has_terrain``) read at the ``nearest`` node or
+      bilinear; SPSO: over the free nodes, inf below ground, else the distance to the band's
+      middle; PPSwarm (``has_band``): over every node, in the band's reference
+      (``ground_ref``: above ground), inf outside the band, else the distance to its middle.
+    * J4: SPSO's limited angles in degrees (:func:`_spso_node_smoothness_fast`); PPSwarm's
+      turning angles and climb-angle changes in radians (Eq. 10 with a1 = a2 = 1).
+
+    ``early``: a path with an infinite J2 or J3 (so an infinite total) skips what is left once
+    every coordinate is known finite (so that NaN stays NaN), its terms left where they were:
+    for the total alone.
+    """
+    P, N, _ = p.shape
+    J = cx.shape[0]
+    total = np.empty(P)
+    terms = np.zeros((P, 4))
+    psi = np.empty((P, max(N - 1, 1)))  # PPSwarm's climb angle per segment
+    mid = 0.5 * (z_max + z_min)
+    strict = model == SPSO
+    for q in prange(P):
+        finite = True
+        if early:
+            for s in range(N):
+                for c in range(3):
+                    finite = finite and np.isfinite(p[q, s, c])
+        # J1 and J2: segments
+        j1 = 0.0
+        j2 = 0.0
+        hits = 0
+        for s in range(N - 1):
+            ax, ay, az, ex, ey, inv_ee, flat, inv_dz = seg_setup(p, q, s)
+            dz = p[q, s + 1, 2] - az
+            length = np.sqrt(ex * ex + ey * ey + dz * dz)
+            j1 += length
+            if model == PPSWARM:
+                psi[q, s] = np.arctan2(dz, length)
+            if threat is None:
+                for j in range(J):
+                    d = clipped_dist(
+                        ax, ay, az, ex, ey, inv_ee, flat, inv_dz, cx[j], cy[j], z_lo[j], z_hi[j]
+                    )
+                    hits += 1 if (d < r_in[j] or (not strict and d == r_in[j])) else 0
+                    j2 += (r_out[j] - d) if d <= r_out[j] else 0.0
+        if threat is not None:
+            j2 = threat[q]
+        elif hits > 0:
+            j2 = np.inf
+        if moving is not None:
+            j2 = j2 + moving[q]
+        # J3: nodes
+        j3 = 0.0
+        first, last = (1, N - 1) if model == SPSO else (0, N)
+        if (model == SPSO or has_band) and not (early and finite and np.isinf(j2)):
+            for s in range(first, last):
+                h = p[q, s, 2]
+                if model == SPSO or ground_ref:
+                    h = h - ground_one(
+                        H, has_terrain, nearest, x0, y0, dx, dy, p[q, s, 0], p[q, s, 1]
+                    )
+                inside = (not h < 0) if model == SPSO else (h >= z_min and h <= z_max)
+                if inside:
+                    j3 += abs(h - mid)
+                else:
+                    j3 += np.inf
+                    if early and finite:
+                        break
+        # J4: interior nodes
+        j4 = 0.0
+        if not (early and finite and (np.isinf(j2) or np.isinf(j3))):
+            if model == SPSO:
+                for i in range(N - 2):
+                    turn, climb = _spso_node_smoothness_fast(p, q, i, 45.0, 45.0)
+                    j4 += turn
+                    j4 += climb
+            else:
+                turns = 0.0
+                climbs = 0.0
+                for i in range(N - 2):
+                    turns += _ppswarm_node_turn(p, q, i)
+                    climbs += abs(psi[q, i + 1] - psi[q, i])
+                j4 = 1.0 * turns
+                j4 = j4 + 1.0 * climbs
+        terms[q, 0] = j1
+        terms[q, 1] = j2
+        terms[q, 2] = j3
+        terms[q, 3] = j4
+        t = 0.0 + weights[0] * j1
+        t = t + weights[1] * j2
+        t = t + weights[2] * j3
+        total[q] = t + weights[3] * j4
+    return total, terms
 
 
 # ---------------------------------------------------------------------------- HR-MAGA

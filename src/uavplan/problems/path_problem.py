@@ -176,6 +176,91 @@ PRESETS: dict[str, tuple[Term, ...]] = {
 LOOKUP = {"spso": "nearest"}
 
 
+def _world_args(v: MotionValidator, r_in: FloatArray, r_out: FloatArray) -> tuple[Any, ...]:
+    """The world's arguments of :func:`uavplan.problems.costs.path_cost_batch` after
+    ``model, paths`` (cylinders as structure of arrays, the terrain, the band), once per
+    problem; ``threat`` and ``moving`` are left as None, for each batch to set."""
+    w, sc = v.world, v.scenario
+    _, cyl = G.soa(np.zeros((0, 2, 3)), w.cyl_centers, w.cyl_lo, w.cyl_hi, r_in, r_out)
+    t = sc.terrain
+    if t is not None:
+        H, x0, y0, dx, dy = t.heights, t.x0, t.y0, t.dx, t.dy
+    else:
+        H, x0, y0, dx, dy = np.zeros((1, 1)), 0.0, 0.0, 1.0, 1.0
+        H.setflags(write=False)  # read-only as a terrain's heights: one kernel signature
+    band = sc.altitude
+    lo, hi = (band.min, band.max) if band is not None else (0.0, 0.0)
+    ground = band is not None and band.reference == "ground"
+    return (*cyl, None, None, H, t is not None, v.lookup == "nearest", float(x0), float(y0),
+            float(dx), float(dy), band is not None, ground, float(lo), float(hi))  # fmt: skip
+
+
+def _spso_prepare(v: MotionValidator) -> tuple[Any, ...]:
+    w = v.world
+    R = (w.cyl_radii - w.cyl_margin) + w.cyl_margin  # as _t_threat_spso
+    return (C.SPSO, *_world_args(v, R, R + 10.0 * w.cyl_margin))
+
+
+def _ppswarm_prepare(v: MotionValidator) -> tuple[Any, ...]:
+    R = v.world.cyl_radii  # as _t_threat
+    return (C.PPSWARM, *_world_args(v, R, R + v.scenario.uav.s1))
+
+
+def _fused(
+    ctx: Batch, args: tuple[Any, ...], weights: FloatArray, early: bool
+) -> tuple[FloatArray, FloatArray]:
+    """The four terms of SPSO's or PPSwarm's cost in one pass
+    (:func:`uavplan.problems.costs.path_cost_batch`): the weighted total and the (pop, 4)
+    terms, the same as the terms of the :data:`PRESETS` (``_t_length`` ...), the references
+    the tests compare it with."""
+    model, cx, cy, lo, hi, r_in, r_out, _, _, *world = args
+    p = ctx.paths  # 3-D, C-contiguous float64 (MotionValidator.check_paths)
+    threat = moving = None
+    if G.gridded(p, len(cx)):  # the indexed pass, then the kernel
+        threat = G.cylinder_threat(p, ctx.world.cyl_centers, lo, hi, r_in, r_out, model == C.SPSO)
+    moving_obstacles = ctx.scenario.moving_obstacles
+    if model == C.PPSWARM and moving_obstacles:
+        radii = np.array([o.radius for o in moving_obstacles])
+        moving = C.moving_threat_cost(ctx.moving_dist, radii, ctx.scenario.uav.s1)
+    total, terms = C.path_cost_batch(
+        model, p, cx, cy, lo, hi, r_in, r_out, threat, moving, *world, weights, bool(early)
+    )
+    return np.asarray(total), np.asarray(terms)
+
+
+@dataclass(frozen=True)
+class Fused:
+    """Cost terms computed together in one kernel: ``fns`` (the term functions it replaces, in
+    order, when they lead a problem's terms), ``prepare(validator) -> args`` (what the kernel
+    needs of the world, once per problem), ``compute(batch, args, weights, early) -> (total,
+    terms)``, the terrain ``lookups`` it can read heights with and the dimension it serves."""
+
+    fns: tuple[TermFn, ...]
+    prepare: Callable[[MotionValidator], tuple[Any, ...]]
+    compute: Callable[[Batch, tuple[Any, ...], FloatArray, bool], tuple[FloatArray, FloatArray]]
+    lookups: tuple[str, ...]
+    dim: int
+
+
+#: The fused kernels, tried in order by :class:`PathProblem`.
+FUSED = (
+    Fused(
+        (_t_length, _t_threat_spso, _t_altitude_spso, _t_smooth_spso),
+        _spso_prepare,
+        _fused,
+        ("nearest",),
+        3,
+    ),
+    Fused(
+        (_t_length, _t_threat, _t_altitude, _t_smooth),
+        _ppswarm_prepare,
+        _fused,
+        ("bilinear", "nearest"),
+        3,
+    ),
+)
+
+
 def cost_presets() -> list[str]:
     return sorted(PRESETS)
 
@@ -205,6 +290,8 @@ class PathProblem:
         name: the cost model's name (default: the preset's, ``"custom"`` for terms).
         cost_terrain: the map the cost terms read heights from (default: the scenario's; a
             terrain pyramid level's sampled map while the checks use its conservative one).
+        fused: compute the leading terms in one kernel where one does (:data:`FUSED`); False
+            computes every term apart (the references the fused kernels are tested against).
 
     Feasibility is the :attr:`validator`'s verdict; the cost terms and the checks of one
     evaluation share one :class:`~uavplan.problems.validity.Batch`.
@@ -221,6 +308,7 @@ class PathProblem:
         lookup: str | None = None,
         name: str | None = None,
         cost_terrain: Terrain | None = None,
+        fused: bool = True,
     ) -> None:
         self.scenario = scenario
         self.task = task if isinstance(task, Task) else scenario.task(task)
@@ -251,6 +339,15 @@ class PathProblem:
             cost_terrain=cost_terrain,
         )
         self.dim = scenario.dim
+        #: the kernel that computes the leading terms together (:data:`FUSED`), if one does
+        self.fused: Fused | None = None
+        fns = tuple(t.fn for t in terms)
+        for f in FUSED if fused else ():
+            if fns[: len(f.fns)] == f.fns and self.lookup in f.lookups and self.dim == f.dim:
+                self.fused = f
+                self._fused_weights = np.array([t.weight for t in terms[: len(f.fns)]], float)
+                self._fused_args = f.prepare(self.validator)
+                break
         self.start = np.asarray(self.task.start, dtype=np.float64)
         self.goal = np.asarray(self.task.goal, dtype=np.float64)
 
@@ -260,8 +357,13 @@ class PathProblem:
 
     # ------------------------------------------------------------------ evaluation
     def _total(self, b: Batch, checks_too: bool = True) -> FloatArray:
-        total = np.zeros(b.paths.shape[0])
-        for t in self.terms:
+        terms = self.terms
+        if self.fused is not None:  # the leading terms in one kernel, stopping early
+            total = self.fused.compute(b, self._fused_args, self._fused_weights, True)[0]
+            terms = terms[len(self.fused.fns) :]
+        else:
+            total = np.zeros(b.paths.shape[0])
+        for t in terms:
             if checks_too or t.check is None:
                 total = total + t.weight * np.asarray(t.fn(b), dtype=np.float64)
         return total
@@ -271,9 +373,16 @@ class PathProblem:
         dim), flown at ``times`` (pop, n_points) seconds (default: the UAV's speed from the
         task's start time)."""
         b = self.validator.batch(paths, times)
-        terms = {t.name: np.asarray(t.fn(b), dtype=np.float64) for t in self.terms}
-        total = np.zeros(b.paths.shape[0])
-        for t in self.terms:
+        rest = self.terms
+        if self.fused is not None:
+            total, fused = self.fused.compute(b, self._fused_args, self._fused_weights, False)
+            k = len(self.fused.fns)
+            terms = {t.name: fused[:, i] for i, t in enumerate(self.terms[:k])}
+            rest = self.terms[k:]
+        else:
+            terms, total = {}, np.zeros(b.paths.shape[0])
+        for t in rest:
+            terms[t.name] = np.asarray(t.fn(b), dtype=np.float64)
             total = total + t.weight * terms[t.name]
         violations = self.validator.violations(b)
         feasible = np.ones(b.paths.shape[0], dtype=bool)

@@ -386,13 +386,13 @@ class MotionValidator:
     @cached_property
     def _static_args(self) -> tuple[object, ...] | None:
         """The arguments of the fused static-world kernel, or None where it does not apply
-        (2-D, circles or polygons, terrain read as ``nearest``)."""
+        (2-D, circles or polygons)."""
         sc = self.scenario
         w = self.world
         if self.dim != 3 or len(w.circ_radii) or w.n_polygons > 0:
             return None
         terrain = sc.terrain
-        if terrain is not None and self.lookup != "bilinear":
+        if terrain is not None and self.lookup not in ("bilinear", "nearest"):
             return None
         band = sc.altitude
         ground = band is not None and band.reference == "ground"
@@ -420,7 +420,7 @@ class MotionValidator:
             BOUNDS_TOL,
             *self._static_cylinders,
             terrain is not None, H, flat, off, shp, nH, nflat, noff, nshp, grid, need,
-            band is not None, ground,
+            band is not None, ground, self.lookup == "nearest",
             float(band.min) if band is not None else 0.0,
             float(band.max) if band is not None else 0.0,
             BAND_TOL, strict,

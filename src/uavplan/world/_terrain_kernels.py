@@ -461,6 +461,35 @@ def bilinear_one(H, x0, y0, dx, dy, x, y):  # pragma: no cover - numba
     return _bilinear_cell(H, i, j, u - i, v - j)
 
 
+@njit(cache=True, inline="always")
+def nearest_one(H, x0, y0, dx, dy, x, y):  # pragma: no cover - numba
+    """Height of the grid node nearest ``(x, y)``, halves rounded up, clamped to the grid: the
+    arithmetic of :meth:`uavplan.world.terrain.Terrain.height_nearest` (SPSO's ``H(round(y),
+    round(x))``). A coordinate that is not finite or beyond the int64 range takes node 0, as
+    the NumPy form's float-to-int conversion gives on x86 (then clipped)."""
+    ny, nx = H.shape
+    u = (x - x0) / dx
+    v = (y - y0) / dy
+    fu = np.floor(u)
+    fv = np.floor(v)
+    ru = fu + 1.0 if u - fu >= 0.5 else fu
+    rv = fv + 1.0 if v - fv >= 0.5 else fv
+    i = int(ru) if abs(ru) < 9.2e18 else 0  # NaN fails the test too
+    j = int(rv) if abs(rv) < 9.2e18 else 0
+    return H[min(max(j, 0), ny - 1), min(max(i, 0), nx - 1)]
+
+
+@njit(cache=True, inline="always")
+def ground_one(H, has_terrain, nearest, x0, y0, dx, dy, x, y):  # pragma: no cover - numba
+    """The ground's height at ``(x, y)`` read at the ``nearest`` node or bilinear; 0 without a
+    terrain (``has_terrain`` False, ``H`` then a placeholder)."""
+    if not has_terrain:
+        return 0.0
+    if nearest:
+        return nearest_one(H, x0, y0, dx, dy, x, y)
+    return bilinear_one(H, x0, y0, dx, dy, x, y)
+
+
 @njit(cache=True)
 def bilinear_heights(H, x0, y0, dx, dy, x, y):  # pragma: no cover - numba
     """Bilinear height at the points ``(x[k], y[k])`` (flat float64 arrays), clamped to the grid:

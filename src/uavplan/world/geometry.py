@@ -317,7 +317,7 @@ def _as_3d(paths: FloatArray) -> FloatArray:
     return np.ascontiguousarray(p)
 
 
-def _soa(
+def soa(
     paths: FloatArray, centers: FloatArray, *per_cylinder: FloatArray
 ) -> tuple[FloatArray, list[FloatArray]]:
     """Paths as :func:`_as_3d` gives them, and the axes' x, y and each per-cylinder array as
@@ -327,7 +327,7 @@ def _soa(
     return _as_3d(paths), cols
 
 
-def _gridded(p: FloatArray, n_cylinders: int) -> bool:
+def gridded(p: FloatArray, n_cylinders: int) -> bool:
     """Whether the grid serves these paths: enough cylinders, and finite coordinates."""
     return n_cylinders >= GRID_MIN_CYLINDERS and bool(np.isfinite(p[..., :2]).all())
 
@@ -344,10 +344,10 @@ def cylinder_threat(
     """:func:`cylinder_threat_batch` of any paths (2-D ones at z = 0 against the cylinders'
     heights, as :func:`cylinder_distances`), (pop,); from :data:`GRID_MIN_CYLINDERS` cylinders
     on, :func:`cylinder_grid_pass`."""
-    p, (cx, cy, lo, hi, a, b) = _soa(paths, centers, z_lo, z_hi, r_in, r_out)
+    p, (cx, cy, lo, hi, a, b) = soa(paths, centers, z_lo, z_hi, r_in, r_out)
     if len(cx) == 0:
         return np.zeros(p.shape[0])
-    if _gridded(p, len(cx)) and bool(np.all(a <= b)):
+    if gridded(p, len(cx)) and bool(np.all(a <= b)):
         g = by_content("cylinder grid", cylinder_grid, cx, cy, b)
         return np.asarray(cylinder_grid_pass(p, cx, cy, lo, hi, a, a, b, bool(strict), *g)[0])
     return np.asarray(cylinder_threat_batch(p, cx, cy, lo, hi, a, b, bool(strict)))
@@ -359,10 +359,10 @@ def cylinder_hits(
     """The metres inside cylinders and whether a path hits one, (pop,) each: what the cylinder
     check and the graded violation need (:func:`cylinder_grid_pass` from
     :data:`GRID_MIN_CYLINDERS` cylinders on, else :func:`cylinder_overlap`)."""
-    p, (cx, cy, lo, hi, r) = _soa(paths, centers, z_lo, z_hi, radii)
+    p, (cx, cy, lo, hi, r) = soa(paths, centers, z_lo, z_hi, radii)
     if len(cx) == 0:
         return np.zeros(p.shape[0]), np.zeros(p.shape[0], dtype=bool)
-    if _gridded(p, len(cx)):
+    if gridded(p, len(cx)):
         g = by_content("cylinder grid", cylinder_grid, cx, cy, r)
         _, inside, hit = cylinder_grid_pass(p, cx, cy, lo, hi, r, r, r, False, *g)
         return np.asarray(inside), np.asarray(hit)
@@ -374,7 +374,7 @@ def cylinder_overlap(
     paths: FloatArray, centers: FloatArray, z_lo: FloatArray, z_hi: FloatArray, radii: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
     """:func:`cylinder_overlap_batch` of any paths: metres inside and least clearance, (pop,)."""
-    p, (cx, cy, lo, hi, r) = _soa(paths, centers, z_lo, z_hi, radii)
+    p, (cx, cy, lo, hi, r) = soa(paths, centers, z_lo, z_hi, radii)
     if len(cx) == 0:
         return np.zeros(p.shape[0]), np.full(p.shape[0], np.inf)
     inside, clearance = cylinder_overlap_batch(p, cx, cy, lo, hi, r)

@@ -33,12 +33,15 @@ register_plan(
     ExperimentPlan(
         name="spso-scenario",
         description=(
-            "PSO, SPSO, GA, DE, ABC, GWO, WOA, RSCDWOA and MAGA on the SPSO benchmark with "
-            "SPSO's cost and budget (500 x 200 evaluations' worth), 20 runs"
+            "PSO, SPSO (synchronous and, as the authors' code, asynchronous), GA, DE, ABC, GWO, "
+            "WOA, RSCDWOA and MAGA on the SPSO benchmark with SPSO's cost and budget (500 x 200 "
+            "evaluations' worth), 20 runs"
         ),
         scenarios=("spso",),
         algorithms=(
             Algorithm("spso", "spso"),
+            # the global best replaced particle by particle, as SPSO_MAIN.m does
+            Algorithm("spso-async", "spso", {"update": "async"}),
             Algorithm("pso", "pso"),
             Algorithm("ga", "ga"),
             Algorithm("de", "de"),
