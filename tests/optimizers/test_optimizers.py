@@ -187,6 +187,29 @@ def test_config_defaults_and_records(name: str) -> None:
     assert res.config == expected
 
 
+@pytest.mark.parametrize("name", ALGORITHMS)
+def test_every_hyperparameter_is_documented_and_checked(name: str) -> None:
+    """Each field of an optimizer's config has a line of documentation (what ``uavplan
+    planners NAME`` prints), its default passes its own declaration, and a value out of a
+    declared range or choices is refused naming the field."""
+    from uavplan.params import describe_options
+
+    cfg_cls = get(name).Config
+    for o in describe_options(cfg_cls):
+        assert o["doc"], f"{name}.{o['name']} has no documentation"
+    cfg_cls()  # the defaults are valid
+    for f in dataclasses.fields(cfg_cls):
+        m = f.metadata
+        if m.get("choices") is not None:
+            bad: object = "no-such-choice"
+        elif m.get("low") is not None:
+            bad = m["low"] - 1
+        else:
+            continue
+        with pytest.raises(OptimizerError, match=f"^{f.name} must be"):
+            cfg_cls(**{f.name: bad})
+
+
 # ---------------------------------------------------------------------- PSO
 def test_pso_defaults() -> None:
     cfg = PSOConfig()

@@ -102,7 +102,7 @@ def test_async_keeps_what_it_took_and_differs_from_sync() -> None:
 
 
 def test_update_must_be_known() -> None:
-    with pytest.raises(OptimizerError, match="update must be one of sync, async"):
+    with pytest.raises(OptimizerError, match=r"update must be one of \['sync', 'async'\]"):
         SPSOConfig(update="parallel")
 
 

@@ -34,9 +34,7 @@ def planners(
     name: Annotated[str | None, typer.Argument(help="A planner: show its options.")] = None,
 ) -> None:
     """List the planners, or show NAME's options (usable as --param NAME=VALUE)."""
-    from dataclasses import fields
 
-    from uavplan import optimizers
     from uavplan.planners import (
         PlannerError,
         available_planners,
@@ -69,7 +67,7 @@ def planners(
     opt = p.optimizer_name()
     if opt is not None and p.optimizer_config is not None:
         cfg = p.optimizer_config
-        doc = (optimizers.get(opt).__doc__ or "").strip().split("\n")[0]
-        for f in fields(cfg):
-            table.add_row(f.name, repr(getattr(cfg, f.name)), "", f"{opt}: {doc}")
+        for o in describe_options(type(cfg)):
+            value = repr(getattr(cfg, o["name"]))
+            table.add_row(o["name"], value, o["range"], f"{opt}: {o['doc']}")
     print_table(table)

@@ -62,9 +62,9 @@ from uavplan.optimizers.base import (
     FloatArray,
     Optimizer,
     OptimizerConfig,
-    OptimizerError,
     register,
 )
+from uavplan.params import option
 
 IntArray = NDArray[np.int64]
 
@@ -74,15 +74,13 @@ class ABCConfig(OptimizerConfig):
     """ABC hyperparameters; colony size from PPSwarm Table 2, ``limit`` from Karaboga & Basturk
     2007."""
 
-    pop_size: int = 300  # colony size (employed + onlookers); SN = FoodNumber = pop_size // 2
-    limit: int | None = None  # trials before a source is abandoned; None: SN * D
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if self.pop_size < 4:
-            raise OptimizerError(f"ABC needs pop_size >= 4 (two food sources), got {self.pop_size}")
-        if self.limit is not None and self.limit < 1:
-            raise OptimizerError(f"limit must be >= 1, got {self.limit}")
+    pop_size: int = option(
+        300, "colony size, employed + onlookers (SN = pop_size // 2 food sources; PPSwarm "
+        "Table 2)", low=4,
+    )  # fmt: skip
+    limit: int | None = option(
+        None, "trials before a food source is abandoned (None: SN x D, Karaboga & Basturk)", low=1
+    )
 
 
 def abc_fitness(f: FloatArray) -> FloatArray:

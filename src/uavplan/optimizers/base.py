@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from uavplan.compile_clock import Stopwatch
+from uavplan.params import check_fields, option
 
 FloatArray = NDArray[np.float64]
 
@@ -113,13 +114,17 @@ class OptimizeResult:
 
 @dataclass(frozen=True)
 class OptimizerConfig:
-    """Base of every optimizer's frozen hyperparameter dataclass (defaults = the paper's)."""
+    """Base of every optimizer's frozen hyperparameter dataclass (defaults = the paper's).
+    Fields are declared with :func:`uavplan.params.option` (a line of documentation, the valid
+    range or choices), checked when a config is built (:class:`OptimizerError` naming the
+    field) and listed by ``uavplan planners NAME``."""
 
-    pop_size: int = 50
+    pop_size: int = option(50, "population size", low=1)
 
     def __post_init__(self) -> None:
-        if self.pop_size < 1:
-            raise OptimizerError(f"pop_size must be >= 1, got {self.pop_size}")
+        bad = check_fields(self)
+        if bad is not None:
+            raise OptimizerError(f"{bad[0]} {bad[1]}")
 
 
 C = TypeVar("C", bound=OptimizerConfig)

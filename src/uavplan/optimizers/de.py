@@ -39,6 +39,7 @@ from uavplan.optimizers.base import (
     OptimizerError,
     register,
 )
+from uavplan.params import option
 
 
 def distinct_indices(rng: np.random.Generator, n: int, k: int) -> np.ndarray:
@@ -139,18 +140,10 @@ def trial(x, r, F, u, c, CR, j_rand, lower, upper):  # pragma: no cover - numba
 class DEConfig(OptimizerConfig):
     """DE/rand/1/bin hyperparameters; F and CR from PPSwarm Table 2."""
 
-    pop_size: int = 100  # NP; needs NP >= 4 for r1, r2, r3, i distinct
-    F: float = 0.8  # differential weight (mutation scale factor)
-    CR: float = 0.9  # crossover probability
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if self.pop_size < 4:
-            raise OptimizerError(f"DE needs pop_size >= 4, got {self.pop_size}")
-        if self.F <= 0:
-            raise OptimizerError(f"F must be > 0, got {self.F}")
-        if not 0.0 <= self.CR <= 1.0:
-            raise OptimizerError(f"CR must be in [0, 1], got {self.CR}")
+    pop_size: int = option(100, "NP, the population (r1, r2, r3 and i distinct)", low=4)
+    F: float = option(0.8, "differential weight, the mutation scale factor (PPSwarm Table 2)",
+                      low=0, low_open=True)  # fmt: skip
+    CR: float = option(0.9, "crossover probability (PPSwarm Table 2)", low=0, high=1)
 
 
 @register

@@ -47,6 +47,7 @@ from uavplan.optimizers.base import (
     OptimizerError,
     register,
 )
+from uavplan.params import option
 
 
 def offspring_reference(
@@ -107,25 +108,22 @@ def offspring(
 class GAConfig(OptimizerConfig):
     """GA hyperparameters (our choices; see the module docstring)."""
 
-    pop_size: int = 100
-    elite: int = 2  # individuals copied unchanged to the next generation
-    tournament_size: int = 2  # binary tournament
-    crossover_rate: float = 0.9  # probability that a parent pair is crossed
-    mutation_rate: float | None = None  # per-gene probability p_m; None means 1 / dim
-    mutation_scale: float = 0.1  # sigma as a fraction of the box width per gene
+    pop_size: int = option(100, "population size", low=1)
+    elite: int = option(2, "individuals copied unchanged to the next generation (< pop_size)",
+                        low=0)  # fmt: skip
+    tournament_size: int = option(2, "tournament size (2: binary tournament)", low=1)
+    crossover_rate: float = option(0.9, "probability that a parent pair is crossed", low=0,
+                                   high=1)  # fmt: skip
+    mutation_rate: float | None = option(
+        None, "per-gene mutation probability p_m (None: 1 / dim)", low=0, high=1
+    )
+    mutation_scale: float = option(0.1, "mutation sigma as a fraction of the box width per gene",
+                                   low=0)  # fmt: skip
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not 0 <= self.elite < self.pop_size:
-            raise OptimizerError(f"elite must be in [0, pop_size), got {self.elite}")
-        if self.tournament_size < 1:
-            raise OptimizerError(f"tournament_size must be >= 1, got {self.tournament_size}")
-        if not 0.0 <= self.crossover_rate <= 1.0:
-            raise OptimizerError(f"crossover_rate must be in [0, 1], got {self.crossover_rate}")
-        if self.mutation_rate is not None and not 0.0 <= self.mutation_rate <= 1.0:
-            raise OptimizerError(f"mutation_rate must be in [0, 1], got {self.mutation_rate}")
-        if self.mutation_scale < 0:
-            raise OptimizerError(f"mutation_scale must be >= 0, got {self.mutation_scale}")
+        if not self.elite < self.pop_size:
+            raise OptimizerError(f"elite must be below pop_size {self.pop_size}, got {self.elite}")
 
 
 @register

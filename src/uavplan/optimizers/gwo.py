@@ -39,24 +39,20 @@ from uavplan.optimizers.base import (
     FloatArray,
     Optimizer,
     OptimizerConfig,
-    OptimizerError,
     register,
 )
+from uavplan.params import option
 
 
 @dataclass(frozen=True)
 class GWOConfig(OptimizerConfig):
     """GWO hyperparameters; PPSwarm Table 2 (N_pop = 300, N_iter = 100)."""
 
-    pop_size: int = 300  # wolves (at least 3: alpha, beta, delta)
-    max_iterations: int = 100  # length of the a: 2 -> 0 schedule; set it to the run's budget
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if self.pop_size < 3:
-            raise OptimizerError(f"GWO needs pop_size >= 3, got {self.pop_size}")
-        if self.max_iterations < 1:
-            raise OptimizerError(f"max_iterations must be >= 1, got {self.max_iterations}")
+    pop_size: int = option(300, "wolves: alpha, beta, delta and the rest (PPSwarm Table 2)",
+                           low=3)  # fmt: skip
+    max_iterations: int = option(
+        100, "length of the a: 2 -> 0 schedule (set to the run's iteration budget)", low=1
+    )
 
 
 def linear_a(t: int, max_iterations: int) -> float:

@@ -136,6 +136,7 @@ from uavplan.optimizers.base import (
     OptimizerError,
     register,
 )
+from uavplan.params import option
 
 IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
@@ -347,38 +348,26 @@ class MAGAConfig(OptimizerConfig):
     ``L_size = 7``; see the module docstring for non-square sizes.
     """
 
-    pop_size: int = 49  # L_size x L_size = 7 x 7 (Table I)
-    P_c: float = 0.5  # crossover rate (Table I)
-    P_m: float = 0.3  # mutation rate, per new agent (Table I)
-    mutation_step: float = 0.05  # "adjacent coordinate": +-step * box width per gene (ours)
-    self_learning: Literal["winners", "best"] = "winners"  # who may self-learn (Alg. 1 line 10)
-    self_learning_rate: float = 0.5  # probability U(0, 1) < 0.5 (Alg. 1 line 10, Sect. III-B)
-    sL_size: int = 3  # self-learning lattice sL_size x sL_size: 8 mutants + the agent (III-B)
-    sGen: int = 10  # self-learning generations (not in the paper; MAGA [26])
-    smooth: bool = True  # smoothing behaviour (Fig. 3(c)); only acts when problem.block >= 2
-    smooth_passes: int = 30  # passes of the smoothing at most (ours)
-    elitism: bool = True  # main-lattice elite retention (ours, as MAGA [26])
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if self.pop_size < 2:
-            raise OptimizerError(f"MAGA needs pop_size >= 2 (a lattice), got {self.pop_size}")
-        for name in ("P_c", "P_m", "self_learning_rate"):
-            v = getattr(self, name)
-            if not 0.0 <= v <= 1.0:
-                raise OptimizerError(f"{name} must be in [0, 1], got {v}")
-        if self.mutation_step <= 0:
-            raise OptimizerError(f"mutation_step must be > 0, got {self.mutation_step}")
-        if self.self_learning not in ("winners", "best"):
-            raise OptimizerError(
-                f"self_learning must be 'winners' or 'best', got {self.self_learning!r}"
-            )
-        if self.sL_size < 2:
-            raise OptimizerError(f"sL_size must be >= 2, got {self.sL_size}")
-        if self.sGen < 0:
-            raise OptimizerError(f"sGen must be >= 0, got {self.sGen}")
-        if self.smooth_passes < 0:
-            raise OptimizerError(f"smooth_passes must be >= 0, got {self.smooth_passes}")
+    pop_size: int = option(49, "agents on the lattice, L_size x L_size = 7 x 7 (Table I)", low=2)
+    P_c: float = option(0.5, "crossover rate (Table I)", low=0, high=1)
+    P_m: float = option(0.3, "mutation rate, per new agent (Table I)", low=0, high=1)
+    mutation_step: float = option(
+        0.05, "adjacent-coordinate mutation: +-step x box width per gene (ours)", low=0,
+        low_open=True,
+    )  # fmt: skip
+    self_learning: Literal["winners", "best"] = option(
+        "winners", "who may self-learn (Alg. 1 line 10)", choices=("winners", "best")
+    )
+    self_learning_rate: float = option(
+        0.5, "probability of self-learning, U(0, 1) < 0.5 (Alg. 1 line 10, Sect. III-B)", low=0,
+        high=1,
+    )  # fmt: skip
+    sL_size: int = option(3, "self-learning lattice sL_size x sL_size: 8 mutants + the agent",
+                          low=2)  # fmt: skip
+    sGen: int = option(10, "self-learning generations (not in the paper; MAGA [26])", low=0)
+    smooth: bool = option(True, "smoothing behaviour (Fig. 3(c); with blocks of >= 2 genes)")
+    smooth_passes: int = option(30, "passes of the smoothing at most (ours)", low=0)
+    elitism: bool = option(True, "main-lattice elite retention (ours, as MAGA [26])")
 
     @property
     def lattice_shape(self) -> tuple[int, int]:

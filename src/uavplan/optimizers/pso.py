@@ -41,9 +41,9 @@ from uavplan.optimizers.base import (
     FloatArray,
     Optimizer,
     OptimizerConfig,
-    OptimizerError,
     register,
 )
+from uavplan.params import option
 
 
 def move_reference(
@@ -109,21 +109,15 @@ def update_bests(X, f, pbest_x, pbest_f):  # pragma: no cover - numba
 class PSOConfig(OptimizerConfig):
     """PSO hyperparameters; defaults from RGG-PSO+ Sect. 5.2.2 / SPSO (Phung & Ha 2021)."""
 
-    pop_size: int = 100
-    w: float = 1.0  # inertia weight w, initial value
-    w_damp: float = 0.98  # w <- w * w_damp after each iteration
-    c1: float = 1.5  # cognitive coefficient c_1 (eta_1 in RGG-PSO+)
-    c2: float = 1.5  # social coefficient c_2 (eta_2 in RGG-PSO+)
-    velocity_fraction: float = 0.5  # v_max = velocity_fraction * (upper - lower)
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if self.w_damp <= 0:
-            raise OptimizerError(f"w_damp must be > 0, got {self.w_damp}")
-        if self.c1 < 0 or self.c2 < 0:
-            raise OptimizerError(f"c1, c2 must be >= 0, got {self.c1}, {self.c2}")
-        if self.velocity_fraction <= 0:
-            raise OptimizerError(f"velocity_fraction must be > 0, got {self.velocity_fraction}")
+    pop_size: int = option(100, "particles", low=1)
+    w: float = option(1.0, "inertia weight w, initial value (RGG-PSO+ Sect. 5.2.2, SPSO)")
+    w_damp: float = option(0.98, "w <- w x w_damp after each iteration", low=0, low_open=True)
+    c1: float = option(1.5, "cognitive coefficient c_1 (eta_1 in RGG-PSO+)", low=0)
+    c2: float = option(1.5, "social coefficient c_2 (eta_2 in RGG-PSO+)", low=0)
+    velocity_fraction: float = option(
+        0.5, "velocity clamp: v_max = velocity_fraction x (upper - lower) (SPSO's code)", low=0,
+        low_open=True,
+    )  # fmt: skip
 
 
 @register

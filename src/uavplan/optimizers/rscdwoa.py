@@ -143,6 +143,7 @@ from uavplan.optimizers.base import (
     OptimizerError,
     register,
 )
+from uavplan.params import option
 
 IntArray = NDArray[np.int64]
 ChaosKind = Literal["tent", "logistic"]
@@ -293,46 +294,36 @@ class RSCDWOAConfig(OptimizerConfig):
       positive so that the convergence argument (Lemma 2) holds.
     """
 
-    pop_size: int = 30  # n; needs n >= 3 for DE's p_1 != p_2 != i and r_1 != r_2 != i
-    max_iterations: int = 100  # t_max of Eq. 6, in generations; a = 0 beyond it
-    chaos: ChaosKind = "tent"  # chaotic map replacing the random numbers of A, C and l
-    beta: float = 0.74  # tent map parameter (Eq. 14)
-    mu: float = 4.0  # logistic map parameter (Eq. 13)
-    b: float = 1.0  # spiral shape constant (Eqs. 7, 15)
-    S: int = 10  # lifespan: DE + reverse search once s >= S non-improving generations
-    k: int | None = None  # ring neighbourhood radius; None: 10 % of pop_size, in [1, (n-1)/2]
-    lam: float = 1e-4  # lambda of Eq. 17 (gamma_1, gamma_2 = lambda * rand)
-    F: float = 0.8  # scale factor of the global donor (Eq. 19)
-    omega: float = 0.5  # weight of the global donor in V (Eq. 20)
-    C_rate: float = 0.1  # crossover rate, donor gene when rand >= C_rate (Eq. 21)
-    alpha: float = 0.01  # per-gene probability of a uniform random perturbation (Eq. 22)
+    pop_size: int = option(30, "n, the whales (DE's p_1, p_2, i and r_1, r_2, i distinct)",
+                           low=3)  # fmt: skip
+    max_iterations: int = option(100, "t_max of Eq. 6, in generations (a = 0 beyond it)", low=1)
+    chaos: ChaosKind = option(
+        "tent", "the chaotic map replacing A's, C's and l's random numbers (Sect. 5.2)",
+        choices=("tent", "logistic"),
+    )  # fmt: skip
+    beta: float = option(0.74, "tent map parameter (Eq. 14, Sect. 5.2)", low=0, high=1,
+                         low_open=True, high_open=True)  # fmt: skip
+    mu: float = option(4.0, "logistic map parameter (Eq. 13)", low=0, high=4, low_open=True)
+    b: float = option(1.0, "spiral shape constant (Eqs. 7, 15)")
+    S: int = option(10, "lifespan: DE and reverse search after S non-improving generations",
+                    low=0)  # fmt: skip
+    k: int | None = option(
+        None, "ring neighbourhood radius (None: 10 % of pop_size), in [1, (n-1)/2]", low=1
+    )
+    lam: float = option(1e-4, "lambda of Eq. 17 (gamma_1, gamma_2 = lambda x rand)", low=0)
+    F: float = option(0.8, "scale factor of the global donor (Eq. 19)", low=0, low_open=True)
+    omega: float = option(0.5, "weight of the global donor in V (Eq. 20)", low=0, high=1)
+    C_rate: float = option(0.1, "crossover rate: the donor gene when rand >= C_rate (Eq. 21)",
+                           low=0, high=1)  # fmt: skip
+    alpha: float = option(0.01, "per-gene probability of a uniform perturbation (Eq. 22)",
+                          low=0, high=1)  # fmt: skip
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if self.pop_size < 3:
-            raise OptimizerError(f"RSCDWOA needs pop_size >= 3, got {self.pop_size}")
-        if self.max_iterations < 1:
-            raise OptimizerError(f"max_iterations must be >= 1, got {self.max_iterations}")
-        if self.chaos not in ("tent", "logistic"):
-            raise OptimizerError(f"chaos must be 'tent' or 'logistic', got {self.chaos!r}")
-        if not 0.0 < self.beta < 1.0:
-            raise OptimizerError(f"beta must be in (0, 1), got {self.beta}")
-        if not 0.0 < self.mu <= 4.0:
-            raise OptimizerError(f"mu must be in (0, 4], got {self.mu}")
-        if self.S < 0:
-            raise OptimizerError(f"lifespan S must be >= 0, got {self.S}")
-        if self.k is not None and not 1 <= self.k <= (self.pop_size - 1) // 2:
+        if self.k is not None and not self.k <= (self.pop_size - 1) // 2:
             raise OptimizerError(
                 f"k must be in [1, (pop_size-1)/2] = [1, {(self.pop_size - 1) // 2}], got {self.k}"
             )
-        if self.lam < 0:
-            raise OptimizerError(f"lam must be >= 0, got {self.lam}")
-        if self.F <= 0:
-            raise OptimizerError(f"F must be > 0, got {self.F}")
-        for name in ("omega", "C_rate", "alpha"):
-            v = getattr(self, name)
-            if not 0.0 <= v <= 1.0:
-                raise OptimizerError(f"{name} must be in [0, 1], got {v}")
 
     def ring_radius(self) -> int:
         """``k``, or 10 % of the population in ``[1, (n-1)/2]`` when ``k`` is None."""

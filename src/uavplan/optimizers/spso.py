@@ -39,6 +39,7 @@ import numpy as np
 
 from uavplan.optimizers.base import FloatArray, OptimizerConfig, OptimizerError, register
 from uavplan.optimizers.pso import PSO, PSOConfig, move
+from uavplan.params import option
 
 #: :class:`SPSOConfig` ``update``: the global best per iteration or per particle
 UPDATES = ("sync", "async")
@@ -48,16 +49,14 @@ UPDATES = ("sync", "async")
 class SPSOConfig(PSOConfig):
     """SPSO hyperparameters (Phung & Ha 2021 and its reference code)."""
 
-    pop_size: int = 500  # SPSO's swarm size on its benchmark
-    max_init_attempts: int = 100  # re-initializations while every cost is infinite
-    update: str = "sync"  # "async": the global best replaced particle by particle, as SPSO_MAIN.m
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if self.max_init_attempts < 1:
-            raise OptimizerError(f"max_init_attempts must be >= 1, got {self.max_init_attempts}")
-        if self.update not in UPDATES:
-            raise OptimizerError(f"update must be one of {', '.join(UPDATES)}, got {self.update!r}")
+    pop_size: int = option(500, "particles (SPSO's swarm on its benchmark)", low=1)
+    max_init_attempts: int = option(
+        100, "re-initializations of the swarm while every cost is infinite (SPSO's code)", low=1
+    )
+    update: str = option(
+        "sync", "sync: the swarm moves against the previous iteration's global best; async: "
+        "the global best replaced particle by particle, as SPSO_MAIN.m", choices=UPDATES,
+    )  # fmt: skip
 
 
 @register

@@ -58,26 +58,21 @@ from uavplan.optimizers.base import (
     FloatArray,
     Optimizer,
     OptimizerConfig,
-    OptimizerError,
     register,
 )
 from uavplan.optimizers.gwo import linear_a
+from uavplan.params import option
 
 
 @dataclass(frozen=True)
 class WOAConfig(OptimizerConfig):
     """WOA hyperparameters; Mirjalili & Lewis 2016 and RSCDWOA Sect. 2.2 / Table 4."""
 
-    pop_size: int = 30  # whales (search agents); at least 2 for X_rand != X_i
-    max_iterations: int = 100  # t_max of a = 2 - 2 t / t_max; set it to the run's budget
-    b: float = 1.0  # logarithmic spiral shape constant
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if self.pop_size < 2:
-            raise OptimizerError(f"WOA needs pop_size >= 2, got {self.pop_size}")
-        if self.max_iterations < 1:
-            raise OptimizerError(f"max_iterations must be >= 1, got {self.max_iterations}")
+    pop_size: int = option(30, "whales, search agents (X_rand != X_i needs 2)", low=2)
+    max_iterations: int = option(
+        100, "t_max of a = 2 - 2 t / t_max (set to the run's iteration budget)", low=1
+    )
+    b: float = option(1.0, "logarithmic spiral shape constant (Mirjalili & Lewis 2016)")
 
 
 @register
