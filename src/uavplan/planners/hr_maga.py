@@ -86,7 +86,7 @@ from numpy.typing import NDArray
 
 from uavplan.optimizers.base import Budget
 from uavplan.optimizers.constraints import feasibility_first
-from uavplan.optimizers.maga import MAGA, MAGAConfig, turn_cosines
+from uavplan.optimizers.maga import MAGA, MAGABatch, MAGAConfig, turn_cosines
 from uavplan.planners.base import Planner
 from uavplan.planners.optimizer_planner import OptimizerPlanner
 from uavplan.planners.options import PlannerConfig, PlannerError, option
@@ -134,6 +134,11 @@ class HRMAGAConfig(PlannerConfig):
     )
     uncertain_from_level: int = option(
         2, "first level that knows the uncertain areas (the paper: the finer ones)", low=1
+    )
+    lockstep: str = option(
+        "batched",
+        "a level's P-MAGAs as one Numba batch, or one object each (the reference: same numbers)",
+        choices=("batched", "reference"),
     )
 
 
@@ -236,25 +241,88 @@ class HRMAGA(Planner):
         return _Sub(a, b, np.tile(lo, n_free), np.tile(hi, n_free), 3, n_free, ground)
 
     def _decode(self, sub: _Sub, X: FloatArray, sc: Scenario) -> FloatArray:
-        free = X.reshape(X.shape[0], sub.n_free, 3).copy()
-        if sub.ground:
-            assert sc.terrain is not None
-            free[..., 2] += sc.terrain.lookup(free[..., 0], free[..., 1], _lookup(sc))
-        out = np.empty((X.shape[0], sub.n_free + 2, 3))
-        out[:, 0], out[:, 1:-1], out[:, -1] = sub.start, free, sub.goal
-        return out
+        return _decode_rows(X, sub.start, sub.goal, sub.n_free, sub.ground, sc)
 
     def _solve_level(
         self, run: Run, problem: PathProblem, sc: Scenario, subs: list[_Sub],
-        rngs: list[np.random.Generator], steps: float, evaluations: float, group: int = 1,
+        seeds: list[np.random.SeedSequence], steps: float, evaluations: float, group: int = 1,
     ) -> tuple[list[Best3], list[float]]:  # fmt: skip
-        """Run one MAGA per sub-problem in lockstep; the ``keep`` best agents of each, and
+        """Run one P-MAGA per sub-problem in lockstep; the ``keep`` best agents of each, and
         after every step the level's loss: the lowest, over the parent paths (``group``
         consecutive sub-problems each), of the sum of their sub-problems' best numbers (the
-        smallest loss in the level's population, Eq. 13's ``loss_layer_i``)."""
+        smallest loss in the level's population, Eq. 13's ``loss_layer_i``).
+
+        The sub-problems of one gene count are one :class:`~uavplan.optimizers.maga.MAGABatch`
+        (a level's are all alike; a repair's runs may differ): a step is one ask of every batch,
+        one evaluation per batch, one tell. ``lockstep="reference"`` runs one
+        :class:`~uavplan.optimizers.maga.MAGA` object per sub-problem instead
+        (:meth:`_solve_level_reference`), which gives the same numbers."""
+        if self.config.lockstep == "reference":
+            return self._solve_level_reference(
+                run, problem, sc, subs, seeds, steps, evaluations, group
+            )
         cfg = self.config
         mcfg = MAGAConfig(pop_size=cfg.pop_size, P_c=cfg.P_c, P_m=cfg.P_m, sGen=cfg.sGen)
-        opts = [MAGA(s, mcfg, seed=g) for s, g in zip(subs, rngs, strict=True)]
+        dims = sorted({s.dim for s in subs})
+        members = [[k for k, s in enumerate(subs) if s.dim == d] for d in dims]
+        batches = [
+            MAGABatch(
+                np.stack([subs[k].lower for k in ks]),
+                np.stack([subs[k].upper for k in ks]),
+                3,
+                mcfg,
+                [seeds[k] for k in ks],
+            )
+            for ks in members
+        ]
+        starts = [np.stack([subs[k].start for k in ks]) for ks in members]
+        goals = [np.stack([subs[k].goal for k in ks]) for ks in members]
+        ground = [subs[ks[0]].ground for ks in members]  # the level's band: alike for all
+        where = np.concatenate(members)  # batch order -> sub-problem order
+        tr = run.tracker
+        trace: list[float] = []
+        used = n_steps = 0
+        while n_steps < steps and used < evaluations:
+            lives = [b.generation < cfg.G for b in batches]
+            if not any(lv.any() for lv in lives):
+                break
+            for g, (b, lv) in enumerate(zip(batches, lives, strict=True)):
+                X, owner = b.ask(lv)
+                if len(X) == 0:
+                    b.tell(np.empty(0))
+                    continue
+                n_free = X.shape[1] // 3
+                paths = _decode_rows(X, starts[g][owner], goals[g][owner], n_free, ground[g], sc)
+                f, cv = problem.evaluate_cv(paths, exact=True)
+                b.tell(feasibility_first(f, cv))
+                tr.evaluations += len(paths)
+                used += len(paths)
+            n_steps += 1
+            bests = np.empty(len(subs))
+            bests[where] = np.concatenate([b.best_f for b in batches])
+            trace.append(float(bests.reshape(-1, group).sum(axis=1).min()))
+            if tr.end_iteration(best=tr.cost):
+                self._stopped = True
+                break
+        out: list[Best3] = [(np.empty(0), np.empty(0))] * len(subs)
+        for b, ks in zip(batches, members, strict=True):
+            for i, k in enumerate(ks):
+                order = np.argsort(b.F[i], kind="stable")[: cfg.keep]
+                out[k] = (self._decode(subs[k], b.L[i][order], sc), b.F[i][order])
+        return out, trace
+
+    def _solve_level_reference(
+        self, run: Run, problem: PathProblem, sc: Scenario, subs: list[_Sub],
+        seeds: list[np.random.SeedSequence], steps: float, evaluations: float, group: int = 1,
+    ) -> tuple[list[Best3], list[float]]:  # fmt: skip
+        """:meth:`_solve_level` with one :class:`~uavplan.optimizers.maga.MAGA` object per
+        sub-problem, stepped in turn (the first implementation, kept as the reference: the
+        tests compare the two plan by plan)."""
+        cfg = self.config
+        mcfg = MAGAConfig(pop_size=cfg.pop_size, P_c=cfg.P_c, P_m=cfg.P_m, sGen=cfg.sGen)
+        opts = [
+            MAGA(s, mcfg, seed=np.random.default_rng(g)) for s, g in zip(subs, seeds, strict=True)
+        ]
         tr = run.tracker
         trace: list[float] = []
         used = n_steps = 0
@@ -417,9 +485,15 @@ class HRMAGA(Planner):
             )
             if lv == cfg.v:
                 steps = math.inf if max_it is None else max_it - len(tr.history)
-            rngs = [np.random.default_rng(s) for s in root_seq.spawn(len(subs))]
             best, trace = self._solve_level(
-                run, problem, sc, subs, rngs, max(steps, 1), evals, 1 if lv == 1 else cfg.num
+                run,
+                problem,
+                sc,
+                subs,
+                root_seq.spawn(len(subs)),
+                max(steps, 1),
+                evals,
+                1 if lv == 1 else cfg.num,
             )
             traces.append(trace)
             results.append(best)
@@ -675,9 +749,10 @@ class HRMAGA(Planner):
             ]
             tr = Tracker(Termination(b.max_iterations, b.max_evaluations, b.max_time), False)
             run = Run(scenario, task, problem, seed, b, b.max_iterations, tr)
-            rngs = [np.random.default_rng(q) for q in seeds.spawn(len(subs))]
             self._stopped = False
-            best, _ = self._solve_level(run, problem, scenario, subs, rngs, steps, evals)
+            best, _ = self._solve_level(
+                run, problem, scenario, subs, seeds.spawn(len(subs)), steps, evals
+            )
             used += tr.evaluations
             if all(np.isfinite(nums[0]) and nums[0] < 1e7 for _, nums in best):
                 break
@@ -745,6 +820,23 @@ def _hull_chains(pts: FloatArray) -> tuple[list[int], list[int]]:
     one = [ring[(a + t) % n] for t in range((b - a) % n + 1)]
     other = [ring[(a - t) % n] for t in range((a - b) % n + 1)]
     return one, other
+
+
+def _decode_rows(
+    X: FloatArray, start: FloatArray, goal: FloatArray, n_free: int, ground: bool, sc: Scenario
+) -> FloatArray:
+    """Paths ``(n, n_free + 2, 3)`` from gene rows ``X`` ``(n, 3 n_free)`` between ``start``
+    and ``goal`` (``(3,)``, or ``(n, 3)`` one per row); ``ground``: the z genes are heights
+    above the level's map."""
+    n = X.shape[0]
+    out = np.empty((n, n_free + 2, 3))
+    out[:, 1:-1] = X.reshape(n, n_free, 3)
+    if ground:
+        assert sc.terrain is not None
+        free = out[:, 1:-1]
+        free[..., 2] += sc.terrain.lookup(free[..., 0], free[..., 1], _lookup(sc))
+    out[:, 0], out[:, -1] = start, goal
+    return out
 
 
 def _lookup(sc: Scenario) -> str:
