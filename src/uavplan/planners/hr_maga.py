@@ -364,25 +364,41 @@ class HRMAGA(Planner):
         return np.asarray(np.sum(turn_cosines(paths) <= 0, axis=1), dtype=np.int64)
 
     def _integrate(
-        self, problem: PathProblem, parts: list[Best3], tr: Tracker
-    ) -> tuple[FloatArray, FloatArray]:
-        """Alg. 2 line 15 for one parent path: every combination of its segments' best
-        sub-paths, ranked by turn-backs, then the rule's number; the best one."""
-        choices = [range(len(p[0])) for p in parts]
-        combos = list(itertools.product(*choices))
-        paths = np.stack(
-            [
-                np.concatenate(
-                    [parts[0][0][c[0]][:1]] + [parts[j][0][c[j]][1:] for j in range(len(parts))]
+        self, problem: PathProblem, groups: list[list[Best3]], tr: Tracker
+    ) -> list[tuple[FloatArray, float]]:
+        """Alg. 2 line 15 for parent paths, each given by its segments' best sub-paths: every
+        combination, ranked by turn-backs, then the rule's number; the best one of each parent.
+        All parents' combinations are scored in one batch per path length."""
+        cands = []
+        for parts in groups:
+            combos = itertools.product(*[range(len(p[0])) for p in parts])
+            cands.append(
+                np.stack(
+                    [
+                        np.concatenate(
+                            [parts[0][0][c[0]][:1]]
+                            + [parts[j][0][c[j]][1:] for j in range(len(parts))]
+                        )
+                        for c in combos
+                    ]
                 )
-                for c in combos
-            ]
-        )
-        f, cv = problem.evaluate_cv(paths, exact=True)
-        tr.evaluations += len(paths)
-        num = feasibility_first(f, cv)
-        order = np.lexsort((num, self._turn_backs(paths)))
-        return paths[order[0]], np.asarray(num[order[0]])
+            )
+        nums: list[FloatArray] = [np.empty(0)] * len(cands)
+        for n_pts in sorted({c.shape[1] for c in cands}):
+            same = [q for q, c in enumerate(cands) if c.shape[1] == n_pts]
+            paths = np.concatenate([cands[q] for q in same])
+            f, cv = problem.evaluate_cv(paths, exact=True)
+            tr.evaluations += len(paths)
+            num = feasibility_first(f, cv)
+            for q, part in zip(
+                same, np.split(num, np.cumsum([len(cands[q]) for q in same])[:-1]), strict=True
+            ):
+                nums[q] = part
+        out = []
+        for paths, num in zip(cands, nums, strict=True):
+            order = np.lexsort((num, self._turn_backs(paths)))
+            out.append((paths[order[0]], float(num[order[0]])))
+        return out
 
     # ------------------------------------------------------------------ uncertain areas
     @staticmethod
@@ -559,15 +575,19 @@ class HRMAGA(Planner):
         k = cfg.keep * cfg.num
         for lv in range(len(results) - 1, 0, -1):
             parents = results[lv - 1]
+            groups = [
+                [results[lv][pidx * k + i * cfg.num + j] for j in range(cfg.num)]
+                for pidx, (ppaths, _) in enumerate(parents)
+                for i in range(len(ppaths))
+            ]
+            best = iter(self._integrate(problem, groups, tr))  # every parent path at once
             merged: list[Best3] = []
-            for pidx, (ppaths, _) in enumerate(parents):
+            for ppaths, _ in parents:
                 news, nums = [], []
-                for i in range(len(ppaths)):
-                    base = pidx * k + i * cfg.num
-                    parts = [results[lv][base + j] for j in range(cfg.num)]
-                    path, val = self._integrate(problem, parts, tr)
+                for _i in range(len(ppaths)):
+                    path, val = next(best)
                     news.append(path)
-                    nums.append(float(val))
+                    nums.append(val)
                 order = np.argsort(nums, kind="stable")
                 merged.append((np.stack([news[o] for o in order]), np.asarray(nums)[order]))
             results[lv - 1] = merged
