@@ -76,6 +76,7 @@ Decisions where the paper is vague (and why)
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 import math
 from dataclasses import dataclass
@@ -650,9 +651,7 @@ class HRMAGA(Planner):
             cell = sc.terrain.cell_size if sc.terrain is not None else math.inf
             by_cell = np.clip(np.ceil(edges / cell), 1, MAX_PIECES).astype(int)
             for pieces in ([1], [2], [4], [8], list(by_cell)):  # per edge; the last: a cell each
-                ts = [
-                    np.linspace(0.0, 1.0, n + 1)[:-1] for n in np.broadcast_to(pieces, len(edges))
-                ]
+                ts = [_cuts(int(n)) for n in np.broadcast_to(pieces, len(edges))]
                 xy = np.concatenate(
                     [
                         a + t[:, None] * (b - a)
@@ -791,6 +790,14 @@ class HRMAGA(Planner):
 
 #: the most pieces a detour's edge is cut into (per terrain cell up to this many)
 MAX_PIECES = 32
+
+
+@functools.cache
+def _cuts(n: int) -> FloatArray:
+    """``np.linspace(0, 1, n + 1)[:-1]``, computed once per ``n`` (read-only)."""
+    t = np.linspace(0.0, 1.0, n + 1)[:-1]
+    t.setflags(write=False)
+    return t
 
 
 def _splice(P: FloatArray, runs: list[tuple[int, int]], inner: list[FloatArray]) -> FloatArray:
