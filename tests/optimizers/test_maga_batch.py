@@ -15,6 +15,7 @@ from uavplan.optimizers.maga import (
     MAGA,
     MAGABatch,
     MAGAConfig,
+    ReferenceMAGA,
     competition,
     mutate_adjacent,
     single_point_crossover,
@@ -110,7 +111,7 @@ def test_competition_and_known_costs_as_the_reference() -> None:
     P1 = np.stack([x[0], x[0], x[1], x[1]])
     P2 = np.stack([x[2], x[0], x[0], x[2]])
     got = [mk.known_cost(X[k], P1[k], 1.0, P2[k], 2.0) for k in range(4)]
-    want = MAGA._known_costs(X, P1, np.ones(4), P2, 2 * np.ones(4))
+    want = ReferenceMAGA._known_costs(X, P1, np.ones(4), P2, 2 * np.ones(4))
     np.testing.assert_array_equal(got, want)
     np.testing.assert_array_equal(want, [1.0, 2.0, 2.0, np.nan])
 
@@ -129,7 +130,9 @@ def run_both(S: int, D: int, block: int, steps: int, G: int = 10**9, **kw: objec
     hi = lo + rng.uniform(1, 5, (S, D))
     seqs = np.random.SeedSequence(42).spawn(S)
     refs = [
-        MAGA(FunctionProblem(bumpy, lo[s], hi[s], block=block), cfg, seed=np.random.default_rng(q))
+        ReferenceMAGA(
+            FunctionProblem(bumpy, lo[s], hi[s], block=block), cfg, seed=np.random.default_rng(q)
+        )
         for s, q in enumerate(seqs)
     ]
     b = MAGABatch(lo, hi, block, cfg, list(seqs))
@@ -186,3 +189,34 @@ def test_batch_refuses_misuse() -> None:
         MAGABatch(
             np.zeros((1, 3)), np.ones((1, 3)), 3, cfg, [np.random.Generator(np.random.MT19937(0))]
         )
+
+
+@pytest.mark.parametrize(("D", "block", "kw"), [(12, 3, {}), (5, 1, {"pop_size": 20})])
+def test_registered_maga_is_the_reference_stepped_in_numba(D: int, block: int, kw: dict) -> None:
+    """``maga`` (one-lattice batch) and :class:`ReferenceMAGA` step for step: the same asks,
+    lattices and stream (the generator continues where the kernels stopped), also when the
+    caller changes the asked rows before telling them; a generator other than PCG64 runs the
+    reference code."""
+    prob = FunctionProblem(bumpy, -2 * np.ones(D), 3 * np.ones(D), block=block)
+    cfg = MAGAConfig(**kw)
+    a = MAGA(prob, cfg, seed=np.random.default_rng(8))
+    b = ReferenceMAGA(prob, cfg, seed=np.random.default_rng(8))
+    assert a._batch is not None
+    for it in range(40):
+        Xa, Xb = a.ask(), b.ask()
+        np.testing.assert_array_equal(Xa, Xb)
+        if it % 7 == 3:  # a caller's repair of the asked rows: they become the agents
+            Xa = np.clip(Xa * 0.9, prob.lower, prob.upper)
+            Xb = Xa.copy()
+        a.tell(Xa, bumpy(Xa))
+        b.tell(Xb, bumpy(Xb))
+        np.testing.assert_array_equal(a.L, b.L)
+        np.testing.assert_array_equal(a.F, b.F)
+        assert (a.generation, a.phase, a.best_f) == (b.generation, b.phase, b.best_f)
+        np.testing.assert_array_equal(a.targets, b.targets)
+        assert a.rng.random() == b.rng.random()  # the same stream after every step
+    mt = MAGA(prob, cfg, seed=np.random.Generator(np.random.MT19937(1)))
+    assert mt._batch is None
+    X = mt.ask()
+    mt.tell(X, bumpy(X))
+    assert mt.iterations == 1

@@ -346,10 +346,11 @@ class MAGAConfig(OptimizerConfig):
 
 
 # ---------------------------------------------------------------------- optimizer
-@register
-class MAGA(Optimizer):
-    """P-MAGA (HR-MAGA Alg. 1): agent lattice, neighbourhood competition, crossover, adjacent
-    mutation, smoothing, self-learning with elite retention. See the module docstring.
+class ReferenceMAGA(Optimizer):
+    """P-MAGA (HR-MAGA Alg. 1) in NumPy, one lattice: agent lattice, neighbourhood competition,
+    crossover, adjacent mutation, smoothing, self-learning with elite retention. See the module
+    docstring. The reference of :class:`MAGA` and :class:`MAGABatch` (same numbers; not
+    registered).
 
     State: ``L`` ``(pop_size, dim)`` agents on the lattice (flat index ``i * cols + j``) and their
     costs ``F``; :attr:`generation` finished generations of Alg. 1.
@@ -359,7 +360,7 @@ class MAGA(Optimizer):
             (e.g. paths seeded by RRT* or RGG); clipped to the box.
     """
 
-    name: ClassVar[str] = "maga"
+    name: ClassVar[str] = "maga-reference"
     Config: ClassVar[type[OptimizerConfig]] = MAGAConfig
     config: MAGAConfig
 
@@ -544,6 +545,65 @@ class MAGA(Optimizer):
         self.phase = "lattice"
 
 
+@register
+class MAGA(ReferenceMAGA):
+    """P-MAGA (HR-MAGA Alg. 1), registered as ``maga``: :class:`ReferenceMAGA`'s optimizer
+    stepped by the Numba kernels of :class:`MAGABatch` (one lattice), the same numbers. The
+    generator's state goes into the kernels before each ask and comes back after it, so
+    ``self.rng`` stays the one stream. A generator that is not PCG64 (NumPy's default) runs
+    the reference code. ``L``, ``F``, ``phase``, ``targets``, ``sL``, ``sF`` and ``s_best_*``
+    read as :class:`ReferenceMAGA`'s (the lattice ones are views of the batch's arrays)."""
+
+    name: ClassVar[str] = "maga"
+
+    def _setup(self) -> None:
+        super()._setup()
+        self._batch: MAGABatch | None = None
+        if isinstance(self.rng.bit_generator, np.random.PCG64):
+            init = None if self.init is None else self.init[None]
+            b = MAGABatch(self.lower, self.upper, self.block, self.config, [self.rng], init)
+            self._batch = b
+            self._sync()
+
+    def _sync(self) -> None:
+        """The reference's attributes from the batch's state."""
+        b = self._batch
+        assert b is not None
+        ints = b.ints[0]
+        T = int(ints[_mk.NTAR])
+        self.L, self.F = b.L[0], b.F[0]
+        self.generation = int(ints[_mk.GEN])
+        self.s_generation = int(ints[_mk.SGEN])
+        self.phase = "lattice" if ints[_mk.PHASE] == 0 else "self_learning"
+        self.targets = b.targets[0, :T].copy()
+        self.sL, self.sF = b.sL[0, :T], b.sF[0, :T]
+        self.s_best_x, self.s_best_f = b.s_best_x[0, :T], b.s_best_f[0, :T]
+        self._elite = (b.elite_x[0].copy(), float(b.elite_f[0]))
+
+    def _batch_ask(self) -> FloatArray:
+        b = self._batch
+        assert b is not None
+        bg = self.rng.bit_generator
+        b.states[0] = _mk.pcg64_row(bg)
+        X, _ = b.ask()
+        _mk.set_pcg64_row(bg, b.states[0])
+        self._sync()
+        return X
+
+    def _initialize(self) -> FloatArray:
+        return super()._initialize() if self._batch is None else self._batch_ask()
+
+    def _ask(self) -> FloatArray:
+        return super()._ask() if self._batch is None else self._batch_ask()
+
+    def _tell(self, X: FloatArray, f: FloatArray) -> None:
+        if self._batch is None:
+            super()._tell(X, f)
+            return
+        self._batch.tell(f, X)
+        self._sync()
+
+
 # ---------------------------------------------------------------------- many lattices at once
 class MAGABatch:
     """``S`` independent P-MAGA optimizers (Alg. 1) of the same gene count and configuration,
@@ -647,13 +707,19 @@ class MAGABatch:
         self._live, self._rows = lv, len(X)
         return X, owner
 
-    def tell(self, f: FloatArray) -> None:
-        """The costs of the rows of the last :meth:`ask`, in its order (no NaN)."""
+    def tell(self, f: FloatArray, X: FloatArray | None = None) -> None:
+        """The costs of the rows of the last :meth:`ask`, in its order (no NaN). ``X``: the
+        rows as evaluated, if the caller changed them (they become the new agents, as
+        :meth:`MAGA.tell` takes them)."""
         if self._live is None:
             raise OptimizerError("MAGABatch: tell() called without a pending ask()")
         f = np.ascontiguousarray(f, dtype=np.float64)
         if f.shape != (self._rows,) or np.isnan(f).any():
             raise OptimizerError(f"MAGABatch: tell() needs one cost per asked row, got {f.shape}")
+        if X is not None:
+            rows = self.asked & (np.arange(self.asked.shape[1]) < self.ints[:, [_mk.NCAND]])
+            rows &= self._live[:, None]
+            self.cand[rows] = X  # row-major: lattice by lattice, asked rows in order
         _mk.tell_all(
             self._live, f, self.ints, self.L, self.F, self.targets, self.sL, self.sF,
             self.s_best_x, self.s_best_f, self.elite_x, self.elite_f, self.cand, self.known,

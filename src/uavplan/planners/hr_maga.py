@@ -87,7 +87,7 @@ from numpy.typing import NDArray
 
 from uavplan.optimizers.base import Budget
 from uavplan.optimizers.constraints import feasibility_first
-from uavplan.optimizers.maga import MAGA, MAGABatch, MAGAConfig, turn_cosines
+from uavplan.optimizers.maga import MAGABatch, MAGAConfig, ReferenceMAGA, turn_cosines
 from uavplan.planners.base import Planner
 from uavplan.planners.optimizer_planner import OptimizerPlanner
 from uavplan.planners.options import PlannerConfig, PlannerError, option
@@ -256,7 +256,7 @@ class HRMAGA(Planner):
         The sub-problems of one gene count are one :class:`~uavplan.optimizers.maga.MAGABatch`
         (a level's are all alike; a repair's runs may differ): a step is one ask of every batch,
         one evaluation per batch, one tell. ``lockstep="reference"`` runs one
-        :class:`~uavplan.optimizers.maga.MAGA` object per sub-problem instead
+        :class:`~uavplan.optimizers.maga.ReferenceMAGA` object per sub-problem instead
         (:meth:`_solve_level_reference`), which gives the same numbers."""
         if self.config.lockstep == "reference":
             return self._solve_level_reference(
@@ -316,13 +316,14 @@ class HRMAGA(Planner):
         self, run: Run, problem: PathProblem, sc: Scenario, subs: list[_Sub],
         seeds: list[np.random.SeedSequence], steps: float, evaluations: float, group: int = 1,
     ) -> tuple[list[Best3], list[float]]:  # fmt: skip
-        """:meth:`_solve_level` with one :class:`~uavplan.optimizers.maga.MAGA` object per
+        """:meth:`_solve_level` with one :class:`~uavplan.optimizers.maga.ReferenceMAGA` per
         sub-problem, stepped in turn (the first implementation, kept as the reference: the
         tests compare the two plan by plan)."""
         cfg = self.config
         mcfg = MAGAConfig(pop_size=cfg.pop_size, P_c=cfg.P_c, P_m=cfg.P_m, sGen=cfg.sGen)
         opts = [
-            MAGA(s, mcfg, seed=np.random.default_rng(g)) for s, g in zip(subs, seeds, strict=True)
+            ReferenceMAGA(s, mcfg, seed=np.random.default_rng(g))
+            for s, g in zip(subs, seeds, strict=True)
         ]
         tr = run.tracker
         trace: list[float] = []
