@@ -201,7 +201,7 @@ def test_registered_maga_is_the_reference_stepped_in_numba(D: int, block: int, k
     cfg = MAGAConfig(**kw)
     a = MAGA(prob, cfg, seed=np.random.default_rng(8))
     b = ReferenceMAGA(prob, cfg, seed=np.random.default_rng(8))
-    assert a._batch is not None
+    assert a._engine is not None
     for it in range(40):
         Xa, Xb = a.ask(), b.ask()
         np.testing.assert_array_equal(Xa, Xb)
@@ -216,7 +216,7 @@ def test_registered_maga_is_the_reference_stepped_in_numba(D: int, block: int, k
         np.testing.assert_array_equal(a.targets, b.targets)
         assert a.rng.random() == b.rng.random()  # the same stream after every step
     mt = MAGA(prob, cfg, seed=np.random.Generator(np.random.MT19937(1)))
-    assert mt._batch is None
+    assert mt._engine is None
     X = mt.ask()
     mt.tell(X, bumpy(X))
     assert mt.iterations == 1

@@ -472,11 +472,12 @@ def _end_self_learning(
 
 @njit(cache=True)
 def tell_all(
-    live, f, ints, L, F, targets, sL, sF, s_best_x, s_best_f, elite_x, elite_f, cand, known,
+    live, f, X, ints, L, F, targets, sL, sF, s_best_x, s_best_f, elite_x, elite_f, cand, known,
     loser, asked, best_x, best_f, has_best, evaluations, sGen, elitism,
 ):  # fmt: skip  # pragma: no cover - numba
     """The costs ``f`` of the rows of the last :func:`ask_all` (in its order) told to every live
-    lattice: :meth:`Optimizer.tell`'s bookkeeping, then MAGA's ``_tell``."""
+    lattice: :meth:`Optimizer.tell`'s bookkeeping, then MAGA's ``_tell``. ``X``: the rows as
+    evaluated, which replace the asked candidates (or no rows: as asked)."""
     S, N = F.shape
     K = sL.shape[2]
     m = K - 1
@@ -489,6 +490,8 @@ def tell_all(
         first = -1
         for r in range(n):
             if asked[s, r]:
+                if X.shape[0] > 0:
+                    cand[s, r] = X[k]
                 known[s, r] = f[k]
                 if first < 0 or f[k] < known[s, first]:
                     first = r

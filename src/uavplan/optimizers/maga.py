@@ -558,16 +558,16 @@ class MAGA(ReferenceMAGA):
 
     def _setup(self) -> None:
         super()._setup()
-        self._batch: MAGABatch | None = None
+        self._engine: MAGABatch | None = None
         if isinstance(self.rng.bit_generator, np.random.PCG64):
             init = None if self.init is None else self.init[None]
             b = MAGABatch(self.lower, self.upper, self.block, self.config, [self.rng], init)
-            self._batch = b
+            self._engine = b
             self._sync()
 
     def _sync(self) -> None:
         """The reference's attributes from the batch's state."""
-        b = self._batch
+        b = self._engine
         assert b is not None
         ints = b.ints[0]
         T = int(ints[_mk.NTAR])
@@ -580,10 +580,11 @@ class MAGA(ReferenceMAGA):
         self.s_best_x, self.s_best_f = b.s_best_x[0, :T], b.s_best_f[0, :T]
         self._elite = (b.elite_x[0].copy(), float(b.elite_f[0]))
 
-    def _batch_ask(self) -> FloatArray:
-        b = self._batch
+    def _engine_ask(self) -> FloatArray:
+        b = self._engine
         assert b is not None
         bg = self.rng.bit_generator
+        assert isinstance(bg, np.random.PCG64)
         b.states[0] = _mk.pcg64_row(bg)
         X, _ = b.ask()
         _mk.set_pcg64_row(bg, b.states[0])
@@ -591,16 +592,16 @@ class MAGA(ReferenceMAGA):
         return X
 
     def _initialize(self) -> FloatArray:
-        return super()._initialize() if self._batch is None else self._batch_ask()
+        return super()._initialize() if self._engine is None else self._engine_ask()
 
     def _ask(self) -> FloatArray:
-        return super()._ask() if self._batch is None else self._batch_ask()
+        return super()._ask() if self._engine is None else self._engine_ask()
 
     def _tell(self, X: FloatArray, f: FloatArray) -> None:
-        if self._batch is None:
+        if self._engine is None:
             super()._tell(X, f)
             return
-        self._batch.tell(f, X)
+        self._engine.tell(f, X)
         self._sync()
 
 
@@ -716,12 +717,11 @@ class MAGABatch:
         f = np.ascontiguousarray(f, dtype=np.float64)
         if f.shape != (self._rows,) or np.isnan(f).any():
             raise OptimizerError(f"MAGABatch: tell() needs one cost per asked row, got {f.shape}")
-        if X is not None:
-            rows = self.asked & (np.arange(self.asked.shape[1]) < self.ints[:, [_mk.NCAND]])
-            rows &= self._live[:, None]
-            self.cand[rows] = X  # row-major: lattice by lattice, asked rows in order
+        X = np.empty((0, self.L.shape[2])) if X is None else np.ascontiguousarray(X, np.float64)
+        if X.shape[0] and X.shape != (self._rows, self.L.shape[2]):
+            raise OptimizerError(f"MAGABatch: tell() got X of shape {X.shape}")
         _mk.tell_all(
-            self._live, f, self.ints, self.L, self.F, self.targets, self.sL, self.sF,
+            self._live, f, X, self.ints, self.L, self.F, self.targets, self.sL, self.sF,
             self.s_best_x, self.s_best_f, self.elite_x, self.elite_f, self.cand, self.known,
             self.loser, self.asked, self.best_x, self.best_f, self.has_best, self.evaluations,
             self.config.sGen, self.config.elitism,
