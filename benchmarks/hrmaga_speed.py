@@ -16,8 +16,8 @@ itself (``Planner.repair``, the baseline), with p50/p95/max and the misses of a 
 Then, with ``--budgets 30,60,120,300``, what a smaller budget buys: per map and budget the median
 plan time, the share of flown-feasible plans and the median loss (Eq. 4) of the feasible ones.
 Run: ``python benchmarks/hrmaga_speed.py [--iterations 300] [--seeds 5] [--budgets ...]
-[--no-pmaga]``. Set ``NUMBA_NUM_THREADS=1`` on a shared machine: small batches lose more to a
-busy thread pool than they gain.
+[--no-pmaga] [--maps a,b]``. Set ``NUMBA_NUM_THREADS=1`` on a shared machine: small batches
+lose more to a busy thread pool than they gain.
 """
 
 from __future__ import annotations
@@ -51,6 +51,7 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=5)
     ap.add_argument("--budgets", default="", help="comma-separated iteration budgets")
     ap.add_argument("--no-pmaga", action="store_true", help="leave out p-maga (slow)")
+    ap.add_argument("--maps", default=",".join(MAPS), help="comma-separated scenario names")
     args = ap.parse_args()
     if args.budgets:
         budgets(args.seeds, [int(b) for b in args.budgets.split(",")])
@@ -62,7 +63,7 @@ def main() -> None:
     lat: dict[str, list[float]] = {"local": [], "local reference": [], "scratch": []}
     cpu: dict[str, list[float]] = {k: [] for k in lat}
     hows: list[str] = []
-    for name in MAPS:
+    for name in args.maps.split(","):
         sc = resolve(name)
         hr = get_planner("hr-maga")
         ref = get_planner("hr-maga", lockstep="reference")

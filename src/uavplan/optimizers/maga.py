@@ -117,6 +117,18 @@ vary in size; :attr:`MAGA.generation` counts finished generations. Budgets in ev
 fairly with other optimizers. Each evaluation is asked, and therefore counted by the base class,
 exactly once; agents whose cost is known are never re-asked. The evaluated ``X`` handed to
 :meth:`tell` is taken as the new agents (a caller may repair points before evaluating them).
+
+Implementations
+---------------
+:class:`ReferenceMAGA` is the algorithm in NumPy, one lattice per object (the first
+implementation). :class:`MAGABatch` advances many independent lattices (HR-MAGA's sub-problems of
+a level) with one Numba call per ask and one per tell (:mod:`uavplan.optimizers._maga_kernels`):
+the operators run agent by agent in the reference's order, and each lattice draws from its own
+generator's PCG64 stream as NumPy would (the kernels advance a copy of its state), so a lattice
+of a batch gives the numbers of a :class:`ReferenceMAGA` with the same generator, bit for bit
+(``tests/optimizers/test_maga_batch.py``: the stream draw for draw, each operator, whole runs).
+The registered :class:`MAGA` (``maga``, P-MAGA's planner) is a batch of one lattice behind the
+ask/tell interface.
 """
 
 from __future__ import annotations

@@ -18,9 +18,15 @@ Eq. 9, weights 1 : 10 : 15, Table I), which the HR-MAGA scenarios and experiment
   the planner returns the best path, the three best in ``info["paths"]``.
 
 Everything one level's P-MAGA problems need is batched: the level's sub-problems (1, then
-``3 num = 9``, then 81) run in lockstep, one MAGA each, and every step evaluates all their asked
-agents as one population on the level's :class:`~uavplan.problems.path_problem.PathProblem`
-(they are independent: Alg. 2 visits them in turn only because it is written recursively).
+``3 num = 9``, then 81) run in lockstep, one P-MAGA each, and every step evaluates all their
+asked agents as one population on the level's
+:class:`~uavplan.problems.path_problem.PathProblem` (they are independent: Alg. 2 visits them in
+turn only because it is written recursively). Their lattices are one
+:class:`~uavplan.optimizers.maga.MAGABatch`: a step is one Numba call for every sub-problem's
+ask, one evaluation, one Numba call for the tells, each sub-problem drawing from its own
+generator exactly as one :class:`~uavplan.optimizers.maga.ReferenceMAGA` object per
+sub-problem does (``lockstep="reference"``, the first implementation, kept for the tests and the
+benchmark: the same plan bit for bit).
 
 Decisions where the paper is vague (and why)
 --------------------------------------------
@@ -61,14 +67,16 @@ Decisions where the paper is vague (and why)
   sub-problems of all levels (a level of 81 sub-problems gets 81 times the first level's);
   P-MAGA stops at Table I's ``G = 200`` generations in any case. Table I's full schedule (200
   generations of 1 + sGen = 11 batches per level) is ``--iterations 6600``; the default, 300
-  iterations (about 9 generations per level), is what plans in a few seconds here.
+  iterations (about 9 generations per level), plans in about a second of CPU here.
 * **One optimizer per sub-problem.** The level's P-MAGAs share every evaluation batch, but each
-  keeps its own state machine. We tried one MAGA holding the level's sub-problems as
+  keeps its own state machine (phase, generation, self-learning lattices, generator), also
+  inside the batched kernels. We tried one MAGA holding the level's sub-problems as
   independent lattices over normalized genes (3x faster: fewer Python calls). Its generations
   are synchronized, so a converged lattice with no self-learning agent sits idle while the
   others self-learn for ``sGen`` steps. It found fewer feasible paths: 10 of 20 against 14 of
   20 on ``hrmaga-jacksboro`` and ``hrmaga-topobathy``, 300 iterations, seeds 4-13. So we kept
-  separate optimizers.
+  separate optimizers; :class:`~uavplan.optimizers.maga.MAGABatch` batches the computation, not
+  the algorithm.
 * **Integration at a junction** uses the moved segment ends, so the combined path is continuous
   by construction.
 """
