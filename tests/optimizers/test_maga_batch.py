@@ -80,7 +80,7 @@ def test_crossover_and_mutation_as_the_reference(D: int, block: int) -> None:
     mk.crossover(s, P1, P2, n, 0.5, block, out, flags, picks)
     want = single_point_crossover(P1, P2, 0.5, block, g)
     np.testing.assert_array_equal(out, want)
-    mk.mutate(s, out, n, 0.6, h, block, lo, hi, flags, picks)  # clips the crossed rows too
+    mk.mutate(s, out, 0, n, 0.6, h, block, lo, hi, flags, picks)  # clips the crossed rows too
     want = mutate_adjacent(want, 0.6, h, block, lo, hi, g)
     np.testing.assert_array_equal(out, want)
     np.testing.assert_array_equal(s, mk.pcg64_row(g.bit_generator))

@@ -140,6 +140,14 @@ def draw_sequence(
 
 # ---------------------------------------------------------------------- operators (Fig. 3)
 @njit(cache=True)
+def _row(dst: np.ndarray, src: np.ndarray) -> None:  # pragma: no cover - numba
+    """``dst[:] = src`` for 1-D arrays, as a plain loop (a slice assignment inlines Numba's
+    broadcasting code at every use: seconds of compilation)."""
+    for j in range(src.shape[0]):
+        dst[j] = src[j]
+
+
+@njit(cache=True)
 def _draw_rows(
     st: np.ndarray, n: int, p: float, low: int, D: int, block: int,
     flags: np.ndarray, picks: np.ndarray,
@@ -172,19 +180,20 @@ def crossover(
 
 @njit(cache=True)
 def mutate(
-    st: np.ndarray, X: np.ndarray, n: int, P_m: float, h: np.ndarray, block: int,
+    st: np.ndarray, X: np.ndarray, r0: int, n: int, P_m: float, h: np.ndarray, block: int,
     lower: np.ndarray, upper: np.ndarray, flags: np.ndarray, picks: np.ndarray,
 ) -> None:  # fmt: skip  # pragma: no cover - numba
-    """:func:`~uavplan.optimizers.maga.mutate_adjacent` on rows ``0..n-1`` of ``X``, in place
+    """:func:`~uavplan.optimizers.maga.mutate_adjacent` on rows ``r0..r0+n-1`` of ``X``, in place
     (``np.clip``'s comparisons: ``x > lower ? x : lower``, then ``x < upper ? x : upper``)."""
     D = X.shape[1]
     bl = _draw_rows(st, n, P_m, 0, D, block, flags, picks)  # the waypoint: 0..n_w - 1
     for r in range(n):
+        x = X[r0 + r]
         for j in range(D):
             step = (-1.0 + 2.0 * random(st)) * h[j]
-            v = X[r, j] + step if flags[r] and j // bl == picks[r] else X[r, j]
+            v = x[j] + step if flags[r] and j // bl == picks[r] else x[j]
             v = v if v > lower[j] else lower[j]
-            X[r, j] = v if v < upper[j] else upper[j]
+            x[j] = v if v < upper[j] else upper[j]
 
 
 @njit(cache=True)
@@ -324,7 +333,7 @@ def _new_agents(  # pragma: no cover - numba
     st, n, P_c, P_m, h, block, lower, upper, smooth, passes, pa, pb, out, flags, picks
 ):
     crossover(st, pa, pb, n, P_c, block, out, flags, picks)
-    mutate(st, out, n, P_m, h, block, lower, upper, flags, picks)
+    mutate(st, out, 0, n, P_m, h, block, lower, upper, flags, picks)
     if smooth:
         smooth_and_clip(out, n, block, passes, True, lower, upper)
 
@@ -357,25 +366,27 @@ def ask_all(
         n = 0
         if ints[s, ITER] == 0:  # Alg. 1 lines 1-2: the first lattice
             if init.shape[0] > 0:
-                cand[s, :N] = init[s]
+                for i in range(N):
+                    _row(cand[s, i], init[s, i])
             else:
                 for i in range(N):
                     for j in range(D):
                         cand[s, i, j] = lower[s, j] + random(st) * (upper[s, j] - lower[s, j])
-            known[s, :N] = np.nan
+            for i in range(N):
+                known[s, i] = np.nan
             n = N
             ints[s, NNEW] = N
         elif ints[s, PHASE] == 0:  # the main lattice (MAGA._ask_lattice)
             b = argmin_first(F[s])
-            elite_x[s] = L[s, b]
+            _row(elite_x[s], L[s, b])
             elite_f[s] = F[s, b]
             compete(F[s], nb, Min, winner)
             nl = 0
             for i in range(N):
                 if not winner[i]:
                     loser[s, nl] = i
-                    pa[nl] = L[s, i]
-                    pb[nl] = L[s, Min[i]]
+                    _row(pa[nl], L[s, i])
+                    _row(pb[nl], L[s, Min[i]])
                     nl += 1
             _new_agents(st, nl, P_c, P_m, h[s], block, lower[s], upper[s], smooth, passes,
                         pa, pb, cand[s], flags, picks)  # fmt: skip
@@ -396,14 +407,13 @@ def ask_all(
                         targets[s, T] = i
                         T += 1
             ints[s, NTAR] = T
-            M = cand[s, nl:]
-            for t in range(T):
+            for t in range(T):  # the mutants, after the new agents
                 for k in range(m):
-                    M[t * m + k] = L[s, targets[s, t]]
-            mutate(st, M, T * m, 1.0, h[s], block, lower[s], upper[s], flags, picks)
+                    _row(cand[s, nl + t * m + k], L[s, targets[s, t]])
+            mutate(st, cand[s], nl, T * m, 1.0, h[s], block, lower[s], upper[s], flags, picks)
             for r in range(T * m):
                 p = targets[s, r // m]
-                known[s, nl + r] = known_cost(M[r], L[s, p], F[s, p], L[s, p], F[s, p])
+                known[s, nl + r] = known_cost(cand[s, nl + r], L[s, p], F[s, p], L[s, p], F[s, p])
             n = nl + T * m
             ints[s, NNEW] = nl
         else:  # the self-learning lattices (MAGA._ask_self_learning)
@@ -414,8 +424,8 @@ def ask_all(
                 for p in range(K):
                     if not swin[p]:
                         loser[s, nl] = t * K + p
-                        pa[nl] = sL[s, t, p]
-                        pb[nl] = sL[s, t, sMin[p]]
+                        _row(pa[nl], sL[s, t, p])
+                        _row(pb[nl], sL[s, t, sMin[p]])
                         known[s, nl] = sF[s, t, sMin[p]]  # parent 2's cost, for known_cost
                         nl += 1
             _new_agents(st, nl, P_c, P_m, h[s], block, lower[s], upper[s], smooth, passes,
@@ -431,7 +441,8 @@ def ask_all(
             asked[s, r] = np.isnan(known[s, r])
             any_unknown |= asked[s, r]
         if not any_unknown:  # an ask is never empty
-            asked[s, :n] = True
+            for r in range(n):
+                asked[s, r] = True
         for r in range(n):
             total += asked[s, r]
     X = np.empty((total, D))
@@ -442,7 +453,7 @@ def ask_all(
             continue
         for r in range(ints[s, NCAND]):
             if asked[s, r]:
-                X[k] = cand[s, r]
+                _row(X[k], cand[s, r])
                 owner[k] = s
                 k += 1
     return X, owner
@@ -454,7 +465,7 @@ def _end_generation(s, ints, L, F, elite_x, elite_f, elitism):  # pragma: no cov
         lowest = F[s, argmin_first(F[s])]
         if lowest > elite_f[s]:
             w = argmax_first(F[s])
-            L[s, w] = elite_x[s]
+            _row(L[s, w], elite_x[s])
             F[s, w] = elite_f[s]
     ints[s, GEN] += 1
     ints[s, PHASE] = 0
@@ -465,7 +476,7 @@ def _end_self_learning(
     s, ints, L, F, targets, s_best_x, s_best_f, elite_x, elite_f, elitism
 ):  # pragma: no cover - numba
     for t in range(ints[s, NTAR]):
-        L[s, targets[s, t]] = s_best_x[s, t]
+        _row(L[s, targets[s, t]], s_best_x[s, t])
         F[s, targets[s, t]] = s_best_f[s, t]
     _end_generation(s, ints, L, F, elite_x, elite_f, elitism)
 
@@ -491,7 +502,7 @@ def tell_all(
         for r in range(n):
             if asked[s, r]:
                 if X.shape[0] > 0:
-                    cand[s, r] = X[k]
+                    _row(cand[s, r], X[k])
                 known[s, r] = f[k]
                 if first < 0 or f[k] < known[s, first]:
                     first = r
@@ -499,28 +510,29 @@ def tell_all(
                 evaluations[s] += 1
         if known[s, first] < best_f[s] or not has_best[s]:
             best_f[s] = known[s, first]
-            best_x[s] = cand[s, first]
+            _row(best_x[s], cand[s, first])
             has_best[s] = True
         nl = ints[s, NNEW]
         if ints[s, ITER] == 0:
-            L[s] = cand[s, :N]
-            F[s] = known[s, :N]
+            for i in range(N):
+                _row(L[s, i], cand[s, i])
+                F[s, i] = known[s, i]
         elif ints[s, PHASE] == 0:  # MAGA._tell_lattice
             for r in range(nl):
-                L[s, loser[s, r]] = cand[s, r]  # New_ij occupies the loser's place
+                _row(L[s, loser[s, r]], cand[s, r])  # New_ij occupies the loser's place
                 F[s, loser[s, r]] = known[s, r]
             T = ints[s, NTAR]
             if T == 0:
                 _end_generation(s, ints, L, F, elite_x, elite_f, elitism)
             else:
                 for t in range(T):
-                    sL[s, t, 0] = L[s, targets[s, t]]
+                    _row(sL[s, t, 0], L[s, targets[s, t]])
                     sF[s, t, 0] = F[s, targets[s, t]]
                     for q in range(m):
-                        sL[s, t, 1 + q] = cand[s, nl + t * m + q]
+                        _row(sL[s, t, 1 + q], cand[s, nl + t * m + q])
                         sF[s, t, 1 + q] = known[s, nl + t * m + q]
                     b = argmin_first(sF[s, t])
-                    s_best_x[s, t] = sL[s, t, b]
+                    _row(s_best_x[s, t], sL[s, t, b])
                     s_best_f[s, t] = sF[s, t, b]
                 ints[s, SGEN] = 0
                 ints[s, PHASE] = 1
@@ -530,17 +542,17 @@ def tell_all(
         else:  # MAGA._tell_self_learning
             for r in range(nl):
                 t, p = loser[s, r] // K, loser[s, r] % K
-                sL[s, t, p] = cand[s, r]
+                _row(sL[s, t, p], cand[s, r])
                 sF[s, t, p] = known[s, r]
             for t in range(ints[s, NTAR]):  # elite retention in L_new
                 b = argmin_first(sF[s, t])
                 best_now = sF[s, t, b]
                 if best_now > s_best_f[s, t]:
                     w = argmax_first(sF[s, t])
-                    sL[s, t, w] = s_best_x[s, t]
+                    _row(sL[s, t, w], s_best_x[s, t])
                     sF[s, t, w] = s_best_f[s, t]
                 elif best_now < s_best_f[s, t]:
-                    s_best_x[s, t] = sL[s, t, b]
+                    _row(s_best_x[s, t], sL[s, t, b])
                     s_best_f[s, t] = best_now
             ints[s, SGEN] += 1
             if ints[s, SGEN] >= sGen:
