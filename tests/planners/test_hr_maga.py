@@ -235,3 +235,28 @@ def test_batched_lockstep_gives_the_reference_plan_and_repair() -> None:
     assert ia["how"] == "local repair" and ia["runs"] >= 2 and ia["segments"] > ia["runs"], ia
     np.testing.assert_array_equal(pa, pb)
     assert ia == ib
+
+
+def test_detour_from_the_notch_of_two_overlapping_areas() -> None:
+    """An end in the notch of two overlapping areas lies inside the hull of their corners, so
+    the grown set has no way around; the first round's way around the one area the run
+    crosses, which meets no other, is kept as a candidate and found (before: P-MAGA)."""
+    sc = hills()
+    areas = (
+        UncertainArea(800.0, 1000.0, 400.0, 400.0, revealed=True),  # north of A
+        UncertainArea(1100.0, 700.0, 400.0, 400.0, revealed=True),  # east of A, across A-B
+    )
+    world = dataclasses.replace(sc, uncertain_areas=areas, danger_areas=())
+    t = world.terrain
+
+    def at(x: float, y: float) -> np.ndarray:
+        return np.array([x, y, float(t.height(x, y)) + 100.0])
+
+    P = np.stack([np.asarray(sc.tasks[0].start), at(1000.0, 900.0), at(1700.0, 900.0)])
+    hr = HRMAGA()
+    problem = hr._problem(world, sc.tasks[0], None, True)
+    inner, used = hr._detour(problem, world, P, 1, 1)
+    assert inner is not None and used > 0
+    way = np.vstack([P[1], inner, P[2]])
+    assert bool(problem.evaluate(way[None]).feasible[0])
+    assert way[:, 1].min() < 700.0  # south of the crossed area, away from the other one

@@ -636,6 +636,7 @@ class HRMAGA(Planner):
         near = touched(P[i : j + 2, :2])
         XY = np.empty((0, 2))
         chains: tuple[list[int], list[int]] = ([], [])
+        extra: list[tuple[FloatArray, list[int]]] = []
         for _ in range(4):  # grow the set while a way around meets another polygon
             pts = [A[:2], B[:2]]
             for q in sorted(near):
@@ -647,15 +648,21 @@ class HRMAGA(Planner):
                 pts += list(v + math.sqrt(2.0) * m * (v - c) / np.maximum(r, 1e-12))
             XY = np.clip(np.asarray(pts, dtype=np.float64), sc.bounds.lo[:2], sc.bounds.hi[:2])
             chains = _hull_chains(XY)
-            more = set().union(*(touched(XY[ch]) for ch in chains if len(ch) >= 2)) - near
+            hits = [touched(XY[ch]) - near if len(ch) >= 2 else set() for ch in chains]
+            more = set().union(*hits)
             if not more:
                 break
+            # a chain of this round that meets no other polygon stays a candidate: the grown
+            # set's hull may hold an end (polygons that overlap leave a notch), then it is the way
+            extra += [
+                (XY, ch) for ch, h in zip(chains, hits, strict=True) if len(ch) >= 2 and not h
+            ]
             near |= more
         ways: list[FloatArray] = []  # (n, 3) each: the way's points at the ends' altitude line
-        for chain in chains:
+        for XYc, chain in [(XY, ch) for ch in chains] + extra:
             if len(chain) < 2:
                 continue
-            corners = XY[chain]  # two points: the ends see each other past every polygon
+            corners = XYc[chain]  # two points: the ends see each other past every polygon
             edges = np.linalg.norm(np.diff(corners, axis=0), axis=1)
             cell = sc.terrain.cell_size if sc.terrain is not None else math.inf
             by_cell = np.clip(np.ceil(edges / cell), 1, MAX_PIECES).astype(int)
