@@ -611,7 +611,9 @@ class HRMAGA(Planner):
         any optimization: a repair must come within one control period). Both chains of the
         convex hull of the two ends and the polygons' corners (pushed out by 2 % of the
         polygon's size, or by half the ends' distance to it if less; the set grows while a
-        chain meets another polygon), each edge cut in 1, 2, 4 or 8 pieces or in pieces of one
+        chain meets another polygon, and a chain of an earlier, smaller set that met none stays
+        a candidate: overlapping polygons leave notches, and an end in one is inside the grown
+        set's hull), each edge cut in 1, 2, 4 or 8 pieces or in pieces of one
         terrain cell (at most 32), every new point admitted (:meth:`_admit`: out of the areas,
         into the band over the terrain) at the ends' interpolated altitude or at half or three
         quarters of the band; all candidates scored in one batch by the sub-problems' rule.
