@@ -203,3 +203,60 @@ def test_hull_chains_go_both_ways_around_and_need_the_ends_on_the_hull() -> None
         [],
         [],
     )
+
+
+def test_batched_lockstep_gives_the_reference_plan_and_repair() -> None:
+    """The level's P-MAGAs as one Numba batch (the default) and as one MAGA object each (the
+    reference) give the same plan bit for bit: paths, per-level traces, evaluations; and the
+    same P-MAGA repair (runs of different lengths: batches of different gene counts)."""
+    from uavplan.planners.replanning import position_at
+
+    sc = hills()
+    plans = {
+        lock: get_planner("hr-maga", lockstep=lock).plan(sc, budget=60, seed=4)
+        for lock in ("batched", "reference")
+    }
+    a, b = plans["batched"], plans["reference"]
+    np.testing.assert_array_equal(a.waypoints, b.waypoints)
+    assert a.info["level_history"] == b.info["level_history"]
+    assert (a.cost, a.evaluations) == (b.cost, b.evaluations)
+    np.testing.assert_array_equal(a.history, b.history)
+    # two unknown areas on the plan, revealed at once: two runs of failing segments
+    areas = []
+    for share in (0.3, 0.7):
+        c = position_at(a.waypoints, a.times, share * a.times[-1])
+        areas.append(UncertainArea(c[0] - 60, c[1] - 60, 120.0 + 80 * share, 120.0, True))
+    world = dataclasses.replace(sc, uncertain_areas=(*sc.uncertain_areas, *areas))
+    fixed = {}
+    for lock in ("batched", "reference"):
+        hr = get_planner("hr-maga", lockstep=lock, repair_detour=False)
+        fixed[lock] = hr.repair(world, sc.tasks[0], a.waypoints, a.times, 1, 8, 11)
+    (pa, ia), (pb, ib) = fixed["batched"], fixed["reference"]
+    assert ia["how"] == "local repair" and ia["runs"] >= 2 and ia["segments"] > ia["runs"], ia
+    np.testing.assert_array_equal(pa, pb)
+    assert ia == ib
+
+
+def test_detour_from_the_notch_of_two_overlapping_areas() -> None:
+    """An end in the notch of two overlapping areas lies inside the hull of their corners, so
+    the grown set has no way around; the first round's way around the one area the run
+    crosses, which meets no other, is kept as a candidate and found (before: P-MAGA)."""
+    sc = hills()
+    areas = (
+        UncertainArea(800.0, 1000.0, 400.0, 400.0, revealed=True),  # north of A
+        UncertainArea(1100.0, 700.0, 400.0, 400.0, revealed=True),  # east of A, across A-B
+    )
+    world = dataclasses.replace(sc, uncertain_areas=areas, danger_areas=())
+    t = world.terrain
+
+    def at(x: float, y: float) -> np.ndarray:
+        return np.array([x, y, float(t.height(x, y)) + 100.0])
+
+    P = np.stack([np.asarray(sc.tasks[0].start), at(1000.0, 900.0), at(1700.0, 900.0)])
+    hr = HRMAGA()
+    problem = hr._problem(world, sc.tasks[0], None, True)
+    inner, used = hr._detour(problem, world, P, 1, 1)
+    assert inner is not None and used > 0
+    way = np.vstack([P[1], inner, P[2]])
+    assert bool(problem.evaluate(way[None]).feasible[0])
+    assert way[:, 1].min() < 700.0  # south of the crossed area, away from the other one

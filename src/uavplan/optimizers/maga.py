@@ -117,6 +117,18 @@ vary in size; :attr:`MAGA.generation` counts finished generations. Budgets in ev
 fairly with other optimizers. Each evaluation is asked, and therefore counted by the base class,
 exactly once; agents whose cost is known are never re-asked. The evaluated ``X`` handed to
 :meth:`tell` is taken as the new agents (a caller may repair points before evaluating them).
+
+Implementations
+---------------
+:class:`ReferenceMAGA` is the algorithm in NumPy, one lattice per object (the first
+implementation). :class:`MAGABatch` advances many independent lattices (HR-MAGA's sub-problems of
+a level) with one Numba call per ask and one per tell (:mod:`uavplan.optimizers._maga_kernels`):
+the operators run agent by agent in the reference's order, and each lattice draws from its own
+generator's PCG64 stream as NumPy would (the kernels advance a copy of its state), so a lattice
+of a batch gives the numbers of a :class:`ReferenceMAGA` with the same generator, bit for bit
+(``tests/optimizers/test_maga_batch.py``: the stream draw for draw, each operator, whole runs).
+The registered :class:`MAGA` (``maga``, P-MAGA's planner) is a batch of one lattice behind the
+ask/tell interface.
 """
 
 from __future__ import annotations
@@ -126,9 +138,9 @@ from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
+from uavplan.optimizers import _maga_kernels as _mk
 from uavplan.optimizers.base import (
     FloatArray,
     Optimizer,
@@ -257,55 +269,8 @@ def smooth(X: FloatArray, block: int, passes: int) -> FloatArray:
     if block < 2 or D % block or D // block < 3 or passes < 1 or n == 0:
         return X.copy()
     P = np.ascontiguousarray(X, dtype=np.float64).reshape(n, D // block, block).copy()
-    _smooth_rows(P, passes)
+    _mk.smooth_rows(P, passes)
     return P.reshape(n, D)
-
-
-@njit(cache=True)
-def _turns_back(Q: FloatArray) -> bool:  # pragma: no cover - numba
-    """``any(turn_cosines(Q[None]) <= 0)`` for one polyline ``(n_p, d)``."""
-    n_p, d = Q.shape
-    for k in range(1, n_p - 1):
-        dot = 0.0
-        s_in = 0.0
-        s_out = 0.0
-        for j in range(d):
-            a = Q[k, j] - Q[k - 1, j]
-            b = Q[k + 1, j] - Q[k, j]
-            dot += b * a
-            s_in += a * a
-            s_out += b * b
-        norm = np.sqrt(s_out) * np.sqrt(s_in)
-        if norm > 0 and dot / norm <= 0:
-            return True
-    return False
-
-
-@njit(cache=True)
-def _smooth_rows(P: FloatArray, passes: int) -> None:  # pragma: no cover - numba
-    """In place: :func:`smooth_reference`'s passes on every polyline of ``P`` ``(n, n_p, d)``."""
-    n, n_p, d = P.shape
-    for r in range(n):
-        Q = P[r]
-        if not _turns_back(Q):
-            continue
-        for _ in range(passes):
-            for start in (1, 2):
-                for k in range(start, n_p - 1, 2):
-                    dot = 0.0
-                    defined_in = False
-                    defined_out = False
-                    for j in range(d):
-                        a = Q[k, j] - Q[k - 1, j]
-                        b = Q[k + 1, j] - Q[k, j]
-                        dot += a * b
-                        defined_in |= a != 0
-                        defined_out |= b != 0
-                    if dot <= 0 and defined_in and defined_out:
-                        for j in range(d):
-                            Q[k, j] = 0.5 * (Q[k - 1, j] + Q[k + 1, j])
-            if not _turns_back(Q):
-                break
 
 
 def smooth_reference(X: FloatArray, block: int, passes: int) -> FloatArray:
@@ -382,10 +347,11 @@ class MAGAConfig(OptimizerConfig):
 
 
 # ---------------------------------------------------------------------- optimizer
-@register
-class MAGA(Optimizer):
-    """P-MAGA (HR-MAGA Alg. 1): agent lattice, neighbourhood competition, crossover, adjacent
-    mutation, smoothing, self-learning with elite retention. See the module docstring.
+class ReferenceMAGA(Optimizer):
+    """P-MAGA (HR-MAGA Alg. 1) in NumPy, one lattice: agent lattice, neighbourhood competition,
+    crossover, adjacent mutation, smoothing, self-learning with elite retention. See the module
+    docstring. The reference of :class:`MAGA` and :class:`MAGABatch` (same numbers; not
+    registered).
 
     State: ``L`` ``(pop_size, dim)`` agents on the lattice (flat index ``i * cols + j``) and their
     costs ``F``; :attr:`generation` finished generations of Alg. 1.
@@ -395,7 +361,7 @@ class MAGA(Optimizer):
             (e.g. paths seeded by RRT* or RGG); clipped to the box.
     """
 
-    name: ClassVar[str] = "maga"
+    name: ClassVar[str] = "maga-reference"
     Config: ClassVar[type[OptimizerConfig]] = MAGAConfig
     config: MAGAConfig
 
@@ -578,3 +544,197 @@ class MAGA(Optimizer):
                 self.L[w], self.F[w] = x_e, f_e
         self.generation += 1
         self.phase = "lattice"
+
+
+@register
+class MAGA(ReferenceMAGA):
+    """P-MAGA (HR-MAGA Alg. 1), registered as ``maga``: :class:`ReferenceMAGA`'s optimizer
+    stepped by the Numba kernels of :class:`MAGABatch` (one lattice), the same numbers. The
+    generator's state goes into the kernels before each ask and comes back after it, so
+    ``self.rng`` stays the one stream. A generator that is not PCG64 (NumPy's default) runs
+    the reference code. ``L``, ``F``, ``phase``, ``targets``, ``sL``, ``sF`` and ``s_best_*``
+    read as :class:`ReferenceMAGA`'s (the lattice ones are views of the batch's arrays)."""
+
+    name: ClassVar[str] = "maga"
+
+    def _setup(self) -> None:
+        super()._setup()
+        self._engine: MAGABatch | None = None
+        if isinstance(self.rng.bit_generator, np.random.PCG64):
+            init = None if self.init is None else self.init[None]
+            b = MAGABatch(self.lower, self.upper, self.block, self.config, [self.rng], init)
+            self._engine = b
+            self._sync()
+
+    def _sync(self) -> None:
+        """The reference's attributes from the batch's state."""
+        b = self._engine
+        assert b is not None
+        ints = b.ints[0]
+        T = int(ints[_mk.NTAR])
+        self.L, self.F = b.L[0], b.F[0]
+        self.generation = int(ints[_mk.GEN])
+        self.s_generation = int(ints[_mk.SGEN])
+        self.phase = "lattice" if ints[_mk.PHASE] == 0 else "self_learning"
+        self.targets = b.targets[0, :T].copy()
+        self.sL, self.sF = b.sL[0, :T], b.sF[0, :T]
+        self.s_best_x, self.s_best_f = b.s_best_x[0, :T], b.s_best_f[0, :T]
+        self._elite = (b.elite_x[0].copy(), float(b.elite_f[0]))
+
+    def _engine_ask(self) -> FloatArray:
+        b = self._engine
+        assert b is not None
+        bg = self.rng.bit_generator
+        assert isinstance(bg, np.random.PCG64)
+        b.states[0] = _mk.pcg64_row(bg)
+        X, _ = b.ask()
+        _mk.set_pcg64_row(bg, b.states[0])
+        self._sync()
+        return X
+
+    def _initialize(self) -> FloatArray:
+        return super()._initialize() if self._engine is None else self._engine_ask()
+
+    def _ask(self) -> FloatArray:
+        return super()._ask() if self._engine is None else self._engine_ask()
+
+    def _tell(self, X: FloatArray, f: FloatArray) -> None:
+        if self._engine is None:
+            super()._tell(X, f)
+            return
+        self._engine.tell(f, X)
+        self._sync()
+
+
+# ---------------------------------------------------------------------- many lattices at once
+class MAGABatch:
+    """``S`` independent P-MAGA optimizers (Alg. 1) of the same gene count and configuration,
+    advanced together: one :meth:`ask` (or :meth:`tell`) is one ask (or tell) of every live
+    lattice, computed by one Numba call (:mod:`uavplan.optimizers._maga_kernels`) instead of a
+    Python pass over each lattice's operators.
+
+    Lattice ``s`` gives the same numbers as a :class:`MAGA` on the box ``lower[s]..upper[s]``
+    with the generator ``seeds[s]`` (the same random draws in the same order, the same
+    operators, the same bookkeeping: ``tests/optimizers/test_maga_batch.py``). What differs is
+    the interface: there is no problem object (the caller evaluates); :meth:`ask` returns the
+    asked rows of every live lattice in one array, lattice by lattice, with the lattice of each
+    row; :meth:`tell` takes their costs in that order. The asked rows are the new agents (the
+    caller does not repair them).
+
+    Args:
+        lower, upper: ``(S, D)`` gene boxes.
+        block: genes per waypoint (smoothing and the mutation's waypoint).
+        config: the lattices' configuration.
+        seeds: ``S`` generators (PCG64, NumPy's default), seed sequences or ints; a generator's
+            state is copied, not advanced.
+        init: optional first lattices ``(S, pop_size, D)`` (clipped to the boxes).
+    """
+
+    def __init__(
+        self,
+        lower: FloatArray,
+        upper: FloatArray,
+        block: int,
+        config: MAGAConfig,
+        seeds: list[Any],
+        init: FloatArray | None = None,
+    ) -> None:
+        lo = np.ascontiguousarray(np.atleast_2d(lower), dtype=np.float64)
+        hi = np.ascontiguousarray(np.atleast_2d(upper), dtype=np.float64)
+        S, D = lo.shape
+        if hi.shape != (S, D) or len(seeds) != S or S == 0 or D == 0:
+            raise OptimizerError(
+                f"MAGABatch: lower and upper must be (S, D) alike with S seeds; got {lo.shape}, "
+                f"{hi.shape}, {len(seeds)}"
+            )
+        cfg = config
+        N, K = cfg.pop_size, cfg.sL_size**2
+        self.config, self.block, self.lower, self.upper = cfg, int(block), lo, hi
+        self.h = cfg.mutation_step * (hi - lo)
+        self.neighbours = torus_neighbours(*cfg.lattice_shape)
+        self.s_neighbours = torus_neighbours(cfg.sL_size, cfg.sL_size)
+        self.states = np.stack([_mk.pcg64_row(_bit_generator(g)) for g in seeds])
+        self.init = (
+            np.empty((0, N, D))
+            if init is None
+            else np.ascontiguousarray(np.clip(init, lo[:, None], hi[:, None]), dtype=np.float64)
+        )
+        if init is not None and self.init.shape != (S, N, D):
+            raise OptimizerError(f"MAGABatch: init must be {(S, N, D)}, got {self.init.shape}")
+        self.ints = np.zeros((S, _mk.INT_COLUMNS), dtype=np.int64)
+        self.L = np.zeros((S, N, D))
+        self.F = np.full((S, N), np.inf)
+        self.targets = np.zeros((S, N), dtype=np.int64)
+        self.sL = np.zeros((S, N, K, D))
+        self.sF = np.zeros((S, N, K))
+        self.s_best_x = np.zeros((S, N, D))
+        self.s_best_f = np.zeros((S, N))
+        self.elite_x = np.zeros((S, D))
+        self.elite_f = np.zeros(S)
+        self.cand = np.zeros((S, N * K, D))
+        self.known = np.zeros((S, N * K))
+        self.loser = np.zeros((S, N * K), dtype=np.int64)
+        self.asked = np.zeros((S, N * K), dtype=np.bool_)
+        self.best_x = np.zeros((S, D))
+        self.best_f = np.full(S, np.inf)
+        self.has_best = np.zeros(S, dtype=np.bool_)
+        self.evaluations = np.zeros(S, dtype=np.int64)
+        self._live: NDArray[np.bool_] | None = None
+        self._rows = 0
+
+    @property
+    def generation(self) -> IntArray:
+        """Finished generations of Alg. 1 per lattice."""
+        return self.ints[:, _mk.GEN]
+
+    @property
+    def iterations(self) -> IntArray:
+        """Asks told per lattice."""
+        return self.ints[:, _mk.ITER]
+
+    def ask(self, live: NDArray[np.bool_] | None = None) -> tuple[FloatArray, IntArray]:
+        """The rows to evaluate of every ``live`` lattice (default all), ``(R, D)``, and the
+        lattice of each row ``(R,)``."""
+        if self._live is not None:
+            raise OptimizerError("MAGABatch: ask() called twice without tell()")
+        cfg = self.config
+        lv = np.ones(len(self.F), dtype=np.bool_) if live is None else np.asarray(live, bool)
+        X, owner = _mk.ask_all(
+            lv, self.states, self.ints, self.L, self.F, self.lower, self.upper, self.h,
+            self.init, self.neighbours, self.s_neighbours, self.targets, self.sL, self.sF,
+            self.elite_x, self.elite_f, self.cand, self.known, self.loser, self.asked,
+            cfg.P_c, cfg.P_m, cfg.self_learning_rate, cfg.self_learning == "best",
+            self.block, cfg.smooth, cfg.smooth_passes,
+        )  # fmt: skip
+        self._live, self._rows = lv, len(X)
+        return X, owner
+
+    def tell(self, f: FloatArray, X: FloatArray | None = None) -> None:
+        """The costs of the rows of the last :meth:`ask`, in its order (no NaN). ``X``: the
+        rows as evaluated, if the caller changed them (they become the new agents, as
+        :meth:`MAGA.tell` takes them)."""
+        if self._live is None:
+            raise OptimizerError("MAGABatch: tell() called without a pending ask()")
+        f = np.ascontiguousarray(f, dtype=np.float64)
+        if f.shape != (self._rows,) or np.isnan(f).any():
+            raise OptimizerError(f"MAGABatch: tell() needs one cost per asked row, got {f.shape}")
+        X = np.empty((0, self.L.shape[2])) if X is None else np.ascontiguousarray(X, np.float64)
+        if X.shape[0] and X.shape != (self._rows, self.L.shape[2]):
+            raise OptimizerError(f"MAGABatch: tell() got X of shape {X.shape}")
+        _mk.tell_all(
+            self._live, f, X, self.ints, self.L, self.F, self.targets, self.sL, self.sF,
+            self.s_best_x, self.s_best_f, self.elite_x, self.elite_f, self.cand, self.known,
+            self.loser, self.asked, self.best_x, self.best_f, self.has_best, self.evaluations,
+            self.config.sGen, self.config.elitism,
+        )  # fmt: skip
+        self._live = None
+
+
+def _bit_generator(seed: Any) -> np.random.PCG64:
+    """The PCG64 of a generator (refused if it has another bit generator), or a new one."""
+    if isinstance(seed, np.random.Generator):
+        bg = seed.bit_generator
+        if not isinstance(bg, np.random.PCG64):
+            raise OptimizerError(f"MAGABatch draws as PCG64 does; got {type(bg).__name__}")
+        return bg
+    return np.random.PCG64(seed)

@@ -18,9 +18,15 @@ Eq. 9, weights 1 : 10 : 15, Table I), which the HR-MAGA scenarios and experiment
   the planner returns the best path, the three best in ``info["paths"]``.
 
 Everything one level's P-MAGA problems need is batched: the level's sub-problems (1, then
-``3 num = 9``, then 81) run in lockstep, one MAGA each, and every step evaluates all their asked
-agents as one population on the level's :class:`~uavplan.problems.path_problem.PathProblem`
-(they are independent: Alg. 2 visits them in turn only because it is written recursively).
+``3 num = 9``, then 81) run in lockstep, one P-MAGA each, and every step evaluates all their
+asked agents as one population on the level's
+:class:`~uavplan.problems.path_problem.PathProblem` (they are independent: Alg. 2 visits them in
+turn only because it is written recursively). Their lattices are one
+:class:`~uavplan.optimizers.maga.MAGABatch`: a step is one Numba call for every sub-problem's
+ask, one evaluation, one Numba call for the tells, each sub-problem drawing from its own
+generator exactly as one :class:`~uavplan.optimizers.maga.ReferenceMAGA` object per
+sub-problem does (``lockstep="reference"``, the first implementation, kept for the tests and the
+benchmark: the same plan bit for bit).
 
 Decisions where the paper is vague (and why)
 --------------------------------------------
@@ -61,14 +67,16 @@ Decisions where the paper is vague (and why)
   sub-problems of all levels (a level of 81 sub-problems gets 81 times the first level's);
   P-MAGA stops at Table I's ``G = 200`` generations in any case. Table I's full schedule (200
   generations of 1 + sGen = 11 batches per level) is ``--iterations 6600``; the default, 300
-  iterations (about 9 generations per level), is what plans in a few seconds here.
+  iterations (about 9 generations per level), plans in about a second of CPU here.
 * **One optimizer per sub-problem.** The level's P-MAGAs share every evaluation batch, but each
-  keeps its own state machine. We tried one MAGA holding the level's sub-problems as
+  keeps its own state machine (phase, generation, self-learning lattices, generator), also
+  inside the batched kernels. We tried one MAGA holding the level's sub-problems as
   independent lattices over normalized genes (3x faster: fewer Python calls). Its generations
   are synchronized, so a converged lattice with no self-learning agent sits idle while the
   others self-learn for ``sGen`` steps. It found fewer feasible paths: 10 of 20 against 14 of
   20 on ``hrmaga-jacksboro`` and ``hrmaga-topobathy``, 300 iterations, seeds 4-13. So we kept
-  separate optimizers.
+  separate optimizers; :class:`~uavplan.optimizers.maga.MAGABatch` batches the computation, not
+  the algorithm.
 * **Integration at a junction** uses the moved segment ends, so the combined path is continuous
   by construction.
 """
@@ -76,6 +84,7 @@ Decisions where the paper is vague (and why)
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 import math
 from dataclasses import dataclass
@@ -86,7 +95,7 @@ from numpy.typing import NDArray
 
 from uavplan.optimizers.base import Budget
 from uavplan.optimizers.constraints import feasibility_first
-from uavplan.optimizers.maga import MAGA, MAGAConfig, turn_cosines
+from uavplan.optimizers.maga import MAGABatch, MAGAConfig, ReferenceMAGA, turn_cosines
 from uavplan.planners.base import Planner
 from uavplan.planners.optimizer_planner import OptimizerPlanner
 from uavplan.planners.options import PlannerConfig, PlannerError, option
@@ -134,6 +143,11 @@ class HRMAGAConfig(PlannerConfig):
     )
     uncertain_from_level: int = option(
         2, "first level that knows the uncertain areas (the paper: the finer ones)", low=1
+    )
+    lockstep: str = option(
+        "batched",
+        "a level's P-MAGAs as one Numba batch, or one object each (the reference: same numbers)",
+        choices=("batched", "reference"),
     )
 
 
@@ -236,25 +250,89 @@ class HRMAGA(Planner):
         return _Sub(a, b, np.tile(lo, n_free), np.tile(hi, n_free), 3, n_free, ground)
 
     def _decode(self, sub: _Sub, X: FloatArray, sc: Scenario) -> FloatArray:
-        free = X.reshape(X.shape[0], sub.n_free, 3).copy()
-        if sub.ground:
-            assert sc.terrain is not None
-            free[..., 2] += sc.terrain.lookup(free[..., 0], free[..., 1], _lookup(sc))
-        out = np.empty((X.shape[0], sub.n_free + 2, 3))
-        out[:, 0], out[:, 1:-1], out[:, -1] = sub.start, free, sub.goal
-        return out
+        return _decode_rows(X, sub.start, sub.goal, sub.n_free, sub.ground, sc)
 
     def _solve_level(
         self, run: Run, problem: PathProblem, sc: Scenario, subs: list[_Sub],
-        rngs: list[np.random.Generator], steps: float, evaluations: float, group: int = 1,
+        seeds: list[np.random.SeedSequence], steps: float, evaluations: float, group: int = 1,
     ) -> tuple[list[Best3], list[float]]:  # fmt: skip
-        """Run one MAGA per sub-problem in lockstep; the ``keep`` best agents of each, and
+        """Run one P-MAGA per sub-problem in lockstep; the ``keep`` best agents of each, and
         after every step the level's loss: the lowest, over the parent paths (``group``
         consecutive sub-problems each), of the sum of their sub-problems' best numbers (the
-        smallest loss in the level's population, Eq. 13's ``loss_layer_i``)."""
+        smallest loss in the level's population, Eq. 13's ``loss_layer_i``).
+
+        The sub-problems of one gene count are one :class:`~uavplan.optimizers.maga.MAGABatch`
+        (a level's are all alike; a repair's runs may differ): a step is one ask of every batch,
+        one evaluation per batch, one tell. ``lockstep="reference"`` runs one
+        :class:`~uavplan.optimizers.maga.ReferenceMAGA` object per sub-problem instead
+        (:meth:`_solve_level_reference`), which gives the same numbers."""
+        if self.config.lockstep == "reference":
+            return self._solve_level_reference(
+                run, problem, sc, subs, seeds, steps, evaluations, group
+            )
         cfg = self.config
         mcfg = MAGAConfig(pop_size=cfg.pop_size, P_c=cfg.P_c, P_m=cfg.P_m, sGen=cfg.sGen)
-        opts = [MAGA(s, mcfg, seed=g) for s, g in zip(subs, rngs, strict=True)]
+        dims = sorted({s.dim for s in subs})
+        members = [[k for k, s in enumerate(subs) if s.dim == d] for d in dims]
+        batches = [
+            MAGABatch(
+                np.stack([subs[k].lower for k in ks]),
+                np.stack([subs[k].upper for k in ks]),
+                3,
+                mcfg,
+                [seeds[k] for k in ks],
+            )
+            for ks in members
+        ]
+        starts = [np.stack([subs[k].start for k in ks]) for ks in members]
+        goals = [np.stack([subs[k].goal for k in ks]) for ks in members]
+        ground = [subs[ks[0]].ground for ks in members]  # the level's band: alike for all
+        where = np.concatenate(members)  # batch order -> sub-problem order
+        tr = run.tracker
+        trace: list[float] = []
+        used = n_steps = 0
+        while n_steps < steps and used < evaluations:
+            lives = [b.generation < cfg.G for b in batches]
+            if not any(lv.any() for lv in lives):
+                break
+            for g, (b, lv) in enumerate(zip(batches, lives, strict=True)):
+                X, owner = b.ask(lv)
+                if len(X) == 0:
+                    b.tell(np.empty(0))
+                    continue
+                n_free = X.shape[1] // 3
+                paths = _decode_rows(X, starts[g][owner], goals[g][owner], n_free, ground[g], sc)
+                f, cv = problem.evaluate_cv(paths, exact=True)
+                b.tell(feasibility_first(f, cv))
+                tr.evaluations += len(paths)
+                used += len(paths)
+            n_steps += 1
+            bests = np.empty(len(subs))
+            bests[where] = np.concatenate([b.best_f for b in batches])
+            trace.append(float(bests.reshape(-1, group).sum(axis=1).min()))
+            if tr.end_iteration(best=tr.cost):
+                self._stopped = True
+                break
+        out: list[Best3] = [(np.empty(0), np.empty(0))] * len(subs)
+        for b, ks in zip(batches, members, strict=True):
+            for i, k in enumerate(ks):
+                order = np.argsort(b.F[i], kind="stable")[: cfg.keep]
+                out[k] = (self._decode(subs[k], b.L[i][order], sc), b.F[i][order])
+        return out, trace
+
+    def _solve_level_reference(
+        self, run: Run, problem: PathProblem, sc: Scenario, subs: list[_Sub],
+        seeds: list[np.random.SeedSequence], steps: float, evaluations: float, group: int = 1,
+    ) -> tuple[list[Best3], list[float]]:  # fmt: skip
+        """:meth:`_solve_level` with one :class:`~uavplan.optimizers.maga.ReferenceMAGA` per
+        sub-problem, stepped in turn (the first implementation, kept as the reference: the
+        tests compare the two plan by plan)."""
+        cfg = self.config
+        mcfg = MAGAConfig(pop_size=cfg.pop_size, P_c=cfg.P_c, P_m=cfg.P_m, sGen=cfg.sGen)
+        opts = [
+            ReferenceMAGA(s, mcfg, seed=np.random.default_rng(g))
+            for s, g in zip(subs, seeds, strict=True)
+        ]
         tr = run.tracker
         trace: list[float] = []
         used = n_steps = 0
@@ -296,25 +374,41 @@ class HRMAGA(Planner):
         return np.asarray(np.sum(turn_cosines(paths) <= 0, axis=1), dtype=np.int64)
 
     def _integrate(
-        self, problem: PathProblem, parts: list[Best3], tr: Tracker
-    ) -> tuple[FloatArray, FloatArray]:
-        """Alg. 2 line 15 for one parent path: every combination of its segments' best
-        sub-paths, ranked by turn-backs, then the rule's number; the best one."""
-        choices = [range(len(p[0])) for p in parts]
-        combos = list(itertools.product(*choices))
-        paths = np.stack(
-            [
-                np.concatenate(
-                    [parts[0][0][c[0]][:1]] + [parts[j][0][c[j]][1:] for j in range(len(parts))]
+        self, problem: PathProblem, groups: list[list[Best3]], tr: Tracker
+    ) -> list[tuple[FloatArray, float]]:
+        """Alg. 2 line 15 for parent paths, each given by its segments' best sub-paths: every
+        combination, ranked by turn-backs, then the rule's number; the best one of each parent.
+        All parents' combinations are scored in one batch per path length."""
+        cands = []
+        for parts in groups:
+            combos = itertools.product(*[range(len(p[0])) for p in parts])
+            cands.append(
+                np.stack(
+                    [
+                        np.concatenate(
+                            [parts[0][0][c[0]][:1]]
+                            + [parts[j][0][c[j]][1:] for j in range(len(parts))]
+                        )
+                        for c in combos
+                    ]
                 )
-                for c in combos
-            ]
-        )
-        f, cv = problem.evaluate_cv(paths, exact=True)
-        tr.evaluations += len(paths)
-        num = feasibility_first(f, cv)
-        order = np.lexsort((num, self._turn_backs(paths)))
-        return paths[order[0]], np.asarray(num[order[0]])
+            )
+        nums: list[FloatArray] = [np.empty(0)] * len(cands)
+        for n_pts in sorted({c.shape[1] for c in cands}):
+            same = [q for q, c in enumerate(cands) if c.shape[1] == n_pts]
+            paths = np.concatenate([cands[q] for q in same])
+            f, cv = problem.evaluate_cv(paths, exact=True)
+            tr.evaluations += len(paths)
+            num = feasibility_first(f, cv)
+            for q, part in zip(
+                same, np.split(num, np.cumsum([len(cands[q]) for q in same])[:-1]), strict=True
+            ):
+                nums[q] = part
+        out = []
+        for paths, num in zip(cands, nums, strict=True):
+            order = np.lexsort((num, self._turn_backs(paths)))
+            out.append((paths[order[0]], float(num[order[0]])))
+        return out
 
     # ------------------------------------------------------------------ uncertain areas
     @staticmethod
@@ -417,9 +511,15 @@ class HRMAGA(Planner):
             )
             if lv == cfg.v:
                 steps = math.inf if max_it is None else max_it - len(tr.history)
-            rngs = [np.random.default_rng(s) for s in root_seq.spawn(len(subs))]
             best, trace = self._solve_level(
-                run, problem, sc, subs, rngs, max(steps, 1), evals, 1 if lv == 1 else cfg.num
+                run,
+                problem,
+                sc,
+                subs,
+                root_seq.spawn(len(subs)),
+                max(steps, 1),
+                evals,
+                1 if lv == 1 else cfg.num,
             )
             traces.append(trace)
             results.append(best)
@@ -485,15 +585,19 @@ class HRMAGA(Planner):
         k = cfg.keep * cfg.num
         for lv in range(len(results) - 1, 0, -1):
             parents = results[lv - 1]
+            groups = [
+                [results[lv][pidx * k + i * cfg.num + j] for j in range(cfg.num)]
+                for pidx, (ppaths, _) in enumerate(parents)
+                for i in range(len(ppaths))
+            ]
+            best = iter(self._integrate(problem, groups, tr))  # every parent path at once
             merged: list[Best3] = []
-            for pidx, (ppaths, _) in enumerate(parents):
+            for ppaths, _ in parents:
                 news, nums = [], []
-                for i in range(len(ppaths)):
-                    base = pidx * k + i * cfg.num
-                    parts = [results[lv][base + j] for j in range(cfg.num)]
-                    path, val = self._integrate(problem, parts, tr)
+                for _i in range(len(ppaths)):
+                    path, val = next(best)
                     news.append(path)
-                    nums.append(float(val))
+                    nums.append(val)
                 order = np.argsort(nums, kind="stable")
                 merged.append((np.stack([news[o] for o in order]), np.asarray(nums)[order]))
             results[lv - 1] = merged
@@ -507,7 +611,9 @@ class HRMAGA(Planner):
         any optimization: a repair must come within one control period). Both chains of the
         convex hull of the two ends and the polygons' corners (pushed out by 2 % of the
         polygon's size, or by half the ends' distance to it if less; the set grows while a
-        chain meets another polygon), each edge cut in 1, 2, 4 or 8 pieces or in pieces of one
+        chain meets another polygon, and a chain of an earlier, smaller set that met none stays
+        a candidate: overlapping polygons leave notches, and an end in one is inside the grown
+        set's hull), each edge cut in 1, 2, 4 or 8 pieces or in pieces of one
         terrain cell (at most 32), every new point admitted (:meth:`_admit`: out of the areas,
         into the band over the terrain) at the ends' interpolated altitude or at half or three
         quarters of the band; all candidates scored in one batch by the sub-problems' rule.
@@ -532,6 +638,7 @@ class HRMAGA(Planner):
         near = touched(P[i : j + 2, :2])
         XY = np.empty((0, 2))
         chains: tuple[list[int], list[int]] = ([], [])
+        extra: list[tuple[FloatArray, list[int]]] = []
         for _ in range(4):  # grow the set while a way around meets another polygon
             pts = [A[:2], B[:2]]
             for q in sorted(near):
@@ -543,22 +650,26 @@ class HRMAGA(Planner):
                 pts += list(v + math.sqrt(2.0) * m * (v - c) / np.maximum(r, 1e-12))
             XY = np.clip(np.asarray(pts, dtype=np.float64), sc.bounds.lo[:2], sc.bounds.hi[:2])
             chains = _hull_chains(XY)
-            more = set().union(*(touched(XY[ch]) for ch in chains if len(ch) >= 2)) - near
+            hits = [touched(XY[ch]) - near if len(ch) >= 2 else set() for ch in chains]
+            more = set().union(*hits)
             if not more:
                 break
+            # a chain of this round that meets no other polygon stays a candidate: the grown
+            # set's hull may hold an end (polygons that overlap leave a notch), then it is the way
+            extra += [
+                (XY, ch) for ch, h in zip(chains, hits, strict=True) if len(ch) >= 2 and not h
+            ]
             near |= more
         ways: list[FloatArray] = []  # (n, 3) each: the way's points at the ends' altitude line
-        for chain in chains:
+        for XYc, chain in [(XY, ch) for ch in chains] + extra:
             if len(chain) < 2:
                 continue
-            corners = XY[chain]  # two points: the ends see each other past every polygon
+            corners = XYc[chain]  # two points: the ends see each other past every polygon
             edges = np.linalg.norm(np.diff(corners, axis=0), axis=1)
             cell = sc.terrain.cell_size if sc.terrain is not None else math.inf
             by_cell = np.clip(np.ceil(edges / cell), 1, MAX_PIECES).astype(int)
             for pieces in ([1], [2], [4], [8], list(by_cell)):  # per edge; the last: a cell each
-                ts = [
-                    np.linspace(0.0, 1.0, n + 1)[:-1] for n in np.broadcast_to(pieces, len(edges))
-                ]
+                ts = [_cuts(int(n)) for n in np.broadcast_to(pieces, len(edges))]
                 xy = np.concatenate(
                     [
                         a + t[:, None] * (b - a)
@@ -675,9 +786,10 @@ class HRMAGA(Planner):
             ]
             tr = Tracker(Termination(b.max_iterations, b.max_evaluations, b.max_time), False)
             run = Run(scenario, task, problem, seed, b, b.max_iterations, tr)
-            rngs = [np.random.default_rng(q) for q in seeds.spawn(len(subs))]
             self._stopped = False
-            best, _ = self._solve_level(run, problem, scenario, subs, rngs, steps, evals)
+            best, _ = self._solve_level(
+                run, problem, scenario, subs, seeds.spawn(len(subs)), steps, evals
+            )
             used += tr.evaluations
             if all(np.isfinite(nums[0]) and nums[0] < 1e7 for _, nums in best):
                 break
@@ -696,6 +808,14 @@ class HRMAGA(Planner):
 
 #: the most pieces a detour's edge is cut into (per terrain cell up to this many)
 MAX_PIECES = 32
+
+
+@functools.cache
+def _cuts(n: int) -> FloatArray:
+    """``np.linspace(0, 1, n + 1)[:-1]``, computed once per ``n`` (read-only)."""
+    t = np.linspace(0.0, 1.0, n + 1)[:-1]
+    t.setflags(write=False)
+    return t
 
 
 def _splice(P: FloatArray, runs: list[tuple[int, int]], inner: list[FloatArray]) -> FloatArray:
@@ -745,6 +865,23 @@ def _hull_chains(pts: FloatArray) -> tuple[list[int], list[int]]:
     one = [ring[(a + t) % n] for t in range((b - a) % n + 1)]
     other = [ring[(a - t) % n] for t in range((a - b) % n + 1)]
     return one, other
+
+
+def _decode_rows(
+    X: FloatArray, start: FloatArray, goal: FloatArray, n_free: int, ground: bool, sc: Scenario
+) -> FloatArray:
+    """Paths ``(n, n_free + 2, 3)`` from gene rows ``X`` ``(n, 3 n_free)`` between ``start``
+    and ``goal`` (``(3,)``, or ``(n, 3)`` one per row); ``ground``: the z genes are heights
+    above the level's map."""
+    n = X.shape[0]
+    out = np.empty((n, n_free + 2, 3))
+    out[:, 1:-1] = X.reshape(n, n_free, 3)
+    if ground:
+        assert sc.terrain is not None
+        free = out[:, 1:-1]
+        free[..., 2] += sc.terrain.lookup(free[..., 0], free[..., 1], _lookup(sc))
+    out[:, 0], out[:, -1] = start, goal
+    return out
 
 
 def _lookup(sc: Scenario) -> str:
