@@ -149,8 +149,9 @@ class PackedWorld:
             lo2=np.ascontiguousarray(scenario.bounds.lo[:2], dtype=np.float64),
             hi2=np.ascontiguousarray(scenario.bounds.hi[:2], dtype=np.float64),
             scene_prep=G.by_content(
-                "scene prep", G.scene_prep, circ_centers, circ_radii, verts, starts, margins
-            ),
+                "scene prep", G.scene_prep, circ_centers, circ_radii, verts, starts, margins,
+                np.bool_(len(circ_radii) + len(margins) >= G.GRID_MIN_OBSTACLES),
+            ),  # fmt: skip
         )
 
     @property
