@@ -135,6 +135,7 @@ class PackedWorld:
         margins = np.array([p.margin for p in scenario.no_fly_polygons], dtype=np.float64)
         circ_centers = np.array([c.center for c in circ], dtype=np.float64).reshape(-1, 2)
         circ_radii = np.array([c.effective_radius for c in circ], dtype=np.float64)
+        gridded = np.bool_(len(circ_radii) + len(margins) >= G.GRID_MIN_OBSTACLES)
         return cls(
             cyl_centers=np.array([c.center for c in cyl], dtype=np.float64).reshape(-1, 2),
             cyl_radii=np.array([c.effective_radius for c in cyl], dtype=np.float64),
@@ -149,9 +150,15 @@ class PackedWorld:
             lo2=np.ascontiguousarray(scenario.bounds.lo[:2], dtype=np.float64),
             hi2=np.ascontiguousarray(scenario.bounds.hi[:2], dtype=np.float64),
             scene_prep=G.by_content(
-                "scene prep", G.scene_prep, circ_centers, circ_radii, verts, starts, margins,
-                np.bool_(len(circ_radii) + len(margins) >= G.GRID_MIN_OBSTACLES),
-            ),  # fmt: skip
+                "scene prep",
+                G.scene_prep,
+                circ_centers,
+                circ_radii,
+                verts,
+                starts,
+                margins,
+                gridded,
+            ),
         )
 
     @property
