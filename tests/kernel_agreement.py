@@ -105,7 +105,7 @@ def _direct_calls() -> None:
     geometry.segment_polygon_inside_fraction(flat, verts, starts)
     margins = np.zeros(2)
     box = (np.zeros(2), np.full(2, 1000.0))  # 200 circles and 2 polygons: the indexed scene pass
-    geometry.scene2d_batch(flat, centers, radii, verts, starts, margins, *box)
+    geometry.scene2d_batch(flat, centers, radii, verts, starts, margins, *box)  # the grid kernel
     H = rng.uniform(0, 100, (50, 60))
     u, v = rng.uniform(0, 59, (40, 12)), rng.uniform(0, 49, (40, 12))
     mean_height_batch(H, u, v)

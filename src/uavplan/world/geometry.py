@@ -969,7 +969,7 @@ def polygon_convexity(verts: FloatArray, starts: NDArray[np.int64]) -> NDArray[n
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _convex_clip(ax, ay, bx, by, verts, v0, v1, orient):  # pragma: no cover - numba
     """Cyrus-Beck: the parameter interval [t_in, t_out] of segment a->b inside the closed
     convex polygon verts[v0:v1] (``orient`` +1 counter-clockwise, -1 clockwise); empty when
@@ -1114,7 +1114,7 @@ def polygon_prep(
     return scene_prep(np.zeros((0, 2)), np.zeros(0), verts, starts, margins)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _hull_missed(ax, ay, bx, by, edges, e0, e1, tol):  # pragma: no cover - numba
     """True if segment a->b misses the convex hull whose edges ``edges[e0:e1]`` describes
     (:func:`hull_edges`), grown by ``tol`` times each edge normal's 1-norm (Cyrus-Beck,
@@ -1149,16 +1149,34 @@ def _box_gap2_soa(sx0, sy0, sx1, sy1, poly, k):  # pragma: no cover - numba
     return gx * gx + gy * gy
 
 
-@njit(cache=True)
-def _polygon_clearance(
-    ax, ay, bx, by, A, L, verts, v0, v1, margin, gap2, phit, ts
+@njit(cache=True, inline="always")
+def _polygon_exact(
+    ax, ay, bx, by, A, L, verts, starts, poly, convex, edges, hull_s, k, gap2, phit, ts
 ):  # pragma: no cover - numba
-    """A polygon with a margin (or a zero-length segment) whose box is within the margin of the
-    segment's (``gap2``: the boxes' squared distance): whether the segment touches it or comes
-    closer than the margin (not tested when ``phit``: already known for this path), and the
-    length of segment inside."""
+    """Segment a->b (``A = |b - a|^2``, ``L = |b - a|``) and polygon k (:func:`scene_prep`'s
+    data) whose box is within its margin of the segment's (``gap2``: the boxes' squared
+    distance): whether the segment touches the polygon or comes closer than its margin, and the
+    length of segment inside. Without a margin, a convex polygon is clipped (Cyrus-Beck); a
+    non-convex one is skipped when the segment misses its convex hull, else split at the edge
+    crossings. With a margin (or a zero-length segment) the clearance is measured unless
+    ``phit`` (already known for this path). ``ts``: scratch of the most vertices + 2."""
+    v0 = starts[k]
+    v1 = starts[k + 1]
+    margin = poly[4, k]
+    if margin <= 0.0 and A > 0.0:
+        if convex[k] != 0:
+            t_in, t_out = _convex_clip(ax, ay, bx, by, verts, v0, v1, convex[k])
+            if t_in <= t_out:
+                return True, (t_out - t_in) * L
+            return False, 0.0
+        seg_scale = 1.0 + max(max(abs(ax), abs(bx)), max(abs(ay), abs(by)))
+        g = SAT_TOL_REL * (seg_scale + poly[6, k])
+        if _hull_missed(ax, ay, bx, by, edges, hull_s[k], hull_s[k + 1], g):
+            return False, 0.0  # clear of the convex hull, so of the polygon
+        frac, touch = _inside_fraction_and_touch(ax, ay, bx, by, verts, v0, v1, ts)
+        return touch, frac * L
     hit = False
-    if not phit:
+    if not phit:  # clearance: touching or closer than the margin
         if _point_in_polygon(ax, ay, verts, v0, v1):
             hit = True
         else:
@@ -1243,19 +1261,167 @@ def scene2d_batch(
     hi: FloatArray,
     prep: tuple[Any, ...] | None = None,
 ) -> tuple[FloatArray, FloatArray, NDArray[np.bool_], NDArray[np.bool_], NDArray[np.bool_]]:
-    """:func:`scene2d_kernel` with the world's :func:`scene_prep` (given, as a world keeps it,
-    or worked out here). The grid serves only paths with finite coordinates (else every pair
-    is tested)."""
+    """One pass over every (path, segment, obstacle) of a scene of circles and polygons, with
+    the world's :func:`scene_prep` (given, as a world keeps it, or worked out here): on the
+    obstacle grid when the world has one (:func:`scene2d_grid_kernel`; paths with coordinates
+    that are not finite test every pair), else testing every pair (:func:`scene2d_kernel`).
+    The two return the same bits.
+
+    The fused form of :func:`segment_circle_inside_fraction`,
+    :func:`segment_polygon_inside_fraction`, :func:`segment_cylinder_distance` (infinite, for
+    circles), :func:`segment_polygon_distance` and the bounds test that the 2-D cost and
+    feasibility need, without the (P, N - 1, J) intermediates. Only the xy coordinates of
+    ``paths`` (P, N, >= 2) are used; ``lo``, ``hi``: the (2,) box, with a 1e-9 tolerance.
+
+    Returns:
+        length: (P,) xy path length;
+        inside: (P,) length of path inside circles and polygons;
+        circle_hit: (P,) bool, some segment closer than ``radii`` to a circle's centre;
+        polygon_hit: (P,) bool, some segment touching a polygon or closer than its margin;
+        outside: (P,) bool, some node outside the box.
+    """
     if prep is None:
         prep = scene_prep(centers, radii, verts, starts, margins)
     p = np.ascontiguousarray(paths, dtype=np.float64)
-    if prep[-4][3] > 0 and not np.isfinite(p[..., :2]).all():
-        prep = (*prep[:-4], np.zeros(5), *prep[-3:])  # nx = 0: every pair
-    return scene2d_kernel(p, verts, starts, lo, hi, *prep)  # type: ignore[no-any-return]
+    if prep[-4][3] > 0 and np.isfinite(p[..., :2]).all():
+        return scene2d_grid_kernel(p, verts, starts, lo, hi, *prep)  # type: ignore[no-any-return]
+    return scene2d_kernel(p, verts, starts, lo, hi, *prep[:-4])  # type: ignore[no-any-return]
+
+
+@njit(cache=True)
+def _scene_outputs(P):  # pragma: no cover - numba
+    """The 2-D scene pass's outputs for P paths, zeroed (see :func:`scene2d_batch`)."""
+    flags = np.zeros((3, P), dtype=np.bool_)
+    return np.zeros(P), np.zeros(P), flags[0], flags[1], flags[2]
+
+
+#: :func:`scene2d_kernel`: paths per block (the lanes its tests run in side by side).
+BLOCK = 64
 
 
 @population_kernel(error_model="numpy")
 def scene2d_kernel(
+    paths, verts, starts, lo, hi, circ, poly, convex, edges, hull_s, maxv
+):  # pragma: no cover - numba
+    """:func:`scene2d_batch` testing every pair, in blocks of :data:`BLOCK` paths whose
+    coordinates are laid out side by side: per segment index, each circle's distance test and
+    each polygon's box test run over the block's paths at once (loops without branches, in SIMD
+    lanes), then the exact work for the pairs that pass (the circle's chord,
+    :func:`_polygon_exact`). Each path's sums take its segments in order and, per segment, its
+    circles then its polygons in index order; a repeated node (a zero-length segment after the
+    first) is skipped, its point tested as the previous segment's end."""
+    P, N, _ = paths.shape
+    J = circ.shape[1]
+    K = starts.shape[0] - 1
+    length, inside, circle_hit, polygon_hit, outside = _scene_outputs(P)
+    tol = BOUNDS_TOL
+    for blk in prange((P + BLOCK - 1) // BLOCK):
+        p0 = blk * BLOCK
+        m = min(P, p0 + BLOCK) - p0
+        xs = np.empty((N, m))
+        ys = np.empty((N, m))
+        for q in range(m):
+            for s in range(N):
+                xs[s, q] = paths[p0 + q, s, 0]
+                ys[s, q] = paths[p0 + q, s, 1]
+        ts = np.empty(maxv + 2)
+        total = np.zeros(m)
+        plen = np.zeros(m)
+        chit = np.zeros(m, dtype=np.bool_)
+        phit = np.zeros(m, dtype=np.bool_)
+        out = np.zeros(m, dtype=np.bool_)
+        dx = np.empty(m)
+        dy = np.empty(m)
+        A = np.empty(m)
+        inv_a = np.empty(m)
+        L = np.empty(m)
+        near = np.empty(m, dtype=np.bool_)
+        gap2 = np.empty(m)
+        for s in range(N):
+            x = xs[s]
+            y = ys[s]
+            for q in range(m):
+                out[q] |= (
+                    (x[q] < lo[0] - tol)
+                    | (x[q] > hi[0] + tol)
+                    | (y[q] < lo[1] - tol)
+                    | (y[q] > hi[1] + tol)
+                )
+        for s in range(N - 1):
+            ax = xs[s]
+            ay = ys[s]
+            bx = xs[s + 1]
+            by = ys[s + 1]
+            first = s == 0
+            for q in range(m):
+                d0 = bx[q] - ax[q]
+                d1 = by[q] - ay[q]
+                aa = d0 * d0 + d1 * d1
+                dx[q] = d0
+                dy[q] = d1
+                A[q] = aa
+                ll = np.sqrt(aa)
+                L[q] = ll
+                plen[q] += ll  # + 0 for a zero-length segment
+                inv_a[q] = 1.0 / aa if aa > 0.0 else 0.0
+            for j in range(J):
+                cx = circ[0, j]
+                cy = circ[1, j]
+                r2 = circ[2, j] * circ[2, j]
+                n_near = 0
+                for q in range(m):  # the distance tests side by side
+                    fx = ax[q] - cx
+                    fy = ay[q] - cy
+                    t = min(max(-(fx * dx[q] + fy * dy[q]) * inv_a[q], 0.0), 1.0)
+                    qx = fx + t * dx[q]
+                    qy = fy + t * dy[q]
+                    c = (not (qx * qx + qy * qy >= r2)) & ((A[q] != 0.0) | first)
+                    near[q] = c
+                    n_near += c
+                if n_near == 0:
+                    continue
+                for q in range(m):  # inside the open disc: a hit, and the chord
+                    if near[q]:
+                        chit[q] = True
+                        if A[q] > 0.0:
+                            fx = ax[q] - cx
+                            fy = ay[q] - cy
+                            C = fx * fx + fy * fy - r2
+                            total[q] += _chord(fx, fy, dx[q], dy[q], A[q], C) * L[q]
+            for k in range(K):
+                n_near = 0
+                for q in range(m):  # the box tests side by side
+                    gx = max(
+                        0.0, max(min(ax[q], bx[q]) - poly[2, k], poly[0, k] - max(ax[q], bx[q]))
+                    )
+                    gy = max(
+                        0.0, max(min(ay[q], by[q]) - poly[3, k], poly[1, k] - max(ay[q], by[q]))
+                    )
+                    g2 = gx * gx + gy * gy
+                    c = (not ((g2 > 0.0) & (g2 >= poly[5, k]))) & ((A[q] != 0.0) | first)
+                    gap2[q] = g2
+                    near[q] = c
+                    n_near += c
+                if n_near == 0:
+                    continue
+                for q in range(m):
+                    if near[q]:
+                        h, add = _polygon_exact(ax[q], ay[q], bx[q], by[q], A[q], L[q], verts,
+                                                starts, poly, convex, edges, hull_s, k, gap2[q],
+                                                phit[q], ts)  # fmt: skip
+                        phit[q] |= h
+                        total[q] += add
+        for q in range(m):
+            length[p0 + q] = plen[q]
+            inside[p0 + q] = total[q]
+            circle_hit[p0 + q] = chit[q]
+            polygon_hit[p0 + q] = phit[q]
+            outside[p0 + q] = out[q]
+    return length, inside, circle_hit, polygon_hit, outside
+
+
+@population_kernel(error_model="numpy")
+def scene2d_grid_kernel(
     paths,
     verts,
     starts,
@@ -1272,48 +1438,20 @@ def scene2d_kernel(
     gitems,
     gspan,
 ):  # pragma: no cover - numba
-    """One pass over every (path, segment, obstacle) of a scene of circles and polygons.
-
-    The fused form of :func:`segment_circle_inside_fraction`,
-    :func:`segment_polygon_inside_fraction`, :func:`segment_cylinder_distance` (infinite, for
-    circles), :func:`segment_polygon_distance` and the bounds test that the 2-D cost and
-    feasibility need, without the (P, N - 1, J) intermediates. Only the xy coordinates of
-    ``paths`` (P, N, >= 2) are used; ``lo``, ``hi``: the (2,) box, with a 1e-9 tolerance;
-    ``circ`` to ``gspan``: the world's :func:`scene_prep`.
-
-    The obstacles of a segment: with fewer than :data:`GRID_MIN_OBSTACLES` (``grid[3] == 0``)
-    every circle and polygon in index order (so sums keep the every-pair order); with a grid,
-    those listed in the cells the segment crosses, each once (:func:`_grid_candidates`). A
-    polygon is skipped when its box is apart from the segment's by more than its margin; a
-    non-convex one whose convex hull the segment misses is skipped before the exact test.
-
-    Returns:
-        length: (P,) xy path length;
-        inside: (P,) length of path inside circles and polygons;
-        circle_hit: (P,) bool, some segment closer than ``radii`` to a circle's centre;
-        polygon_hit: (P,) bool, some segment touching a polygon or closer than its margin;
-        outside: (P,) bool, some node outside the box.
-    """
+    """:func:`scene2d_batch` on the obstacle grid (paths with finite coordinates): each
+    segment's circles and polygons are those listed in the cells it crosses
+    (:func:`_grid_candidates`), each once and in index order, so the sums and verdicts are
+    :func:`scene2d_kernel`'s bit for bit."""
     P, N, _ = paths.shape
     J = circ.shape[1]
     K = starts.shape[0] - 1
-    gridded = grid[3] > 0
-    length = np.zeros(P)
-    inside = np.zeros(P)
-    circle_hit = np.zeros(P, dtype=np.bool_)
-    polygon_hit = np.zeros(P, dtype=np.bool_)
-    outside = np.zeros(P, dtype=np.bool_)
+    length, inside, circle_hit, polygon_hit, outside = _scene_outputs(P)
     tol = BOUNDS_TOL
-    all_c = np.arange(J)
-    all_k = np.arange(K)
     for p in prange(P):
         ts = np.empty(maxv + 2)
-        # the obstacles of each segment: all of them, or those the grid lists near it
-        buf = np.empty(J + K, dtype=np.int64) if gridded else all_c
-        cidx = np.empty(J, dtype=np.int64) if gridded else all_c
-        kidx = np.empty(K, dtype=np.int64) if gridded else all_k
-        n_c = J
-        n_k = K
+        buf = np.empty(J + K, dtype=np.int64)
+        cidx = np.empty(J, dtype=np.int64)
+        kidx = np.empty(K, dtype=np.int64)
         total = 0.0
         plen = 0.0
         chit = False
@@ -1331,51 +1469,27 @@ def scene2d_kernel(
             L = np.sqrt(A)
             plen += L
             inv_a = 1.0 / A if A > 0.0 else 0.0
-            if gridded:
-                n_c, n_k = _grid_candidates(grid, gstarts, gitems, gspan, J, ax, ay, bx, by, buf,
-                                            cidx, kidx)  # fmt: skip
-            if gridded:
-                for m in range(n_c):
-                    j = cidx[m]
-                    h, add = _circle_pair(ax, ay, dx, dy, A, inv_a, L, circ[0, j], circ[1, j],
-                                          circ[2, j])  # fmt: skip
-                    chit = chit or h
-                    total += add
-            else:  # the same, without the indirection
-                for j in range(J):
-                    h, add = _circle_pair(ax, ay, dx, dy, A, inv_a, L, circ[0, j], circ[1, j],
-                                          circ[2, j])  # fmt: skip
-                    chit = chit or h
-                    total += add
+            n_c, n_k = _grid_candidates(grid, gstarts, gitems, gspan, J, ax, ay, bx, by, buf,
+                                        cidx, kidx)  # fmt: skip
+            for i in range(n_c):
+                j = cidx[i]
+                h, add = _circle_pair(ax, ay, dx, dy, A, inv_a, L, circ[0, j], circ[1, j],
+                                      circ[2, j])  # fmt: skip
+                chit = chit or h
+                total += add
             sx0 = min(ax, bx)
             sy0 = min(ay, by)
             sx1 = max(ax, bx)
             sy1 = max(ay, by)
-            for m in range(n_k):
-                k = kidx[m]
+            for i in range(n_k):
+                k = kidx[i]
                 gap2 = _box_gap2_soa(sx0, sy0, sx1, sy1, poly, k)
                 if gap2 > 0.0 and gap2 >= poly[5, k]:
                     continue  # clear of polygon k, and nothing inside it
-                v0 = starts[k]
-                v1 = starts[k + 1]
-                if not (poly[4, k] <= 0.0 and A > 0.0):
-                    h, add = _polygon_clearance(ax, ay, bx, by, A, L, verts, v0, v1, poly[4, k],
-                                                gap2, phit, ts)  # fmt: skip
-                    phit = phit or h
-                    total += add
-                elif convex[k] != 0:
-                    t_in, t_out = _convex_clip(ax, ay, bx, by, verts, v0, v1, convex[k])
-                    if t_in <= t_out:
-                        phit = True
-                        total += (t_out - t_in) * L
-                else:  # no margin: one pass gives both answers
-                    seg_scale = 1.0 + max(max(abs(ax), abs(bx)), max(abs(ay), abs(by)))
-                    g = SAT_TOL_REL * (seg_scale + poly[6, k])
-                    if _hull_missed(ax, ay, bx, by, edges, hull_s[k], hull_s[k + 1], g):
-                        continue  # clear of the convex hull, so of the polygon
-                    frac, touch = _inside_fraction_and_touch(ax, ay, bx, by, verts, v0, v1, ts)
-                    total += frac * L
-                    phit = phit or touch
+                h, add = _polygon_exact(ax, ay, bx, by, A, L, verts, starts, poly, convex, edges,
+                                        hull_s, k, gap2, phit, ts)  # fmt: skip
+                phit = phit or h
+                total += add
         length[p] = plen
         inside[p] = total
         circle_hit[p] = chit
