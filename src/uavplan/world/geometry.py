@@ -528,29 +528,30 @@ def circle_inside_grid(paths, circ, grid, gstarts, gitems, gspan):  # pragma: no
     J = circ.shape[1]
     out = np.zeros(P)
     none = np.empty(0, dtype=np.int64)
-    for p in prange(P):
+    for blk in prange((P + BLOCK - 1) // BLOCK):  # scratch once per block of paths
         buf = np.empty(J, dtype=np.int64)
         cidx = np.empty(J, dtype=np.int64)
-        total = 0.0
-        for s in range(N - 1):
-            ax, ay, bx, by, dx, dy, A = _seg2d(paths, p, s)
-            L = A
-            for q in range(2, D):
-                dz = paths[p, s + 1, q] - paths[p, s, q]
-                L += dz * dz
-            L = np.sqrt(L)
-            n_c, _ = _grid_candidates(grid, gstarts, gitems, gspan, J, ax, ay, bx, by, buf, cidx,
-                                      none)  # fmt: skip
-            for m in range(n_c):
-                j = cidx[m]
-                fx = ax - circ[0, j]
-                fy = ay - circ[1, j]
-                C = fx * fx + fy * fy - circ[2, j] * circ[2, j]
-                if A == 0.0:
-                    total += L if C < 0.0 else 0.0
-                    continue
-                total += _chord(fx, fy, dx, dy, A, C) * L
-        out[p] = total
+        for p in range(blk * BLOCK, min(P, (blk + 1) * BLOCK)):
+            total = 0.0
+            for s in range(N - 1):
+                ax, ay, bx, by, dx, dy, A = _seg2d(paths, p, s)
+                L = A
+                for q in range(2, D):
+                    dz = paths[p, s + 1, q] - paths[p, s, q]
+                    L += dz * dz
+                L = np.sqrt(L)
+                n_c, _ = _grid_candidates(grid, gstarts, gitems, gspan, J, ax, ay, bx, by, buf,
+                                          cidx, none)  # fmt: skip
+                for m in range(n_c):
+                    j = cidx[m]
+                    fx = ax - circ[0, j]
+                    fy = ay - circ[1, j]
+                    C = fx * fx + fy * fy - circ[2, j] * circ[2, j]
+                    if A == 0.0:
+                        total += L if C < 0.0 else 0.0
+                        continue
+                    total += _chord(fx, fy, dx, dy, A, C) * L
+            out[p] = total
     return out
 
 
@@ -1027,6 +1028,9 @@ def convex_hulls(
     return np.array(hv, dtype=np.float64).reshape(-1, 2), hs
 
 
+#: The indexed and blocked kernels: paths per block (the lanes the 2-D scene pass runs its tests
+#: in side by side; the block's scratch arrays are allocated once).
+BLOCK = 64
 #: :func:`scene2d_batch`: from this many circles and polygons together on, a uniform grid
 #: (:mod:`uavplan.world.obstacle_index`) picks the obstacles near each segment; below it every
 #: pair is tested (the sums over obstacles then keep their order, so results stay bit for bit
@@ -1226,7 +1230,7 @@ def _sort_head(a, n):  # pragma: no cover - numba
         a[r + 1] = key
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _grid_candidates(
     grid, gstarts, gitems, gspan, J, ax, ay, bx, by, buf, cidx, kidx
 ):  # pragma: no cover - numba
@@ -1293,10 +1297,6 @@ def _scene_outputs(P):  # pragma: no cover - numba
     """The 2-D scene pass's outputs for P paths, zeroed (see :func:`scene2d_batch`)."""
     flags = np.zeros((3, P), dtype=np.bool_)
     return np.zeros(P), np.zeros(P), flags[0], flags[1], flags[2]
-
-
-#: :func:`scene2d_kernel`: paths per block (the lanes its tests run in side by side).
-BLOCK = 64
 
 
 @population_kernel(error_model="numpy")
@@ -1447,52 +1447,53 @@ def scene2d_grid_kernel(
     K = starts.shape[0] - 1
     length, inside, circle_hit, polygon_hit, outside = _scene_outputs(P)
     tol = BOUNDS_TOL
-    for p in prange(P):
+    for blk in prange((P + BLOCK - 1) // BLOCK):  # scratch once per block of paths
         ts = np.empty(maxv + 2)
         buf = np.empty(J + K, dtype=np.int64)
         cidx = np.empty(J, dtype=np.int64)
         kidx = np.empty(K, dtype=np.int64)
-        total = 0.0
-        plen = 0.0
-        chit = False
-        phit = False
-        out = False
-        for s in range(N):
-            x = paths[p, s, 0]
-            y = paths[p, s, 1]
-            if x < lo[0] - tol or x > hi[0] + tol or y < lo[1] - tol or y > hi[1] + tol:
-                out = True
-        for s in range(N - 1):
-            ax, ay, bx, by, dx, dy, A = _seg2d(paths, p, s)
-            if A == 0.0 and s > 0:
-                continue  # a repeated node: the point was tested as the previous segment's end
-            L = np.sqrt(A)
-            plen += L
-            inv_a = 1.0 / A if A > 0.0 else 0.0
-            n_c, n_k = _grid_candidates(grid, gstarts, gitems, gspan, J, ax, ay, bx, by, buf,
-                                        cidx, kidx)  # fmt: skip
-            for i in range(n_c):
-                j = cidx[i]
-                h, add = _circle_pair(ax, ay, dx, dy, A, inv_a, L, circ[0, j], circ[1, j],
-                                      circ[2, j])  # fmt: skip
-                chit = chit or h
-                total += add
-            sx0 = min(ax, bx)
-            sy0 = min(ay, by)
-            sx1 = max(ax, bx)
-            sy1 = max(ay, by)
-            for i in range(n_k):
-                k = kidx[i]
-                gap2 = _box_gap2_soa(sx0, sy0, sx1, sy1, poly, k)
-                if gap2 > 0.0 and gap2 >= poly[5, k]:
-                    continue  # clear of polygon k, and nothing inside it
-                h, add = _polygon_exact(ax, ay, bx, by, A, L, verts, starts, poly, convex, edges,
-                                        hull_s, k, gap2, phit, ts)  # fmt: skip
-                phit = phit or h
-                total += add
-        length[p] = plen
-        inside[p] = total
-        circle_hit[p] = chit
-        polygon_hit[p] = phit
-        outside[p] = out
+        for p in range(blk * BLOCK, min(P, (blk + 1) * BLOCK)):
+            total = 0.0
+            plen = 0.0
+            chit = False
+            phit = False
+            out = False
+            for s in range(N):
+                x = paths[p, s, 0]
+                y = paths[p, s, 1]
+                if x < lo[0] - tol or x > hi[0] + tol or y < lo[1] - tol or y > hi[1] + tol:
+                    out = True
+            for s in range(N - 1):
+                ax, ay, bx, by, dx, dy, A = _seg2d(paths, p, s)
+                if A == 0.0 and s > 0:
+                    continue  # a repeated node: the point was tested as the previous segment's end
+                L = np.sqrt(A)
+                plen += L
+                inv_a = 1.0 / A if A > 0.0 else 0.0
+                n_c, n_k = _grid_candidates(grid, gstarts, gitems, gspan, J, ax, ay, bx, by, buf,
+                                            cidx, kidx)  # fmt: skip
+                for i in range(n_c):
+                    j = cidx[i]
+                    h, add = _circle_pair(ax, ay, dx, dy, A, inv_a, L, circ[0, j], circ[1, j],
+                                          circ[2, j])  # fmt: skip
+                    chit = chit or h
+                    total += add
+                sx0 = min(ax, bx)
+                sy0 = min(ay, by)
+                sx1 = max(ax, bx)
+                sy1 = max(ay, by)
+                for i in range(n_k):
+                    k = kidx[i]
+                    gap2 = _box_gap2_soa(sx0, sy0, sx1, sy1, poly, k)
+                    if gap2 > 0.0 and gap2 >= poly[5, k]:
+                        continue  # clear of polygon k, and nothing inside it
+                    h, add = _polygon_exact(ax, ay, bx, by, A, L, verts, starts, poly, convex,
+                                            edges, hull_s, k, gap2, phit, ts)  # fmt: skip
+                    phit = phit or h
+                    total += add
+            length[p] = plen
+            inside[p] = total
+            circle_hit[p] = chit
+            polygon_hit[p] = phit
+            outside[p] = out
     return length, inside, circle_hit, polygon_hit, outside

@@ -30,7 +30,7 @@ finite coordinates (callers test every pair otherwise).
 **Each box once per segment.** A box listed in several visited cells is taken in the first of
 them in the walking order (rows upwards, columns rightwards): at cell ``(ii, jj)`` box ``b`` is
 taken iff ``ii`` is the first column of row ``jj`` it shares with the segment and no earlier
-visited row shares a column with it (:func:`first_visit`). No per-segment bookkeeping.
+visited row shares a column with it (:func:`segment_boxes`). No per-segment bookkeeping.
 """
 
 from __future__ import annotations
@@ -120,33 +120,33 @@ def _cell_coord(v, n):  # pragma: no cover - numba
 
 
 @njit(cache=True, inline="always")
-def segment_rows(grid, ax, ay, bx, by):  # pragma: no cover - numba
-    """The rows ``j_lo..j_hi`` the segment a->b meets, clipped to the grid (empty when
-    ``j_lo > j_hi``)."""
+def segment_walk(grid, ax, ay, bx, by):  # pragma: no cover - numba
+    """Segment a->b in cell units, as :func:`row_columns` takes it: ``(ua, ub, va, vb,
+    inv_dv)`` (``inv_dv = 1 / (vb - va)``, 0 for a horizontal segment), and the rows
+    ``j_lo..j_hi`` it meets, clipped to the grid (empty when ``j_lo > j_hi``)."""
     ny = int(grid[4])
-    va = (ay - grid[1]) / grid[2]
-    vb = (by - grid[1]) / grid[2]
+    inv_h = 1.0 / grid[2]
+    ua = (ax - grid[0]) * inv_h
+    ub = (bx - grid[0]) * inv_h
+    va = (ay - grid[1]) * inv_h
+    vb = (by - grid[1]) * inv_h
+    dv = vb - va
+    inv_dv = 1.0 / dv if dv != 0.0 else 0.0
     j_lo = max(_cell_coord(min(va, vb) - WALK_PAD, ny), 0)
     j_hi = min(_cell_coord(max(va, vb) + WALK_PAD, ny), ny - 1)
-    return j_lo, j_hi
+    return ua, ub, va, vb, inv_dv, j_lo, j_hi
 
 
 @njit(cache=True, inline="always")
-def row_columns(grid, ax, ay, bx, by, jj):  # pragma: no cover - numba
-    """The columns ``i_lo..i_hi`` of row ``jj`` that the segment a->b passes through (widened
-    by :data:`WALK_PAD` cells), clipped to the grid."""
-    nx = int(grid[3])
-    h = grid[2]
-    ua = (ax - grid[0]) / h
-    ub = (bx - grid[0]) / h
-    va = (ay - grid[1]) / h
-    vb = (by - grid[1]) / h
+def row_columns(nx, ua, ub, va, vb, inv_dv, jj):  # pragma: no cover - numba
+    """The columns ``i_lo..i_hi`` of row ``jj`` that the segment (:func:`segment_walk`) passes
+    through, widened by :data:`WALK_PAD` cells (and by as much again of its length, for the
+    rounding of its entry and exit), clipped to the grid's ``nx`` columns."""
     u_min = min(ua, ub)
     u_max = max(ua, ub)
-    dv = vb - va
-    if dv != 0.0:
-        t1 = (jj - WALK_PAD - va) / dv
-        t2 = (jj + 1.0 + WALK_PAD - va) / dv
+    if inv_dv != 0.0:
+        t1 = (jj - WALK_PAD - va) * inv_dv
+        t2 = (jj + 1.0 + WALK_PAD - va) * inv_dv
         t_lo = max(0.0, min(t1, t2))
         t_hi = min(1.0, max(t1, t2))
         u1 = ua + t_lo * (ub - ua)
@@ -160,33 +160,29 @@ def row_columns(grid, ax, ay, bx, by, jj):  # pragma: no cover - numba
 
 
 @njit(cache=True, inline="always")
-def first_visit(grid, ax, ay, bx, by, span, b, ii, jj, j_lo, i_lo):  # pragma: no cover
-    """Whether visited cell ``(ii, jj)`` (``i_lo``: the first column of row ``jj``; ``j_lo``:
-    the segment's first row) is the first one the segment shares with box ``b``: the first
-    shared column of this row, and no earlier row of the box shares a column."""
-    if ii != max(i_lo, span[b, 0]):
-        return False
-    for r in range(max(j_lo, span[b, 1]), jj):
-        c_lo, c_hi = row_columns(grid, ax, ay, bx, by, r)
-        if c_lo <= span[b, 2] and c_hi >= span[b, 0]:
-            return False
-    return True
-
-
-@njit(cache=True)
 def segment_boxes(grid, starts, items, span, ax, ay, bx, by, out):  # pragma: no cover - numba
     """The boxes listed in the cells segment a->b crosses, each once, into ``out`` (room for
-    every box); returns how many."""
+    every box); returns how many. Box ``b`` is taken at visited cell ``(ii, jj)`` iff ``ii``
+    is the first column of row ``jj`` it shares with the segment and no earlier visited row of
+    it shares a column (the module's rule)."""
     nx = int(grid[3])
+    ua, ub, va, vb, inv_dv, j_lo, j_hi = segment_walk(grid, ax, ay, bx, by)
     n = 0
-    j_lo, j_hi = segment_rows(grid, ax, ay, bx, by)
     for jj in range(j_lo, j_hi + 1):
-        i_lo, i_hi = row_columns(grid, ax, ay, bx, by, jj)
+        i_lo, i_hi = row_columns(nx, ua, ub, va, vb, inv_dv, jj)
         for ii in range(i_lo, i_hi + 1):
             k = jj * nx + ii
             for q in range(starts[k], starts[k + 1]):
                 bb = items[q]
-                if first_visit(grid, ax, ay, bx, by, span, bb, ii, jj, j_lo, i_lo):
+                if ii != max(i_lo, span[bb, 0]):
+                    continue  # taken in an earlier column of this row
+                first = True
+                for r in range(max(j_lo, span[bb, 1]), jj):
+                    c_lo, c_hi = row_columns(nx, ua, ub, va, vb, inv_dv, r)
+                    if c_lo <= span[bb, 2] and c_hi >= span[bb, 0]:
+                        first = False  # taken in an earlier row
+                        break
+                if first:
                     out[n] = bb
                     n += 1
     return n
