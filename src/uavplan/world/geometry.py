@@ -647,14 +647,6 @@ def _box_gap(ax, ay, bx, by, box, k):  # pragma: no cover - numba
     return np.sqrt(gx * gx + gy * gy)
 
 
-@njit(cache=True, inline="always")
-def _box_gap2(ax, ay, bx, by, box, k):  # pragma: no cover - numba
-    """The square of :func:`_box_gap` (no square root: the hot rejection test)."""
-    gx = max(0.0, max(min(ax, bx) - box[k, 2], box[k, 0] - max(ax, bx)))
-    gy = max(0.0, max(min(ay, by) - box[k, 3], box[k, 1] - max(ay, by)))
-    return gx * gx + gy * gy
-
-
 @population_kernel()
 def segment_polygon_distance(paths, verts, starts, cap=np.inf):  # pragma: no cover - numba
     """Distance between each 2-D segment and each polygon (0 when they touch or overlap).
@@ -1111,13 +1103,6 @@ def scene_prep(
     return (circ, poly, convex, edges, hull_s, maxv, *g)
 
 
-def polygon_prep(
-    verts: FloatArray, starts: NDArray[np.int64], margins: FloatArray
-) -> tuple[Any, ...]:
-    """:func:`scene_prep` of a world without circles."""
-    return scene_prep(np.zeros((0, 2)), np.zeros(0), verts, starts, margins)
-
-
 @njit(cache=True, inline="always")
 def _hull_missed(ax, ay, bx, by, edges, e0, e1, tol):  # pragma: no cover - numba
     """True if segment a->b misses the convex hull whose edges ``edges[e0:e1]`` describes
@@ -1146,7 +1131,7 @@ def _hull_missed(ax, ay, bx, by, edges, e0, e1, tol):  # pragma: no cover - numb
 
 
 @njit(cache=True, inline="always")
-def _box_gap2_soa(sx0, sy0, sx1, sy1, poly, k):  # pragma: no cover - numba
+def _box_gap2(sx0, sy0, sx1, sy1, poly, k):  # pragma: no cover - numba
     """The squared distance between the box ``[sx0, sx1] x [sy0, sy1]`` and polygon k's."""
     gx = max(0.0, max(sx0 - poly[2, k], poly[0, k] - sx1))
     gy = max(0.0, max(sy0 - poly[3, k], poly[1, k] - sy1))
@@ -1484,7 +1469,7 @@ def scene2d_grid_kernel(
                 sy1 = max(ay, by)
                 for i in range(n_k):
                     k = kidx[i]
-                    gap2 = _box_gap2_soa(sx0, sy0, sx1, sy1, poly, k)
+                    gap2 = _box_gap2(sx0, sy0, sx1, sy1, poly, k)
                     if gap2 > 0.0 and gap2 >= poly[5, k]:
                         continue  # clear of polygon k, and nothing inside it
                     h, add = _polygon_exact(ax, ay, bx, by, A, L, verts, starts, poly, convex,
