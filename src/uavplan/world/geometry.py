@@ -1273,8 +1273,8 @@ def scene2d_batch(
         prep = scene_prep(centers, radii, verts, starts, margins)
     p = np.ascontiguousarray(paths, dtype=np.float64)
     if prep[-4][3] > 0 and np.isfinite(p[..., :2]).all():
-        return scene2d_grid_kernel(p, verts, starts, lo, hi, *prep)  # type: ignore[no-any-return]
-    return scene2d_kernel(p, verts, starts, lo, hi, *prep[:-4])  # type: ignore[no-any-return]
+        return scene2d_grid_kernel(p, verts, starts, lo, hi, *prep)
+    return scene2d_kernel(p, verts, starts, lo, hi, *prep[:-4])
 
 
 @njit(cache=True)
