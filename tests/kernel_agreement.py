@@ -4,7 +4,7 @@ them, bit for bit (``uavplan.kernel_builds``).
     NUMBA_NUM_THREADS=2 python tests/kernel_agreement.py
 
 runs a small workload (``uavplan plan`` on built-in scenarios covering 2-D scenes, terrain,
-cylinders, fleets and moving obstacles; a 200-cylinder world for the indexed pass; the reference
+cylinders, fleets and moving obstacles; 200-obstacle worlds for the indexed passes; the reference
 kernels called directly), keeps the first calls of each kernel, runs both builds on copies of
 their arguments and prints one JSON line: the kernels compared, those never called, and those
 whose builds differ. ``tests/test_kernel_builds.py`` runs it (a slow test: it compiles every
@@ -84,8 +84,8 @@ def record() -> dict[str, list[tuple[Any, ...]]]:
 
 def _direct_calls() -> None:
     """The kernels the plans above do not reach: the indexed cylinder pass (64 or more
-    cylinders), the per-pair distances and the reference kernels (those of the fused costs
-    among them)."""
+    cylinders), the indexed danger-area and 2-D scene passes (64 or more obstacles), the
+    per-pair distances and the reference kernels (those of the fused costs among them)."""
     from uavplan.problems import costs
     from uavplan.world import geometry
     from uavplan.world._terrain_kernels import mean_height_batch, mean_height_batch_reference
@@ -102,11 +102,15 @@ def _direct_calls() -> None:
     geometry.cylinder_threat(paths, centers[:10], z_lo[:10], z_hi[:10], r10, r10 + 5.0, False)
     geometry.cylinder_distances(paths, centers, z_lo, z_hi)
     geometry.segment_circle_inside_fraction(paths[..., :2], centers[:20], radii[:20])
+    geometry.circle_inside_length(paths, centers, radii)  # 64 or more: the indexed pass
     square = np.array([[0.0, 0.0], [200.0, 0.0], [200.0, 200.0], [0.0, 200.0]])
     verts, starts = geometry.pack_polygons([square + 300.0, square[::-1] * 0.5 + 600.0])
     flat = np.ascontiguousarray(paths[..., :2])
     geometry.segment_polygon_distance(flat, verts, starts)
     geometry.segment_polygon_inside_fraction(flat, verts, starts)
+    margins = np.zeros(2)
+    box = (np.zeros(2), np.full(2, 1000.0))  # 200 circles and 2 polygons: the indexed scene pass
+    geometry.scene2d_batch(flat, centers, radii, verts, starts, margins, *box)  # the grid kernel
     H = rng.uniform(0, 100, (50, 60))
     u, v = rng.uniform(0, 59, (40, 12)), rng.uniform(0, 49, (40, 12))
     mean_height_batch(H, u, v)

@@ -193,3 +193,30 @@ def test_rgg_bad_parameters() -> None:
         get_planner("rgg", bogus=1)
     with pytest.raises(PlannerError):
         get_planner("rgg", gamma=0.0)
+
+
+def test_shortest_path_reuses_the_graph_matrix_with_the_same_answers() -> None:
+    """The sparse matrix is built once per edge set and its entries reset per search: the same
+    distances and predecessors as a matrix built from the weights, for any weights."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    from uavplan.planners.rgg import build_rgg
+    from uavplan.scenarios import resolve
+
+    for i in range(6):
+        rng = np.random.default_rng(i)
+        g = build_rgg(resolve(f"rgg-n{5 + 2 * i:02d}-i{i:03d}"), rng, n_samples=40)
+        n = len(g.nodes)
+        for _ in range(4):
+            w = g.lengths * rng.uniform(1.0, 3.0, len(g.lengths))
+            fresh = csr_matrix((w, (g.edges[:, 0], g.edges[:, 1])), shape=(n, n))
+            want = dijkstra(fresh, directed=False, indices=0, return_predecessors=True)
+            m, entry_edge = g._csr()
+            m.data = w[entry_edge]
+            got = dijkstra(m, directed=False, indices=0, return_predecessors=True)
+            np.testing.assert_array_equal(got[0], want[0])
+            np.testing.assert_array_equal(got[1], want[1])
+        assert g._csr()[0] is m  # kept while the graph does not change
+        g.add_samples(10, rng)
+        assert g._csr()[0] is not m  # rebuilt when it does

@@ -304,3 +304,44 @@ def test_rgg_pso_samples_n_nodes_by_default_as_the_paper_says() -> None:
         else:
             seeded += 1
     assert seeded > 0 and uniform > 0  # 3 samples connect the task only sometimes
+
+
+def test_halves_evaluated_together_give_what_each_alone_gives(monkeypatch) -> None:
+    """evaluate_many: two encodings of two tasks in one world evaluate in one call, with the
+    costs, bests and histories of separate calls; a problem with other answers (another cost
+    model) is evaluated apart."""
+    from uavplan.problems.variable_length import evaluate_many, same_answers
+    from uavplan.scenarios import resolve
+
+    sc = resolve("rgg-n09-i004")
+    t1, t2 = Task("a", (6.0, 6.0), (50.0, 40.0)), Task("b", (50.0, 40.0), (93.0, 92.0))
+    rng = np.random.default_rng(0)
+
+    def encodings() -> list[VariableLengthEncoding]:
+        return [VariableLengthEncoding(PathProblem(sc, t), 12) for t in (t1, t2)]
+
+    Xs = [rng.uniform(0, 100, (30, 24)), rng.uniform(0, 100, (30, 24))]
+    Xs[0][::3, 2:4] = Xs[0][::3, :2]  # duplicated waypoints
+    alone, together = encodings(), encodings()
+    assert same_answers(alone[0].problem, alone[1].problem)
+    want = [e.evaluate(X) for e, X in zip(alone, Xs, strict=True)]
+    calls = []
+    original = PathProblem.evaluate
+
+    def counted(self, *args, **kwargs):
+        calls.append(1)
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(PathProblem, "evaluate", counted)
+    got = evaluate_many(together, Xs)
+    assert len(calls) == 1
+    for a, b, w, g in zip(alone, together, want, got, strict=True):
+        np.testing.assert_array_equal(g, w)
+        assert a.feasible_history == b.feasible_history and a.evaluations == b.evaluations
+        assert a.best_f == b.best_f and a.best_feasible_f == b.best_feasible_f
+        np.testing.assert_array_equal(a.best()[0], b.best()[0])
+    other = VariableLengthEncoding(PathProblem(sc, t1, cost="length"), 12)
+    assert not same_answers(together[0].problem, other.problem)
+    calls.clear()
+    evaluate_many([together[0], other], Xs)
+    assert len(calls) == 2

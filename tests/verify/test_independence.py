@@ -9,9 +9,12 @@ from pathlib import Path
 import uavplan.verify
 
 #: What the verifier may import: the plan file reader (typed trajectories), the scenario as
-#: data (its classes; the terrain's grid, not its clearance kernels), the tolerances, itself.
+#: data (its classes; the terrain's grid, not its clearance kernels), the tolerances, the
+#: obstacle index (its broad phase only: which segments are near which obstacle; the exact
+#: tests are its own), itself.
 ALLOWED = {
     "uavplan.io.plan_file",
+    "uavplan.world.obstacle_index",
     "uavplan.world.obstacles",
     "uavplan.world.scenario",
     "uavplan.world.terrain",

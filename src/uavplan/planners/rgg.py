@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -202,6 +203,7 @@ class RGG:
         self.lengths: FloatArray = np.zeros(0)
         self.radius = 0.0
         self.edge_checks = 1
+        self._csr_cache: tuple[tuple[int, int], Any, IntArray] | None = None
         if bool(self.feas.segments_valid(self.nodes[:1], self.nodes[1:])[0]):
             self._add_edges(np.array([[0, 1]], dtype=np.int64))
 
@@ -240,14 +242,12 @@ class RGG:
         """Node indices of Dijkstra's shortest start-goal path (``weights`` default: lengths),
         or None when the start and the goal are not connected."""
         w = self.lengths if weights is None else weights
-        n = len(self.nodes)
         if len(self.edges) == 0:
             return None
-        from scipy.sparse import csr_matrix
         from scipy.sparse.csgraph import dijkstra
 
-        w = np.maximum(w, 1e-12)  # an explicit zero would be no edge for csgraph
-        g = csr_matrix((w, (self.edges[:, 0], self.edges[:, 1])), shape=(n, n))
+        g, entry_edge = self._csr()
+        g.data = np.maximum(w, 1e-12)[entry_edge]  # an explicit zero would be no edge
         dist, pred = dijkstra(g, directed=False, indices=0, return_predecessors=True)
         if not np.isfinite(dist[1]):
             return None
@@ -255,6 +255,22 @@ class RGG:
         while out[-1] != 0:
             out.append(int(pred[out[-1]]))
         return np.asarray(out[::-1], dtype=np.int64)
+
+    def _csr(self) -> tuple[Any, IntArray]:
+        """The graph as a sparse matrix for :func:`scipy.sparse.csgraph.dijkstra`, built once
+        per set of nodes and edges (the edge-penalty searches change only the weights), and
+        the edge of each stored entry: the matrix ``csr_matrix((w, (i, j)))`` would be, with
+        its entries set to ``w[entry_edge]``."""
+        key = (len(self.nodes), len(self.edges))
+        if self._csr_cache is None or self._csr_cache[0] != key:
+            from scipy.sparse import csr_matrix
+
+            n = len(self.nodes)
+            tag = np.arange(1.0, len(self.edges) + 1.0)  # entry k holds edge tag[k] - 1
+            g = csr_matrix((tag, (self.edges[:, 0], self.edges[:, 1])), shape=(n, n))
+            assert g.nnz == len(self.edges), "an edge is listed twice"
+            self._csr_cache = (key, g, np.asarray(g.data, dtype=np.int64) - 1)
+        return self._csr_cache[1], self._csr_cache[2]
 
     def path(self, idx: IntArray) -> FloatArray:
         """Waypoints (k, d) of a node-index path."""

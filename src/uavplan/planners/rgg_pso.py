@@ -104,12 +104,9 @@ def initial_swarm(
     rng: np.random.Generator,
 ) -> FloatArray:
     """Genes (pop_size, dim): particle ``i`` is Alg. 1 of ``interiors[i mod len]``."""
-    X = np.empty((pop_size, enc.dim))
     n = enc.n_waypoints
-    for i in range(pop_size):
-        particle = path_to_particle(interiors[i % len(interiors)], n, rng)
-        X[i] = enc.encode(enc.problem.with_endpoints(particle[None]))[0]
-    return X
+    particles = [path_to_particle(interiors[i % len(interiors)], n, rng) for i in range(pop_size)]
+    return enc.encode(enc.problem.with_endpoints(np.stack(particles)))
 
 
 # ------------------------------------------------------------------------------ Alg. 4

@@ -49,7 +49,7 @@ from uavplan.planners.options import option
 from uavplan.planners.registry import register_planner
 from uavplan.planners.rgg_pso import RGGPSOConfig, RGGPSOPlanner, Stats, conquer
 from uavplan.planners.run import Outcome, Run
-from uavplan.problems.variable_length import evaluate_paths, particle_to_path
+from uavplan.problems.variable_length import evaluate_many, evaluate_paths, particle_to_path
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 
@@ -91,14 +91,27 @@ class _Solver:
         self.merge = ""
 
     def step(self) -> None:
+        """One iteration: every active (sub-)swarm asks, their batches are evaluated together
+        where their problems allow (:func:`~uavplan.problems.variable_length.evaluate_many`:
+        the halves share one world and cost), each is told its costs, then the clocks advance
+        (and a solver whose iterations are spent finishes)."""
+        asked = self._ask()
+        costs = evaluate_many([s.enc for s, _ in asked], [X for _, X in asked])
+        for (s, X), f in zip(asked, costs, strict=True):
+            s.opt.tell(X, f)
+        self._advance()
+
+    def _ask(self) -> list[tuple[_Solver, FloatArray]]:
+        """Divide where it is time to (Alg. 3), then each active swarm's next batch."""
         if self.children is None and self.t >= self.T_w and not self._divide():
             self.T_w = self.T
         if self.children is None:
-            X = self.opt.ask()
-            self.opt.tell(X, self.enc.evaluate(X))
-        else:
-            for c in self.children:
-                c.step()
+            return [(self, self.opt.ask())]
+        return [b for c in self.children for b in c._ask()]
+
+    def _advance(self) -> None:
+        for c in self.children or ():
+            c._advance()
         self.t += 1
         if self.t >= self.T:
             self.finish()

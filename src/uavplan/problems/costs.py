@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from uavplan.kernel_builds import population_kernel
 from uavplan.world._terrain_kernels import ground_one
 from uavplan.world.geometry import (
+    circle_inside_length,
     clipped_dist,
     seg_setup,
     segment_circle_inside_fraction,
@@ -399,10 +400,7 @@ def danger_length_cost(paths: FloatArray, centers: FloatArray, radii: FloatArray
     Exact: the chord of each segment's ground track through each circle, scaled to the
     segment's 3-D length.
     """
-    if len(radii) == 0:
-        return np.zeros(np.shape(paths)[0])
-    frac = segment_circle_inside_fraction(paths, centers, radii)
-    return np.asarray((frac * segment_lengths(paths)[..., None]).sum(axis=(1, 2)))
+    return circle_inside_length(paths, centers, radii)  # indexed from 64 areas on
 
 
 # ---------------------------------------------------------------------------- 2-D scenes

@@ -107,8 +107,9 @@ class PackedWorld:
     ``cyl_lo``/``cyl_hi`` (J,) heights grown by the margin. Circles: ``circ_centers`` (C, 2),
     ``circ_radii`` (C,) radius + margin. Polygons (no-fly polygons and revealed uncertain
     areas): ``poly_verts``/``poly_starts`` (packed, see :func:`uavplan.world.geometry.
-    pack_polygons`), ``poly_margin`` (K,), ``poly_prep``
-    (:func:`uavplan.world.geometry.polygon_prep`: boxes, convexity, hulls, once per world).
+    pack_polygons`), ``poly_margin`` (K,). ``scene_prep``: what the 2-D scene pass needs of the
+    circles and polygons (:func:`uavplan.world.geometry.scene_prep`: boxes, convexity, hulls,
+    the obstacle grid from 64 obstacles on), once per world.
     ``lo2``/``hi2``: the box's x, y range.
     """
 
@@ -124,7 +125,7 @@ class PackedWorld:
     poly_margin: FloatArray
     lo2: FloatArray
     hi2: FloatArray
-    poly_prep: tuple[Any, ...]
+    scene_prep: tuple[Any, ...]
 
     @classmethod
     def of(cls, scenario: Scenario) -> PackedWorld:
@@ -132,20 +133,32 @@ class PackedWorld:
         circ = scenario.circles
         verts, starts = scenario.packed_polygons()
         margins = np.array([p.margin for p in scenario.no_fly_polygons], dtype=np.float64)
+        circ_centers = np.array([c.center for c in circ], dtype=np.float64).reshape(-1, 2)
+        circ_radii = np.array([c.effective_radius for c in circ], dtype=np.float64)
+        gridded = np.bool_(len(circ_radii) + len(margins) >= G.GRID_MIN_OBSTACLES)
         return cls(
             cyl_centers=np.array([c.center for c in cyl], dtype=np.float64).reshape(-1, 2),
             cyl_radii=np.array([c.effective_radius for c in cyl], dtype=np.float64),
             cyl_margin=np.array([c.margin for c in cyl], dtype=np.float64),
             cyl_lo=np.array([c.z_min - c.margin for c in cyl], dtype=np.float64),
             cyl_hi=np.array([c.z_max + c.margin for c in cyl], dtype=np.float64),
-            circ_centers=np.array([c.center for c in circ], dtype=np.float64).reshape(-1, 2),
-            circ_radii=np.array([c.effective_radius for c in circ], dtype=np.float64),
+            circ_centers=circ_centers,
+            circ_radii=circ_radii,
             poly_verts=verts,
             poly_starts=starts,
             poly_margin=margins,
             lo2=np.ascontiguousarray(scenario.bounds.lo[:2], dtype=np.float64),
             hi2=np.ascontiguousarray(scenario.bounds.hi[:2], dtype=np.float64),
-            poly_prep=G.by_content("polygon prep", G.polygon_prep, verts, starts, margins),
+            scene_prep=G.by_content(
+                "scene prep",
+                G.scene_prep,
+                circ_centers,
+                circ_radii,
+                verts,
+                starts,
+                margins,
+                gridded,
+            ),
         )
 
     @property
@@ -251,7 +264,7 @@ class Batch:
             w.poly_margin,
             w.lo2,
             w.hi2,
-            w.poly_prep,
+            w.scene_prep,
         )
         return length, inside, circle_hit, polygon_hit, outside
 

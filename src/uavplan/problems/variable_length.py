@@ -113,6 +113,28 @@ def evaluate_decoded(problem: PathProblem, full: FloatArray) -> tuple[FloatArray
     return cost, feas
 
 
+def same_answers(a: PathProblem, b: PathProblem) -> bool:
+    """Whether the two problems give any path the same cost and feasibility, so that their
+    batches can be evaluated in one call (:func:`evaluate_many`): one world, one cost model
+    that depends on the path alone (:data:`DUPLICATE_INVARIANT`), no timed checks (moving
+    obstacles, other UAVs' reservations), the same validator settings. Only their tasks (start,
+    goal, start time) may differ, and none of these checks reads them."""
+    va, vb = a.validator, b.validator
+    return (
+        a.scenario is b.scenario
+        and a.cost_name == b.cost_name
+        and a.cost_name in DUPLICATE_INVARIANT
+        and a.terms == b.terms
+        and not a.scenario.moving_obstacles
+        and va.reservations is None
+        and vb.reservations is None
+        and not va.kinematics
+        and not vb.kinematics
+        and va.strict_altitude == vb.strict_altitude
+        and va.lookup == vb.lookup
+    )
+
+
 class VariableLengthEncoding(CartesianEncoding):
     """Cartesian genes of ``N`` waypoints, evaluated on the Alg. 2-decoded path.
 
@@ -131,6 +153,7 @@ class VariableLengthEncoding(CartesianEncoding):
         self.best_f = np.inf
         self.best_feasible_x: FloatArray | None = None
         self.best_feasible_f = np.inf
+        self._best: tuple[FloatArray, float, bool] | None = None
 
     def path(self, x: FloatArray) -> FloatArray:
         """The decoded (Alg. 2) path of one gene vector, start and goal included."""
@@ -138,26 +161,67 @@ class VariableLengthEncoding(CartesianEncoding):
 
     def evaluate(self, X: FloatArray) -> FloatArray:
         X = np.asarray(X, dtype=np.float64)
+        cost, feas = evaluate_decoded(self.problem, self.decode(X))
+        self.record(X, cost, feas)
+        return cost
+
+    def record(self, X: FloatArray, cost: FloatArray, feas: BoolArray) -> None:
+        """Count an evaluated batch and keep its bests (what :meth:`evaluate` does after
+        evaluating; :func:`evaluate_many` evaluates several encodings' batches at once)."""
         self.evaluations += len(X)
         if self.counter is not None:
             self.counter.evaluations += len(X)
-        cost, feas = evaluate_decoded(self.problem, self.decode(X))
         i = int(np.argmin(cost))
         if self.best_x is None or cost[i] < self.best_f:
             self.best_x, self.best_f = X[i].copy(), float(cost[i])
+            self._best = None
         if feas.any():
             fc = np.where(feas, cost, np.inf)
             j = int(np.argmin(fc))
             if self.best_feasible_x is None or fc[j] < self.best_feasible_f:
                 self.best_feasible_x, self.best_feasible_f = X[j].copy(), float(fc[j])
+                self._best = None
         prev = self.feasible_history[-1] if self.feasible_history else np.inf
         self.feasible_history.append(min(prev, self.best_feasible_f))
-        return cost
 
     def best(self) -> tuple[FloatArray, float, bool]:
-        """(decoded path, cost, feasible) of the best feasible point, else of the best point."""
-        if self.best_feasible_x is not None:
-            return self.path(self.best_feasible_x), self.best_feasible_f, True
-        if self.best_x is None:
-            raise RuntimeError("nothing evaluated yet")
-        return self.path(self.best_x), self.best_f, False
+        """(decoded path, cost, feasible) of the best feasible point, else of the best point
+        (decoded once per new best: RGG-PSO+ asks for it at every iteration)."""
+        if self._best is None:
+            if self.best_feasible_x is not None:
+                self._best = (self.path(self.best_feasible_x), self.best_feasible_f, True)
+            elif self.best_x is None:
+                raise RuntimeError("nothing evaluated yet")
+            else:
+                self._best = (self.path(self.best_x), self.best_f, False)
+        return self._best
+
+
+def evaluate_many(
+    encs: Sequence[VariableLengthEncoding], Xs: Sequence[FloatArray]
+) -> list[FloatArray]:
+    """``[e.evaluate(X) for e, X in zip(encs, Xs)]``, with the batches of encodings whose
+    problems give the same answers (:func:`same_answers`) and whose particles have one length
+    evaluated in one call (one kernel pass instead of several: RGG-PSO+'s halves step in
+    lockstep). Each path's cost and feasibility are the same either way."""
+    Xs = [np.asarray(X, dtype=np.float64) for X in Xs]
+    out: list[FloatArray] = [np.zeros(0)] * len(encs)
+    groups: list[list[int]] = []
+    for i, e in enumerate(encs):
+        for g in groups:
+            f = encs[g[0]]
+            if f.n_waypoints == e.n_waypoints and same_answers(f.problem, e.problem):
+                g.append(i)
+                break
+        else:
+            groups.append([i])
+    for g in groups:
+        full = [encs[i].decode(Xs[i]) for i in g]
+        cost, feas = evaluate_decoded(encs[g[0]].problem, np.concatenate(full))
+        at = 0
+        for i in g:
+            n = len(Xs[i])
+            encs[i].record(Xs[i], cost[at : at + n], feas[at : at + n])
+            out[i] = cost[at : at + n].copy()
+            at += n
+    return out

@@ -1,5 +1,12 @@
 """Obstacle checks of one trajectory, exact: cylinders, circles, polygons (and revealed uncertain
-areas), moving obstacles over continuous time."""
+areas), moving obstacles over continuous time.
+
+Broad phase: from :data:`INDEX_MIN` obstacles of a kind on, a uniform grid over the obstacles'
+boxes (:mod:`uavplan.world.obstacle_index`, which imports none of the planner's geometry) gives
+each obstacle the segments near it, and the exact tests below (the narrow phase, the verifier's
+own) run on those alone; below it, or for a trajectory with coordinates that are not finite,
+every obstacle is tested against every segment. The broad phase is conservative: a segment
+whose box misses an obstacle's box (grown by its margin) cannot violate it."""
 
 from __future__ import annotations
 
@@ -19,10 +26,61 @@ from uavplan.verify.report import (
     point_at,
     segment_ends,
 )
+from uavplan.world.obstacle_index import box_grid, box_pad, segment_candidates
 from uavplan.world.obstacles import Cylinder
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+
+#: From this many obstacles of one kind on, the grid picks the segments near each obstacle.
+INDEX_MIN = 64
+#: The grids of the last few obstacle tuples (by identity: a verification asks for the same
+#: world's obstacles once per trajectory; the tuple is kept, so its identity is not reused).
+_GRIDS: dict[int, tuple[Any, Any]] = {}
+
+
+def _grid(obstacles: Sequence[Any], boxes: Any) -> Any:
+    key = id(obstacles)
+    hit = _GRIDS.get(key)
+    if hit is None or hit[0] is not obstacles:
+        if len(_GRIDS) >= 8:
+            _GRIDS.pop(next(iter(_GRIDS)))
+        hit = _GRIDS[key] = (obstacles, box_grid(*boxes(obstacles)))
+    return hit[1]
+
+
+def near_segments(
+    a: FloatArray, b: FloatArray, obstacles: Sequence[Any], boxes: Any
+) -> list[tuple[int, IntArray]]:
+    """``(obstacle index, segment indices)`` for every obstacle that segments ``a -> b`` may
+    violate, both in increasing order: the broad phase (see the module). ``boxes(obstacles)``
+    gives ``(x_lo, y_lo, x_hi, y_hi)`` arrays of boxes that hold everything a segment must keep
+    out of."""
+    n, m = len(obstacles), len(a)
+    if n < INDEX_MIN or not (np.isfinite(a[:, :2]).all() and np.isfinite(b[:, :2]).all()):
+        every = np.arange(m)
+        return [(i, every) for i in range(n)]
+    seg, box = segment_candidates(_grid(obstacles, boxes), a, b)
+    cut = np.flatnonzero(np.diff(box)) + 1
+    groups = zip(np.split(box, cut), np.split(seg, cut), strict=True)
+    return [(int(g[0]), s) for g, s in groups if len(g)]
+
+
+def _disc_boxes(obstacles: Sequence[Any]) -> tuple[FloatArray, ...]:
+    """Boxes around discs of radius ``effective_radius`` (cylinders, circles)."""
+    c = np.array([o.center for o in obstacles], dtype=np.float64).reshape(-1, 2)
+    r = np.array([o.effective_radius for o in obstacles], dtype=np.float64)
+    pad = box_pad(c[:, 0], c[:, 1], r)
+    return c[:, 0] - r - pad, c[:, 1] - r - pad, c[:, 0] + r + pad, c[:, 1] + r + pad
+
+
+def _polygon_boxes(polygons: Sequence[Any]) -> tuple[FloatArray, ...]:
+    """Boxes around polygons grown by their margins."""
+    lo = np.array([np.min(np.asarray(p.vertices, dtype=np.float64), axis=0) for p in polygons])
+    hi = np.array([np.max(np.asarray(p.vertices, dtype=np.float64), axis=0) for p in polygons])
+    m = np.maximum(np.array([float(p.margin) for p in polygons]), 0.0)
+    pad = box_pad(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1]) + m
+    return lo[:, 0] - pad, lo[:, 1] - pad, hi[:, 0] + pad, hi[:, 1] + pad
 
 
 # ================================================================================ obstacles
@@ -70,22 +128,24 @@ def check_cylinders(traj: Trajectory, cylinders: Sequence[Cylinder]) -> list[Vio
     and ``z_max + margin`` stays at least ``radius + margin`` from the axis (exact)."""
     a, b = segment_ends(traj)
     out = []
-    for ci, cyl in enumerate(cylinders):
+    for ci, rows in near_segments(a, b, cylinders, _disc_boxes):
+        cyl = cylinders[ci]
         r = cyl.effective_radius
         d, s = segment_cylinder_distance(
-            a, b, cyl.center, cyl.z_min - cyl.margin, cyl.z_max + cyl.margin
+            a[rows], b[rows], cyl.center, cyl.z_min - cyl.margin, cyl.z_max + cyl.margin
         )
-        for k in np.flatnonzero(d < r - TOL):
-            p, t = point_at(traj, int(k), float(s[k]))
+        for q in np.flatnonzero(d < r - TOL):
+            k = rows[q]
+            p, t = point_at(traj, int(k), float(s[q]))
             out.append(
                 Violation(
                     "cylinder",
                     (traj.id,),
                     t,
                     (p,),
-                    float(d[k]),
+                    float(d[q]),
                     r,
-                    f"{traj.id}: segment {k} passes {fmt_num(d[k])} m from the axis of cylinder "
+                    f"{traj.id}: segment {k} passes {fmt_num(d[q])} m from the axis of cylinder "
                     f"{ci} (radius + margin {r:g} m) at {fmt_points(p)}, t={t:.3f} s",
                 )
             )
@@ -97,20 +157,22 @@ def check_circles(traj: Trajectory, circles: Sequence[Any]) -> list[Violation]:
     from the centre in the horizontal plane (exact)."""
     a, b = segment_ends(traj)
     out = []
-    for ci, circ in enumerate(circles):
+    for ci, rows in near_segments(a, b, circles, _disc_boxes):
+        circ = circles[ci]
         r = float(circ.effective_radius)
-        d, s = segment_cylinder_distance(a[:, :2], b[:, :2], circ.center, -math.inf, math.inf)
-        for k in np.flatnonzero(d < r - TOL):
-            p, t = point_at(traj, int(k), float(s[k]))
+        d, s = segment_cylinder_distance(a[rows, :2], b[rows, :2], circ.center, -math.inf, math.inf)
+        for q in np.flatnonzero(d < r - TOL):
+            k = rows[q]
+            p, t = point_at(traj, int(k), float(s[q]))
             out.append(
                 Violation(
                     "circle",
                     (traj.id,),
                     t,
                     (p,),
-                    float(d[k]),
+                    float(d[q]),
                     r,
-                    f"{traj.id}: segment {k} passes {fmt_num(d[k])} m from the centre of circle "
+                    f"{traj.id}: segment {k} passes {fmt_num(d[q])} m from the centre of circle "
                     f"{ci} (radius + margin {r:g} m) at {fmt_points(p)}, t={t:.3f} s",
                 )
             )
@@ -219,32 +281,35 @@ def check_polygons(traj: Trajectory, polygons: Sequence[Any]) -> list[Violation]
     keeps at least ``margin`` from the boundary (exact; touching with no margin is allowed).
 
     ``value`` is the signed horizontal distance at the reported point (negative inside)."""
-    a, b = segment_ends(traj)
+    a_all, b_all = segment_ends(traj)
     out = []
-    for pi, poly in enumerate(polygons):
+    for pi, rows in near_segments(a_all, b_all, polygons, _polygon_boxes):
+        poly = polygons[pi]
+        a, b = a_all[rows], b_all[rows]
         verts = np.asarray(poly.vertices, dtype=np.float64)
         margin = float(poly.margin)
         dist = segment_polygon_distance(a, b, verts)
         # A segment that does not touch the boundary is wholly inside or wholly outside.
         start_inside = point_in_polygon(a[:, 0], a[:, 1], verts)
         suspects = (dist <= TOL) | start_inside | (dist < margin - TOL)
-        for k in (int(i) for i in np.flatnonzero(suspects)):
-            if dist[k] > TOL:
-                if start_inside[k]:
+        for q in (int(i) for i in np.flatnonzero(suspects)):
+            k = int(rows[q])
+            if dist[q] > TOL:
+                if start_inside[q]:
                     s, depth = (
                         0.5,
-                        _midpoint_depth(a[k], b[k], verts),
+                        _midpoint_depth(a[q], b[q], verts),
                     )
-                elif dist[k] < margin - TOL:
-                    s, depth = _closest_to_polygon(a[k], b[k], verts), -float(dist[k])
+                elif dist[q] < margin - TOL:
+                    s, depth = _closest_to_polygon(a[q], b[q], verts), -float(dist[q])
                 else:
                     continue
             else:
-                s, depth = _deepest_inside(a[k], b[k], verts)
+                s, depth = _deepest_inside(a[q], b[q], verts)
                 if math.isnan(s):
                     if margin <= TOL:
                         continue
-                    s, depth = _closest_to_polygon(a[k], b[k], verts), 0.0
+                    s, depth = _closest_to_polygon(a[q], b[q], verts), 0.0
             p, t = point_at(traj, k, s)
             value = -depth
             inside = value < 0

@@ -9,7 +9,6 @@ Numba-parallel over the population, and each has a plain NumPy or Python referen
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -17,7 +16,15 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from uavplan.kernel_builds import population_kernel
-from uavplan.world.tolerances import BOUNDS_TOL, HULL_GROWTH_REL
+from uavplan.world.obstacle_index import GRID_MAX_CELLS as GRID_MAX_CELLS  # re-exported
+from uavplan.world.obstacle_index import (
+    box_grid,
+    box_pad,
+    by_content,
+    disc_grid,
+    segment_boxes,
+)
+from uavplan.world.tolerances import BOUNDS_TOL, SAT_TOL_REL
 
 FloatArray = NDArray[np.float64]
 
@@ -196,66 +203,19 @@ def cylinder_overlap_batch(paths, cx, cy, z_lo, z_hi, radii):  # pragma: no cove
 #: :func:`cylinder_threat`: from this many cylinders on, a uniform grid picks the cylinders
 #: near each segment (:func:`cylinder_grid`); below it every pair is tested.
 GRID_MIN_CYLINDERS = 64
-#: :func:`cylinder_grid`: at most this many cells a side.
-GRID_MAX_CELLS = 1024
 
 
 def cylinder_grid(
     cx: FloatArray, cy: FloatArray, reach: FloatArray
 ) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
-    """A uniform grid over the discs of radius ``reach`` around the cylinders' axes: ``(grid,
-    starts, items, first)`` with ``grid = (x0, y0, h, nx, ny)``, the cylinders whose disc's
-    bounding box meets cell ``(i, j)`` at ``items[starts[k]:starts[k + 1]]``, ``k = j nx + i``,
-    and each cylinder's first cell ``first[c] = (i, j)`` (its box's lowest corner).
-    The cell side ``h`` is at least the largest disc's diameter (each disc's box meets two
+    """The :mod:`uavplan.world.obstacle_index` grid over the discs of radius ``reach`` around
+    the cylinders' axes (:func:`~uavplan.world.obstacle_index.disc_grid`): ``(grid, starts,
+    items, first)``, ``first[c] = (i, j)`` the first cell of cylinder ``c``'s box (its lowest
+    corner). The cell side is at least the largest disc's diameter (each disc's box meets two
     cells a side, three where rounding widens it; every one of them lists it) and about the
     side that gives one cylinder per cell."""
-    r = np.asarray(reach, dtype=np.float64)
-    pad = 1e-9 * (1.0 + np.abs(cx) + np.abs(cy) + r)  # rounding: a disc never misses its cell
-    x_lo, x_hi, y_lo, y_hi = cx - r - pad, cx + r + pad, cy - r - pad, cy + r + pad
-    x0, y0 = float(x_lo.min()), float(y_lo.min())
-    w, hgt = float(x_hi.max()) - x0, float(y_hi.max()) - y0
-    h = max(2.0 * float((r + pad).max()), float(np.sqrt(max(w * hgt, 1e-300) / len(r))))
-    h = max(h, w / GRID_MAX_CELLS, hgt / GRID_MAX_CELLS, 1e-9)
-    nx, ny = int(w // h) + 1, int(hgt // h) + 1
-    i0 = np.floor((x_lo - x0) / h).astype(np.int64)
-    i1 = np.minimum(np.floor((x_hi - x0) / h).astype(np.int64), nx - 1)
-    j0 = np.floor((y_lo - y0) / h).astype(np.int64)
-    j1 = np.minimum(np.floor((y_hi - y0) / h).astype(np.int64), ny - 1)
-    cells, ids = [], []
-    for di in (0, 1, 2):  # two cells a side, a third where rounding widens a box
-        for dj in (0, 1, 2):
-            ok = (i0 + di <= i1) & (j0 + dj <= j1)
-            cells.append((j0 + dj)[ok] * nx + (i0 + di)[ok])
-            ids.append(np.nonzero(ok)[0])
-    cell, item = np.concatenate(cells), np.concatenate(ids)
-    order = np.lexsort((item, cell))
-    starts = np.searchsorted(cell[order], np.arange(nx * ny + 1)).astype(np.int64)
-    grid = np.array([x0, y0, h, nx, ny], dtype=np.float64)
-    first = np.ascontiguousarray(np.c_[i0, j0], dtype=np.int64)
-    return grid, starts, np.ascontiguousarray(item[order], dtype=np.int64), first
-
-
-_BUILT: dict[tuple[str, bytes], Any] = {}
-
-
-def by_content(kind: str, build: Callable[..., Any], *arrays: Any) -> Any:
-    """``build(*arrays)``, kept for the last few distinct inputs of each ``kind`` (keyed by the
-    arrays' bytes, which cost far less to hash than the structure to build): a planner asks for
-    the same world's grid or polygon data at every iteration and every validator."""
-    import hashlib
-
-    h = hashlib.blake2b(digest_size=16)
-    for a in arrays:
-        h.update(np.ascontiguousarray(a).tobytes())
-        h.update(b"|")
-    key = (kind, h.digest())
-    out = _BUILT.get(key)
-    if out is None:
-        if len(_BUILT) >= 16:
-            _BUILT.pop(next(iter(_BUILT)))
-        out = _BUILT[key] = build(*arrays)
-    return out
+    grid, starts, items, span = disc_grid(cx, cy, reach)
+    return grid, starts, items, np.ascontiguousarray(span[:, :2])
 
 
 @population_kernel(error_model="numpy")
@@ -503,6 +463,98 @@ def _circle_fraction_kernel(paths, centers, radii):  # pragma: no cover - numba
     return out
 
 
+@njit(cache=True, inline="always")
+def _chord(fx, fy, dx, dy, A, C):  # pragma: no cover - numba
+    """The fraction of segment a -> a + d inside a circle, ``f = a - centre``, ``A = |d|^2 > 0``,
+    ``C = |f|^2 - r^2``: the roots of ``|f + t d|^2 = r^2`` clipped to [0, 1]."""
+    B = 2.0 * (fx * dx + fy * dy)
+    disc = B * B - 4.0 * A * C
+    if disc > 0.0:
+        sq = np.sqrt(disc)
+        t0 = min(max((-B - sq) / (2.0 * A), 0.0), 1.0)
+        t1 = min(max((-B + sq) / (2.0 * A), 0.0), 1.0)
+        return t1 - t0
+    return 0.0
+
+
+@njit(cache=True, inline="always")
+def _seg2d(paths, p, s):  # pragma: no cover - numba
+    """The xy ends of segment ``s`` of path ``p``, its xy direction and that one's squared
+    length."""
+    ax = paths[p, s, 0]
+    ay = paths[p, s, 1]
+    bx = paths[p, s + 1, 0]
+    by = paths[p, s + 1, 1]
+    dx = bx - ax
+    dy = by - ay
+    return ax, ay, bx, by, dx, dy, dx * dx + dy * dy
+
+
+def circle_grid(
+    cx: FloatArray, cy: FloatArray, r: FloatArray
+) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+    """The obstacle grid (:func:`uavplan.world.obstacle_index.box_grid`) over circles' boxes."""
+    pad = box_pad(cx, cy, r)
+    return box_grid(cx - r - pad, cy - r - pad, cx + r + pad, cy + r + pad)
+
+
+def circle_inside_length(paths: FloatArray, centers: FloatArray, radii: FloatArray) -> FloatArray:
+    """Per path (pop,), the length inside circles: each segment's chord fraction through each
+    circle (:func:`segment_circle_inside_fraction`: the ground track's; a segment with no
+    horizontal extent counts whole when its point is inside) times the segment's length (3-D
+    for 3-D paths), summed: HR-MAGA's danger-area length (Eq. 9). From
+    :data:`GRID_MIN_OBSTACLES` circles on the circles near each segment come from the obstacle
+    grid (:func:`circle_inside_grid`); below (or for paths that are not finite), the (pop,
+    n - 1, J) fractions are summed."""
+    p = np.ascontiguousarray(paths, dtype=np.float64)
+    c = np.asarray(centers, dtype=np.float64).reshape(-1, 2)
+    r = np.ascontiguousarray(radii, dtype=np.float64)
+    if len(r) == 0:
+        return np.zeros(p.shape[0])
+    if len(r) >= GRID_MIN_OBSTACLES and bool(np.isfinite(p[..., :2]).all()):
+        circ = np.ascontiguousarray(np.stack([c[:, 0], c[:, 1], r]))
+        g = by_content("circle grid", circle_grid, circ[0], circ[1], r)
+        return np.asarray(circle_inside_grid(p, circ, *g))
+    d = np.diff(p, axis=1)
+    seg = np.sqrt(np.sum(d * d, axis=-1))
+    return np.asarray((segment_circle_inside_fraction(p, c, r) * seg[..., None]).sum(axis=(1, 2)))
+
+
+@population_kernel(error_model="numpy")
+def circle_inside_grid(paths, circ, grid, gstarts, gitems, gspan):  # pragma: no cover - numba
+    """:func:`circle_inside_length` with the circles (rows ``cx, cy, r`` of ``circ``) near each
+    segment taken from their grid (:func:`circle_grid`), each once, in index order."""
+    P, N, D = paths.shape
+    J = circ.shape[1]
+    out = np.zeros(P)
+    none = np.empty(0, dtype=np.int64)
+    for blk in prange((P + BLOCK - 1) // BLOCK):  # scratch once per block of paths
+        buf = np.empty(J, dtype=np.int64)
+        cidx = np.empty(J, dtype=np.int64)
+        for p in range(blk * BLOCK, min(P, (blk + 1) * BLOCK)):
+            total = 0.0
+            for s in range(N - 1):
+                ax, ay, bx, by, dx, dy, A = _seg2d(paths, p, s)
+                L = A
+                for q in range(2, D):
+                    dz = paths[p, s + 1, q] - paths[p, s, q]
+                    L += dz * dz
+                L = np.sqrt(L)
+                n_c, _ = _grid_candidates(grid, gstarts, gitems, gspan, J, ax, ay, bx, by, buf,
+                                          cidx, none)  # fmt: skip
+                for m in range(n_c):
+                    j = cidx[m]
+                    fx = ax - circ[0, j]
+                    fy = ay - circ[1, j]
+                    C = fx * fx + fy * fy - circ[2, j] * circ[2, j]
+                    if A == 0.0:
+                        total += L if C < 0.0 else 0.0
+                        continue
+                    total += _chord(fx, fy, dx, dy, A, C) * L
+            out[p] = total
+    return out
+
+
 # ---------------------------------------------------------------------------- polygons
 def pack_polygons(polygons: list[FloatArray]) -> tuple[FloatArray, NDArray[np.int64]]:
     """Pack ragged polygons into ``(vertices (V, 2), starts (K + 1,))`` for the kernels."""
@@ -593,14 +645,6 @@ def _box_gap(ax, ay, bx, by, box, k):  # pragma: no cover - numba
     gx = max(0.0, max(min(ax, bx) - box[k, 2], box[k, 0] - max(ax, bx)))
     gy = max(0.0, max(min(ay, by) - box[k, 3], box[k, 1] - max(ay, by)))
     return np.sqrt(gx * gx + gy * gy)
-
-
-@njit(cache=True, inline="always")
-def _box_gap2(ax, ay, bx, by, box, k):  # pragma: no cover - numba
-    """The square of :func:`_box_gap` (no square root: the hot rejection test)."""
-    gx = max(0.0, max(min(ax, bx) - box[k, 2], box[k, 0] - max(ax, bx)))
-    gy = max(0.0, max(min(ay, by) - box[k, 3], box[k, 1] - max(ay, by)))
-    return gx * gx + gy * gy
 
 
 @population_kernel()
@@ -918,7 +962,7 @@ def polygon_convexity(verts: FloatArray, starts: NDArray[np.int64]) -> NDArray[n
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _convex_clip(ax, ay, bx, by, verts, v0, v1, orient):  # pragma: no cover - numba
     """Cyrus-Beck: the parameter interval [t_in, t_out] of segment a->b inside the closed
     convex polygon verts[v0:v1] (``orient`` +1 counter-clockwise, -1 clockwise); empty when
@@ -976,49 +1020,104 @@ def convex_hulls(
     return np.array(hv, dtype=np.float64).reshape(-1, 2), hs
 
 
-def polygon_prep(
-    verts: FloatArray, starts: NDArray[np.int64], margins: FloatArray
-) -> tuple[FloatArray, NDArray[np.int64], FloatArray, NDArray[np.int64], float, FloatArray, int]:
-    """What :func:`scene2d_batch` needs of a world's polygons besides their vertices, worked out
-    once per world: bounding boxes (K, 4), convexity (K,), convex hulls (packed), the hulls'
-    growth ``delta``, squared margins (K,) and the most vertices of one polygon."""
+#: The indexed and blocked kernels: paths per block (the lanes the 2-D scene pass runs its tests
+#: in side by side; the block's scratch arrays are allocated once).
+BLOCK = 64
+#: :func:`scene2d_batch`: from this many circles and polygons together on, a uniform grid
+#: (:mod:`uavplan.world.obstacle_index`) picks the obstacles near each segment; below it every
+#: pair is tested (the sums over obstacles then keep their order, so results stay bit for bit
+#: those of the every-pair pass).
+GRID_MIN_OBSTACLES = 64
+
+
+def hull_edges(
+    verts: FloatArray, starts: NDArray[np.int64]
+) -> tuple[FloatArray, NDArray[np.int64]]:
+    """The edges of the polygons' counter-clockwise convex hulls (:func:`convex_hulls`), packed
+    with starts (K + 1,): per edge ``q`` (from hull vertex ``q - 1`` to ``q``, cyclic in each
+    hull) its outward normal ``(nx, ny)`` (the edge turned clockwise, as long as the edge), its
+    offset ``c = n . v`` and ``|nx| + |ny|``, (E, 4)."""
+    hull_v, hull_s = convex_hulls(verts, starts)
+    edges = np.zeros((len(hull_v), 4))
+    for k in range(len(hull_s) - 1):
+        v = hull_v[hull_s[k] : hull_s[k + 1]]
+        prev = np.roll(v, 1, axis=0)
+        e = v - prev
+        n = np.c_[e[:, 1], -e[:, 0]]
+        edges[hull_s[k] : hull_s[k + 1]] = np.c_[n, np.sum(n * prev, axis=1), np.abs(n).sum(axis=1)]
+    return edges, hull_s
+
+
+def scene_prep(
+    centers: FloatArray,
+    radii: FloatArray,
+    verts: FloatArray,
+    starts: NDArray[np.int64],
+    margins: FloatArray,
+    gridded: bool | None = None,
+) -> tuple[Any, ...]:
+    """What :func:`scene2d_kernel` needs of a world's circles and polygons besides their
+    vertices, worked out once per world (NumPy/Python): the circles as rows ``(cx, cy, r)``
+    (3, C); per polygon the rows ``(x_min, y_min, x_max, y_max, margin, margin^2, scale)``
+    (7, K) (``scale``: 1 + the largest vertex coordinate's magnitude); convexity (K,); the
+    convex hulls' edges (:func:`hull_edges`); the most vertices of one polygon; and from
+    :data:`GRID_MIN_OBSTACLES` obstacles on (or as ``gridded`` says) the grid over the circles'
+    boxes (items ``0..C-1``) and the polygons' boxes grown by their margins (items
+    ``C..C+K-1``), else an empty one."""
+    c = np.asarray(centers, dtype=np.float64).reshape(-1, 2)
+    r = np.asarray(radii, dtype=np.float64)
+    circ = np.ascontiguousarray(np.stack([c[:, 0], c[:, 1], r]))
     K = len(starts) - 1
+    m = np.maximum(np.asarray(margins, dtype=np.float64), 0.0)
     if K > 0:
-        box = np.column_stack(
-            [
-                np.minimum.reduceat(verts[:, 0], starts[:-1]),
-                np.minimum.reduceat(verts[:, 1], starts[:-1]),
-                np.maximum.reduceat(verts[:, 0], starts[:-1]),
-                np.maximum.reduceat(verts[:, 1], starts[:-1]),
-            ]
+        box = [
+            np.minimum.reduceat(verts[:, 0], starts[:-1]),
+            np.minimum.reduceat(verts[:, 1], starts[:-1]),
+            np.maximum.reduceat(verts[:, 0], starts[:-1]),
+            np.maximum.reduceat(verts[:, 1], starts[:-1]),
+        ]
+        scale = 1.0 + np.maximum.reduceat(np.abs(verts).max(axis=1), starts[:-1])
+    else:
+        box = [np.zeros(0)] * 4
+        scale = np.zeros(0)
+    raw = np.asarray(margins, dtype=np.float64)
+    poly = np.ascontiguousarray(np.stack([*box, raw, m * m, scale]))
+    convex = polygon_convexity(verts, starts)
+    edges, hull_s = hull_edges(verts, starts)
+    maxv = int(np.diff(starts).max()) if K > 0 else 0
+    J = len(r)
+    if gridded is None:
+        gridded = J + K >= GRID_MIN_OBSTACLES
+    if gridded and J + K > 0:
+        pc = box_pad(c[:, 0], c[:, 1], r)
+        pp = box_pad(*box) + m if K > 0 else np.zeros(0)
+        g = box_grid(
+            np.r_[c[:, 0] - r - pc, box[0] - pp],
+            np.r_[c[:, 1] - r - pc, box[1] - pp],
+            np.r_[c[:, 0] + r + pc, box[2] + pp],
+            np.r_[c[:, 1] + r + pc, box[3] + pp],
         )
     else:
-        box = np.zeros((0, 4))
-    hull_v, hull_s = convex_hulls(verts, starts)
-    delta = HULL_GROWTH_REL * (1.0 + float(np.max(np.abs(verts)))) if len(verts) else 0.0
-    m = np.maximum(np.asarray(margins, dtype=np.float64), 0.0)
-    maxv = int(np.diff(starts).max()) if K > 0 else 0
-    return (
-        np.ascontiguousarray(box), polygon_convexity(verts, starts), hull_v, hull_s,
-        delta, m * m, maxv,
-    )  # fmt: skip
+        g = (np.zeros(5), np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64),
+             np.zeros((0, 4), dtype=np.int64))  # fmt: skip
+    return (circ, poly, convex, edges, hull_s, maxv, *g)
 
 
-@njit(cache=True)
-def _hull_missed(ax, ay, bx, by, hv, h0, h1, delta):  # pragma: no cover - numba
-    """True if segment a->b misses the counter-clockwise convex hull hv[h0:h1] grown by
-    ``delta`` (a conservative rejection test: a segment that touches the polygon never misses
-    its grown hull, whatever the rounding)."""
+@njit(cache=True, inline="always")
+def _hull_missed(ax, ay, bx, by, edges, e0, e1, tol):  # pragma: no cover - numba
+    """True if segment a->b misses the convex hull whose edges ``edges[e0:e1]`` describes
+    (:func:`hull_edges`), grown by ``tol`` times each edge normal's 1-norm (Cyrus-Beck,
+    stopping as soon as the interval empties): a conservative rejection, never of a segment
+    that touches the polygon, whatever the rounding."""
     rx = bx - ax
     ry = by - ay
     t_in = 0.0
     t_out = 1.0
-    j = h1 - 1
-    for i in range(h0, h1):
-        ex = hv[i, 0] - hv[j, 0]
-        ey = hv[i, 1] - hv[j, 1]
-        num = ey * (ax - hv[j, 0]) - ex * (ay - hv[j, 1]) - delta * np.sqrt(ex * ex + ey * ey)
-        den = ey * rx - ex * ry
+    for q in range(e0, e1):
+        nx = edges[q, 0]
+        ny = edges[q, 1]
+        num = nx * ax + ny * ay - edges[q, 2] - tol * edges[q, 3]  # > 0: a outside this edge
+        den = nx * rx + ny * ry
         if den == 0.0:
             if num > 0.0:
                 return True
@@ -1028,8 +1127,116 @@ def _hull_missed(ax, ay, bx, by, hv, h0, h1, delta):  # pragma: no cover - numba
             t_out = min(t_out, -num / den)
         if t_in > t_out:
             return True
-        j = i
     return False
+
+
+@njit(cache=True, inline="always")
+def _box_gap2(sx0, sy0, sx1, sy1, poly, k):  # pragma: no cover - numba
+    """The squared distance between the box ``[sx0, sx1] x [sy0, sy1]`` and polygon k's."""
+    gx = max(0.0, max(sx0 - poly[2, k], poly[0, k] - sx1))
+    gy = max(0.0, max(sy0 - poly[3, k], poly[1, k] - sy1))
+    return gx * gx + gy * gy
+
+
+@njit(cache=True, inline="always")
+def _polygon_exact(
+    ax, ay, bx, by, A, L, verts, starts, poly, convex, edges, hull_s, k, gap2, phit, ts
+):  # pragma: no cover - numba
+    """Segment a->b (``A = |b - a|^2``, ``L = |b - a|``) and polygon k (:func:`scene_prep`'s
+    data) whose box is within its margin of the segment's (``gap2``: the boxes' squared
+    distance): whether the segment touches the polygon or comes closer than its margin, and the
+    length of segment inside. Without a margin, a convex polygon is clipped (Cyrus-Beck); a
+    non-convex one is skipped when the segment misses its convex hull, else split at the edge
+    crossings. With a margin (or a zero-length segment) the clearance is measured unless
+    ``phit`` (already known for this path). ``ts``: scratch of the most vertices + 2."""
+    v0 = starts[k]
+    v1 = starts[k + 1]
+    margin = poly[4, k]
+    if margin <= 0.0 and A > 0.0:
+        if convex[k] != 0:
+            t_in, t_out = _convex_clip(ax, ay, bx, by, verts, v0, v1, convex[k])
+            if t_in <= t_out:
+                return True, (t_out - t_in) * L
+            return False, 0.0
+        seg_scale = 1.0 + max(max(abs(ax), abs(bx)), max(abs(ay), abs(by)))
+        g = SAT_TOL_REL * (seg_scale + poly[6, k])
+        if _hull_missed(ax, ay, bx, by, edges, hull_s[k], hull_s[k + 1], g):
+            return False, 0.0  # clear of the convex hull, so of the polygon
+        frac, touch = _inside_fraction_and_touch(ax, ay, bx, by, verts, v0, v1, ts)
+        return touch, frac * L
+    hit = False
+    if not phit:  # clearance: touching or closer than the margin
+        if _point_in_polygon(ax, ay, verts, v0, v1):
+            hit = True
+        else:
+            jj = v1 - 1
+            for i in range(v0, v1):
+                d = _seg_seg_distance(ax, ay, bx, by, verts[jj, 0], verts[jj, 1], verts[i, 0],
+                                      verts[i, 1])  # fmt: skip
+                if d <= 0.0 or d < margin:
+                    hit = True
+                    break
+                jj = i
+    if gap2 > 0.0 or A == 0.0:
+        return hit, 0.0
+    return hit, _inside_fraction_one(ax, ay, bx, by, verts, v0, v1, ts) * L
+
+
+@njit(cache=True, inline="always")
+def _circle_pair(ax, ay, dx, dy, A, inv_a, L, cx, cy, r):  # pragma: no cover - numba
+    """Segment a -> a + d (``A = |d|^2``, ``inv_a = 1 / A`` or 0, ``L = |d|``) and the circle
+    ``(cx, cy, r)``: whether the segment comes closer than ``r`` to the centre, and the length
+    of its chord inside the circle (scalars only: no array to count references of)."""
+    fx = ax - cx
+    fy = ay - cy
+    # squared distance from the centre to the segment
+    t = min(max(-(fx * dx + fy * dy) * inv_a, 0.0), 1.0)
+    qx = fx + t * dx
+    qy = fy + t * dy
+    if qx * qx + qy * qy >= r * r:
+        return False, 0.0  # the segment stays out of the open disc: no hit, no chord
+    if A == 0.0:
+        return True, 0.0
+    return True, _chord(fx, fy, dx, dy, A, fx * fx + fy * fy - r * r) * L
+
+
+@njit(cache=True, inline="always")
+def _sort_head(a, n):  # pragma: no cover - numba
+    """Sort ``a[:n]`` in place (insertion sort for the usual handful, else NumPy's)."""
+    if n > 32:
+        a[:n] = np.sort(a[:n])
+        return
+    for q in range(1, n):
+        key = a[q]
+        r = q - 1
+        while r >= 0 and a[r] > key:
+            a[r + 1] = a[r]
+            r -= 1
+        a[r + 1] = key
+
+
+@njit(cache=True, inline="always")
+def _grid_candidates(
+    grid, gstarts, gitems, gspan, J, ax, ay, bx, by, buf, cidx, kidx
+):  # pragma: no cover - numba
+    """The circles (into ``cidx``) and polygons (into ``kidx``, as ``item - J``) listed in the
+    cells segment a->b crosses (:func:`uavplan.world.obstacle_index.segment_boxes`, into
+    ``buf``), each once and in increasing order (so that sums over them keep the every-pair
+    order); returns their counts."""
+    n = segment_boxes(grid, gstarts, gitems, gspan, ax, ay, bx, by, buf)
+    n_c = 0
+    n_k = 0
+    for q in range(n):
+        b = buf[q]
+        if b < J:
+            cidx[n_c] = b
+            n_c += 1
+        else:
+            kidx[n_k] = b - J
+            n_k += 1
+    _sort_head(cidx, n_c)
+    _sort_head(kidx, n_k)
+    return n_c, n_k
 
 
 def scene2d_batch(
@@ -1043,39 +1250,17 @@ def scene2d_batch(
     hi: FloatArray,
     prep: tuple[Any, ...] | None = None,
 ) -> tuple[FloatArray, FloatArray, NDArray[np.bool_], NDArray[np.bool_], NDArray[np.bool_]]:
-    """:func:`scene2d_kernel` with the polygons' :func:`polygon_prep` (given, as a world keeps
-    it, or worked out here)."""
-    if prep is None:
-        prep = polygon_prep(verts, starts, margins)
-    return scene2d_kernel(paths, centers, radii, verts, starts, margins, lo, hi, *prep)
-
-
-@population_kernel(error_model="numpy")
-def scene2d_kernel(
-    paths,
-    centers,
-    radii,
-    verts,
-    starts,
-    margins,
-    lo,
-    hi,
-    box,
-    convex,
-    hull_v,
-    hull_s,
-    delta,
-    cap2,
-    maxv,
-):  # pragma: no cover - numba
-    """One pass over every (path, segment, obstacle) of a scene of circles and polygons.
+    """One pass over every (path, segment, obstacle) of a scene of circles and polygons, with
+    the world's :func:`scene_prep` (given, as a world keeps it, or worked out here): on the
+    obstacle grid when the world has one (:func:`scene2d_grid_kernel`; paths with coordinates
+    that are not finite test every pair), else testing every pair (:func:`scene2d_kernel`).
+    The two return the same bits.
 
     The fused form of :func:`segment_circle_inside_fraction`,
     :func:`segment_polygon_inside_fraction`, :func:`segment_cylinder_distance` (infinite, for
     circles), :func:`segment_polygon_distance` and the bounds test that the 2-D cost and
     feasibility need, without the (P, N - 1, J) intermediates. Only the xy coordinates of
-    ``paths`` (P, N, >= 2) are used; ``lo``, ``hi``: the (2,) box, with a 1e-9 tolerance;
-    ``box`` to ``maxv``: the world's :func:`polygon_prep`.
+    ``paths`` (P, N, >= 2) are used; ``lo``, ``hi``: the (2,) box, with a 1e-9 tolerance.
 
     Returns:
         length: (P,) xy path length;
@@ -1084,108 +1269,216 @@ def scene2d_kernel(
         polygon_hit: (P,) bool, some segment touching a polygon or closer than its margin;
         outside: (P,) bool, some node outside the box.
     """
+    if prep is None:
+        prep = scene_prep(centers, radii, verts, starts, margins)
+    p = np.ascontiguousarray(paths, dtype=np.float64)
+    if prep[-4][3] > 0 and np.isfinite(p[..., :2]).all():
+        return scene2d_grid_kernel(p, verts, starts, lo, hi, *prep)
+    return scene2d_kernel(p, verts, starts, lo, hi, *prep[:-4])
+
+
+@njit(cache=True)
+def _scene_outputs(P):  # pragma: no cover - numba
+    """The 2-D scene pass's outputs for P paths, zeroed (see :func:`scene2d_batch`)."""
+    flags = np.zeros((3, P), dtype=np.bool_)
+    return np.zeros(P), np.zeros(P), flags[0], flags[1], flags[2]
+
+
+@population_kernel(error_model="numpy")
+def scene2d_kernel(
+    paths, verts, starts, lo, hi, circ, poly, convex, edges, hull_s, maxv
+):  # pragma: no cover - numba
+    """:func:`scene2d_batch` testing every pair, in blocks of :data:`BLOCK` paths whose
+    coordinates are laid out side by side: per segment index, each circle's distance test and
+    each polygon's box test run over the block's paths at once (loops without branches, in SIMD
+    lanes), then the exact work for the pairs that pass (the circle's chord,
+    :func:`_polygon_exact`). Each path's sums take its segments in order and, per segment, its
+    circles then its polygons in index order; a repeated node (a zero-length segment after the
+    first) is skipped, its point tested as the previous segment's end."""
     P, N, _ = paths.shape
-    J = centers.shape[0]
+    J = circ.shape[1]
     K = starts.shape[0] - 1
-    length = np.zeros(P)
-    inside = np.zeros(P)
-    circle_hit = np.zeros(P, dtype=np.bool_)
-    polygon_hit = np.zeros(P, dtype=np.bool_)
-    outside = np.zeros(P, dtype=np.bool_)
+    length, inside, circle_hit, polygon_hit, outside = _scene_outputs(P)
     tol = BOUNDS_TOL
-    for p in prange(P):
+    for blk in prange((P + BLOCK - 1) // BLOCK):
+        p0 = blk * BLOCK
+        m = min(P, p0 + BLOCK) - p0
+        xs = np.empty((N, m))
+        ys = np.empty((N, m))
+        for q in range(m):
+            for s in range(N):
+                xs[s, q] = paths[p0 + q, s, 0]
+                ys[s, q] = paths[p0 + q, s, 1]
         ts = np.empty(maxv + 2)
-        total = 0.0
-        plen = 0.0
-        chit = False
-        phit = False
-        out = False
+        total = np.zeros(m)
+        plen = np.zeros(m)
+        chit = np.zeros(m, dtype=np.bool_)
+        phit = np.zeros(m, dtype=np.bool_)
+        out = np.zeros(m, dtype=np.bool_)
+        dx = np.empty(m)
+        dy = np.empty(m)
+        A = np.empty(m)
+        inv_a = np.empty(m)
+        L = np.empty(m)
+        near = np.empty(m, dtype=np.bool_)
+        gap2 = np.empty(m)
         for s in range(N):
-            x = paths[p, s, 0]
-            y = paths[p, s, 1]
-            if x < lo[0] - tol or x > hi[0] + tol or y < lo[1] - tol or y > hi[1] + tol:
-                out = True
+            x = xs[s]
+            y = ys[s]
+            for q in range(m):
+                out[q] |= (
+                    (x[q] < lo[0] - tol)
+                    | (x[q] > hi[0] + tol)
+                    | (y[q] < lo[1] - tol)
+                    | (y[q] > hi[1] + tol)
+                )
         for s in range(N - 1):
-            ax = paths[p, s, 0]
-            ay = paths[p, s, 1]
-            bx = paths[p, s + 1, 0]
-            by = paths[p, s + 1, 1]
-            dx = bx - ax
-            dy = by - ay
-            A = dx * dx + dy * dy
-            if A == 0.0 and s > 0:
-                continue  # a repeated node: the point was tested as the previous segment's end
-            L = np.sqrt(A)
-            plen += L
-            inv_a = 1.0 / A if A > 0.0 else 0.0
+            ax = xs[s]
+            ay = ys[s]
+            bx = xs[s + 1]
+            by = ys[s + 1]
+            first = s == 0
+            for q in range(m):
+                d0 = bx[q] - ax[q]
+                d1 = by[q] - ay[q]
+                aa = d0 * d0 + d1 * d1
+                dx[q] = d0
+                dy[q] = d1
+                A[q] = aa
+                ll = np.sqrt(aa)
+                L[q] = ll
+                plen[q] += ll  # + 0 for a zero-length segment
+                inv_a[q] = 1.0 / aa if aa > 0.0 else 0.0
             for j in range(J):
-                fx = ax - centers[j, 0]
-                fy = ay - centers[j, 1]
-                r = radii[j]
-                # squared distance from the centre to the segment
-                t = min(max(-(fx * dx + fy * dy) * inv_a, 0.0), 1.0)
-                qx = fx + t * dx
-                qy = fy + t * dy
-                if qx * qx + qy * qy >= r * r:
-                    continue  # the segment stays out of the open disc: no hit, no chord
-                chit = True
-                if A == 0.0:
+                cx = circ[0, j]
+                cy = circ[1, j]
+                r2 = circ[2, j] * circ[2, j]
+                n_near = 0
+                for q in range(m):  # the distance tests side by side
+                    fx = ax[q] - cx
+                    fy = ay[q] - cy
+                    t = min(max(-(fx * dx[q] + fy * dy[q]) * inv_a[q], 0.0), 1.0)
+                    qx = fx + t * dx[q]
+                    qy = fy + t * dy[q]
+                    c = (not (qx * qx + qy * qy >= r2)) & ((A[q] != 0.0) | first)
+                    near[q] = c
+                    n_near += c
+                if n_near == 0:
                     continue
-                C = fx * fx + fy * fy - r * r
-                B = 2.0 * (fx * dx + fy * dy)
-                disc = B * B - 4.0 * A * C
-                if disc > 0.0:
-                    sq = np.sqrt(disc)
-                    t0 = min(max((-B - sq) / (2.0 * A), 0.0), 1.0)
-                    t1 = min(max((-B + sq) / (2.0 * A), 0.0), 1.0)
-                    total += (t1 - t0) * L
+                for q in range(m):  # inside the open disc: a hit, and the chord
+                    if near[q]:
+                        chit[q] = True
+                        if A[q] > 0.0:
+                            fx = ax[q] - cx
+                            fy = ay[q] - cy
+                            C = fx * fx + fy * fy - r2
+                            total[q] += _chord(fx, fy, dx[q], dy[q], A[q], C) * L[q]
             for k in range(K):
-                gap2 = _box_gap2(ax, ay, bx, by, box, k)
-                if gap2 > 0.0 and gap2 >= cap2[k]:
-                    continue  # clear of polygon k, and nothing inside it
-                gap = np.sqrt(gap2)
-                v0 = starts[k]
-                v1 = starts[k + 1]
-                if margins[k] <= 0.0 and A > 0.0 and convex[k] != 0:
-                    t_in, t_out = _convex_clip(ax, ay, bx, by, verts, v0, v1, convex[k])
-                    if t_in <= t_out:
-                        phit = True
-                        total += (t_out - t_in) * L
+                n_near = 0
+                for q in range(m):  # the box tests side by side
+                    gx = max(
+                        0.0, max(min(ax[q], bx[q]) - poly[2, k], poly[0, k] - max(ax[q], bx[q]))
+                    )
+                    gy = max(
+                        0.0, max(min(ay[q], by[q]) - poly[3, k], poly[1, k] - max(ay[q], by[q]))
+                    )
+                    g2 = gx * gx + gy * gy
+                    c = (not ((g2 > 0.0) & (g2 >= poly[5, k]))) & ((A[q] != 0.0) | first)
+                    gap2[q] = g2
+                    near[q] = c
+                    n_near += c
+                if n_near == 0:
                     continue
-                if margins[k] <= 0.0 and A > 0.0:  # no margin: one pass gives both answers
-                    if _hull_missed(ax, ay, bx, by, hull_v, hull_s[k], hull_s[k + 1], delta):
-                        continue  # clear of the convex hull, so of the polygon
-                    frac, touch = _inside_fraction_and_touch(ax, ay, bx, by, verts, v0, v1, ts)
-                    total += frac * L
-                    phit = phit or touch
-                    continue
-                # clearance: touching or closer than the margin
-                if not phit:
-                    if _point_in_polygon(ax, ay, verts, v0, v1):
-                        phit = True
-                    else:
-                        jj = v1 - 1
-                        for i in range(v0, v1):
-                            d = _seg_seg_distance(
-                                ax,
-                                ay,
-                                bx,
-                                by,
-                                verts[jj, 0],
-                                verts[jj, 1],
-                                verts[i, 0],
-                                verts[i, 1],
-                            )
-                            if d <= 0.0 or d < margins[k]:
-                                phit = True
-                                break
-                            jj = i
-                if gap > 0.0 or A == 0.0:
-                    continue
-                total += _inside_fraction_one(ax, ay, bx, by, verts, v0, v1, ts) * L
-        length[p] = plen
-        inside[p] = total
-        circle_hit[p] = chit
-        polygon_hit[p] = phit
-        outside[p] = out
+                for q in range(m):
+                    if near[q]:
+                        h, add = _polygon_exact(ax[q], ay[q], bx[q], by[q], A[q], L[q], verts,
+                                                starts, poly, convex, edges, hull_s, k, gap2[q],
+                                                phit[q], ts)  # fmt: skip
+                        phit[q] |= h
+                        total[q] += add
+        for q in range(m):
+            length[p0 + q] = plen[q]
+            inside[p0 + q] = total[q]
+            circle_hit[p0 + q] = chit[q]
+            polygon_hit[p0 + q] = phit[q]
+            outside[p0 + q] = out[q]
+    return length, inside, circle_hit, polygon_hit, outside
+
+
+@population_kernel(error_model="numpy")
+def scene2d_grid_kernel(
+    paths,
+    verts,
+    starts,
+    lo,
+    hi,
+    circ,
+    poly,
+    convex,
+    edges,
+    hull_s,
+    maxv,
+    grid,
+    gstarts,
+    gitems,
+    gspan,
+):  # pragma: no cover - numba
+    """:func:`scene2d_batch` on the obstacle grid (paths with finite coordinates): each
+    segment's circles and polygons are those listed in the cells it crosses
+    (:func:`_grid_candidates`), each once and in index order, so the sums and verdicts are
+    :func:`scene2d_kernel`'s bit for bit."""
+    P, N, _ = paths.shape
+    J = circ.shape[1]
+    K = starts.shape[0] - 1
+    length, inside, circle_hit, polygon_hit, outside = _scene_outputs(P)
+    tol = BOUNDS_TOL
+    for blk in prange((P + BLOCK - 1) // BLOCK):  # scratch once per block of paths
+        ts = np.empty(maxv + 2)
+        buf = np.empty(J + K, dtype=np.int64)
+        cidx = np.empty(J, dtype=np.int64)
+        kidx = np.empty(K, dtype=np.int64)
+        for p in range(blk * BLOCK, min(P, (blk + 1) * BLOCK)):
+            total = 0.0
+            plen = 0.0
+            chit = False
+            phit = False
+            out = False
+            for s in range(N):
+                x = paths[p, s, 0]
+                y = paths[p, s, 1]
+                if x < lo[0] - tol or x > hi[0] + tol or y < lo[1] - tol or y > hi[1] + tol:
+                    out = True
+            for s in range(N - 1):
+                ax, ay, bx, by, dx, dy, A = _seg2d(paths, p, s)
+                if A == 0.0 and s > 0:
+                    continue  # a repeated node: the point was tested as the previous segment's end
+                L = np.sqrt(A)
+                plen += L
+                inv_a = 1.0 / A if A > 0.0 else 0.0
+                n_c, n_k = _grid_candidates(grid, gstarts, gitems, gspan, J, ax, ay, bx, by, buf,
+                                            cidx, kidx)  # fmt: skip
+                for i in range(n_c):
+                    j = cidx[i]
+                    h, add = _circle_pair(ax, ay, dx, dy, A, inv_a, L, circ[0, j], circ[1, j],
+                                          circ[2, j])  # fmt: skip
+                    chit = chit or h
+                    total += add
+                sx0 = min(ax, bx)
+                sy0 = min(ay, by)
+                sx1 = max(ax, bx)
+                sy1 = max(ay, by)
+                for i in range(n_k):
+                    k = kidx[i]
+                    gap2 = _box_gap2(sx0, sy0, sx1, sy1, poly, k)
+                    if gap2 > 0.0 and gap2 >= poly[5, k]:
+                        continue  # clear of polygon k, and nothing inside it
+                    h, add = _polygon_exact(ax, ay, bx, by, A, L, verts, starts, poly, convex,
+                                            edges, hull_s, k, gap2, phit, ts)  # fmt: skip
+                    phit = phit or h
+                    total += add
+            length[p] = plen
+            inside[p] = total
+            circle_hit[p] = chit
+            polygon_hit[p] = phit
+            outside[p] = out
     return length, inside, circle_hit, polygon_hit, outside

@@ -11,9 +11,11 @@ offsets (``uavplan.world.visibility.OFFSET_REL``, ``ANGLE_TOL``), RSCDWOA's ``CH
 BAND_TOL = 1e-9
 #: A point may leave the scenario's box by this much.
 BOUNDS_TOL = 1e-9
-#: 2-D polygons' convex hulls are grown by this fraction of the scene's size before a segment
-#: that misses a hull is rejected without the exact test (never rejects a touching segment).
-HULL_GROWTH_REL = 1e-9
+#: A 2-D segment is rejected without the exact test when a separating axis keeps it apart from
+#: a convex polygon (or a polygon's convex hull) by more than this fraction of the coordinates'
+#: magnitude: far above rounding, so the exact test would find such a pair apart too (it never
+#: rejects a touching segment).
+SAT_TOL_REL = 1e-9
 #: Duplicate waypoints closer than this are one (Dubins smoothing, fleet pose times).
 DUPLICATE_TOL = 1e-9
 #: RRT*: a rewire must shorten the cost-to-come by more than this (no churn on round-off).
