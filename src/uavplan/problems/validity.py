@@ -426,6 +426,20 @@ class MotionValidator:
             BAND_TOL, strict,
         )  # fmt: skip
 
+    def static_kernel_args(self) -> tuple[object, ...] | None:
+        """The fused static kernel's arguments after the paths
+        (:func:`uavplan.problems._validity_kernels.static_path_ok`'s after ``p``) when that
+        kernel alone is :meth:`passing` but for ``separation`` (a 3-D world whose every other
+        check it makes: no circles, polygons, moving obstacles or indexed cylinders, no
+        kinematics), else None: what a kernel that checks a whole population in one pass
+        needs."""
+        args = self._static_args
+        if args is None or self._cylinders_by_grid:
+            return None
+        if set(self.checks()) - {"separation"} - STATIC:
+            return None
+        return args
+
     def passing(self, b: Batch, skip: Iterable[str] = ()) -> NDArray[np.intp]:
         """The rows of ``b`` that pass every applicable check (but ``skip``), found by
         cascading: the cheap checks first, each later one only on the paths still passing
@@ -440,7 +454,7 @@ class MotionValidator:
         idx = np.arange(b.paths.shape[0])
         args = self._static_args
         if args is not None and not skipped & STATIC:
-            idx = idx[VK.static_world_ok(b.paths, *args)]
+            idx = idx[VK.static_world_ok(b.paths, args)]
             fused = STATIC - {"cylinders"} if self._cylinders_by_grid else STATIC
             names = [c for c in names if c not in fused]
         for c in names:
