@@ -147,6 +147,7 @@ def fleet_costs(
                     h = h - ground[p, k]
                 tmp[p, k] = abs(h - mid) if (h >= bmin and h <= bmax) else np.inf
             f_alt = _row_sum(tmp[p], N)
+        band_in = f_alt < np.inf
         f_alt = weights[2] * f_alt
         # the terms are >= 0 and F adds them in the order F1, F2, F3, F4: a partial sum at or
         # above ``below`` means F is too (additions round monotonically)
@@ -157,7 +158,18 @@ def fleet_costs(
         hits = 0
         for s in range(N - 1):
             ax, ay, az, ex, ey, inv_ee, flat_s, inv_dz = seg_setup(paths, p, s)
+            sx0 = min(ax, paths[p, s + 1, 0])
+            sx1 = max(ax, paths[p, s + 1, 0])
+            sy0 = min(ay, paths[p, s + 1, 1])
+            sy1 = max(ay, paths[p, s + 1, 1])
             for j in range(cx.shape[0]):
+                # farther than r_out (and a micrometre, far above round-off) from the axis in
+                # x or y: the segment adds 0 (d is at least that gap)
+                reach = r_out[j] + 1e-6
+                if cx[j] - sx1 > reach or sx0 - cx[j] > reach:
+                    continue
+                if cy[j] - sy1 > reach or sy0 - cy[j] > reach:
+                    continue
                 dd = clipped_dist(
                     ax, ay, az, ex, ey, inv_ee, flat_s, inv_dz, cx[j], cy[j], cz_lo[j], cz_hi[j]
                 )
@@ -192,7 +204,8 @@ def fleet_costs(
         f = f + weights[3] * f_smooth
         if not f < below[p]:
             continue
-        ok = static_path_ok(paths, p, static)
+        # F3 finite: every node inside the band, so the check's band at the waypoints passes
+        ok = static_path_ok(paths, p, static, not (band_mode and band_in))
         if not ok:
             continue
         if has_table:

@@ -21,12 +21,14 @@ from uavplan.world.geometry import seg_cyl_dist
 
 
 @njit(cache=True, inline="always")
-def static_path_ok(paths, p, args):  # pragma: no cover - numba
+def static_path_ok(paths, p, args, waypoint_band=True):  # pragma: no cover - numba
     """Whether path ``p`` of ``paths`` (P, N, 3) passes bounds, cylinders, terrain and the band
     (:func:`static_world_ok`'s test of one path; the fleet's fused objective calls it too).
     ``args``: the tuple ``(lo, hi, bounds_tol, cyl_c, cyl_r, cyl_lo, cyl_hi, has_terrain, H,
     flat, off, shp, nH, nflat, noff, nshp, grid, need, has_band, band_ground, bmin, bmax,
     band_tol, strict)`` (:meth:`~uavplan.problems.validity.MotionValidator.static_kernel_args`).
+    ``waypoint_band=False``: the caller knows every waypoint to be inside the band (without
+    the tolerance), so the band is checked along the segments only.
 
     ``grid``: (x0, y0, dx, dy, nx - 1, ny - 1, tol_u, tol_v) of the terrain; ``H``/``flat``/
     ``off``/``shp`` its heights and max-pyramid, ``nH``/... those of the negated heights (the
@@ -71,7 +73,7 @@ def static_path_ok(paths, p, args):  # pragma: no cover - numba
             c = paths[p, k, d]
             if not (c >= lo[d] - bounds_tol and c <= hi[d] + bounds_tol):
                 ok = False
-    if ok and has_band:  # the band at the waypoints
+    if ok and has_band and waypoint_band:  # the band at the waypoints
         for k in range(N):
             z = paths[p, k, 2]
             h = z

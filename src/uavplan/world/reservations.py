@@ -561,9 +561,14 @@ class ReservationTable:
         self._t1 = np.concatenate([self._t1, t1])
         self._pad = np.concatenate([self._pad, pad])
         self._owner = np.concatenate([self._owner, np.full(len(t0), len(self.owners) - 1)])
-        self._keys = np.concatenate([self._keys, keys])
-        self._idx = np.concatenate([self._idx, idx + base])
-        self._build()
+        # the entries stay sorted by key, equal keys in the order added (what a stable sort of
+        # all of them gives): the new ones, sorted, go after the equal keys already there
+        order = np.argsort(keys, kind="stable")
+        keys, idx = keys[order], idx[order] + base
+        at = np.searchsorted(self._keys, keys, side="right")
+        self._keys = np.insert(self._keys, at, keys)
+        self._idx = np.insert(self._idx, at, idx)
+        self._tkey, self._tstart, self._tcount = _build_table(self._keys)
 
     def trajectories(self) -> list[tuple[FloatArray, FloatArray]]:
         """Every reserved trajectory as ``(points (n, 3), times (n,))``, in the order added
