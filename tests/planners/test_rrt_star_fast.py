@@ -107,7 +107,7 @@ def test_segment_kernel_where_it_applies() -> None:
     lo, hi = sc.bounds.lo, sc.bounds.hi
     seg = lo + rng.random((500, 2, 3)) * (hi - lo)
     kernel, args = sk
-    assert np.array_equal(kernel(seg, *args), v.paths_valid(seg))
+    assert np.array_equal(kernel(seg, args), v.paths_valid(seg))
     # not where another check must run, nor with the cylinder grid
     flat = Scenario("flat", Bounds((0, 0), (10, 10)), (Task("u", (1, 1), (9, 9)),),
                     circles=(Circle((5, 5), 1),))  # fmt: skip

@@ -21,6 +21,7 @@ from uavplan.smoothing import (
     discrete_curvature,
     dubins_csc,
     max_discrete_curvature,
+    sample_pieces,
     schedule,
     smooth_path,
     waypoint_headings,
@@ -442,3 +443,24 @@ def test_schedule_rejects_bad_times():
         schedule(sp, [0.0, 1.0])
     with pytest.raises(ValueError, match="non-decreasing"):
         schedule(sp, [0.0, 5.0, 4.0])
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_sample_pieces_is_each_piece_sampled_bit_for_bit(seed: int) -> None:
+    """The vectorized sampler :func:`smooth_path` uses gives :meth:`DubinsPath.sample`'s
+    samples exactly, for every word, zero-length curves and steps longer than a piece."""
+    rng = np.random.default_rng(seed)
+    pieces = []
+    for _ in range(40):
+        q0 = (*rng.uniform(-500, 500, 2), rng.uniform(-4, 4))
+        q1 = (*rng.uniform(-500, 500, 2), rng.uniform(-4, 4))
+        pieces.append(dubins_csc(q0, q1, rng.uniform(5, 60)))
+    pieces.append(dubins_csc((3.0, 4.0, 0.5), (3.0, 4.0, 0.5), 20.0))  # length 0
+    for step in (0.7, 5.0, 1e4):
+        got = sample_pieces(pieces, step)
+        assert len(got) == len(pieces)
+        for p, g in zip(pieces, got, strict=True):
+            np.testing.assert_array_equal(g, p.sample(step))
+    assert sample_pieces([], 1.0) == []
+    with pytest.raises(ValueError):
+        sample_pieces(pieces, 0.0)

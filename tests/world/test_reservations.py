@@ -48,6 +48,22 @@ def test_pieces_stay_in_one_bucket_and_cover_the_path():
     np.testing.assert_allclose(p0[1:], p1[:-1], atol=1e-9)
 
 
+def test_entries_stay_sorted_as_one_stable_sort_of_all_would_sort_them():
+    """Each ``add`` merges its entries into the sorted ones (not a sort of all of them): by
+    key, and within a key in the order added (a later UAV's pieces have larger indices)."""
+    rng = np.random.default_rng(5)
+    table = ReservationTable(LO, HI, separation=10.0, dt=1.0)
+    for i in range(15):
+        p = _random_path(rng)
+        table.add(f"u{i}", p, _times(p, t0=rng.uniform(0, 5)), tolerance=0.1 * (i % 2))
+    keys, idx = table._keys, table._idx
+    assert np.all(np.diff(keys) >= 0)
+    same = np.diff(keys) == 0
+    assert same.any() and np.all(np.diff(idx)[same] > 0)
+    order = np.lexsort((idx, keys))  # the stable sort of every entry, added in index order
+    np.testing.assert_array_equal(order, np.arange(len(keys)))
+
+
 @pytest.mark.parametrize("dt", [0.25, 1.0, 3.0])
 @pytest.mark.parametrize("cell", [None, 7.0, 300.0])
 def test_conflicts_equal_brute_force(dt, cell):

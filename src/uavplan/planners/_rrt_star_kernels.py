@@ -159,7 +159,7 @@ def _check(edge, a, b, kargs):  # pragma: no cover - numba
     for d in range(3):
         edge[0, 0, d] = a[d]
         edge[0, 1, d] = b[d]
-    return _segment_ok(edge, *kargs)[0]
+    return _segment_ok(edge, kargs)[0]
 
 
 @njit(cache=True)

@@ -64,8 +64,9 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -73,8 +74,10 @@ from numpy.typing import NDArray
 from uavplan import optimizers
 from uavplan.compile_clock import Stopwatch
 from uavplan.optimizers.base import Budget, OptimizerConfig
-from uavplan.optimizers.constraints import RULES, Constrained
+from uavplan.optimizers.constraints import RULES, Constrained, infinite_if_violated
+from uavplan.optimizers.pso import PSO
 from uavplan.planners.base import FleetOutcome, FleetPlanner, separated_problem
+from uavplan.planners.fleet_objective import FleetObjective
 from uavplan.planners.flight import TIMINGS, Flight, declare, fly
 from uavplan.planners.options import FleetPlannerConfig, PlannerError, option
 from uavplan.planners.results import PlanResult, make_result
@@ -299,7 +302,7 @@ class PrioritizedPlanner(FleetPlanner):
                     later = replace(task, start_time=task.start_time + k * cfg.delay_step)
                     if in_loop:  # first the same candidates, taking off later (cheap)
                         res2 = self._in_loop_flight(
-                            scenario, table, self._waited(scenario, later, table, cands[:3])
+                            scenario, table, self._waited(scenario, later, table, cands)
                         )
                         if ok(res2):
                             res = replace(res2, info={**res2.info, "rescue": "wait"})
@@ -435,7 +438,7 @@ class PrioritizedPlanner(FleetPlanner):
         n_iter: int,
         n_free: int,
         rng: np.random.Generator,
-    ) -> tuple[PlanResult, FloatArray, list[PlanResult]]:
+    ) -> tuple[PlanResult, FloatArray, Candidates]:
         """One UAV's low-level run: its best result, the last positions (Eq. 16's
         ``x_last``) and, for in-loop flights, the best distinct feasible polylines of the last
         population (the best result first)."""
@@ -462,12 +465,14 @@ class PrioritizedPlanner(FleetPlanner):
         opt = self.optimizer_cls(objective, self.opt_config, seed=rng, init=init)
         clock = Stopwatch()  # kernel compilation left out
         X_last = init
+        evaluate = self._swarm_evaluator(problem, enc, objective, opt)
         for _ in range(n_iter):
             X = opt.ask()
-            f = objective.evaluate(X)
+            f = evaluate(X)
             opt.tell(X, f)
             X_last = X
         assert opt.best_x is not None
+        elapsed = clock.elapsed
 
         def result(path: FloatArray) -> PlanResult:
             return _candidate(
@@ -478,28 +483,61 @@ class PrioritizedPlanner(FleetPlanner):
                 history=opt.history,
                 evaluations=opt.evaluations,
                 evaluations_history=opt.evaluations_history,
-                wall_time=clock.elapsed,
+                wall_time=elapsed,
             )
 
         best = result(enc.decode(opt.best_x[None])[0])
-        others: list[PlanResult] = []
+        others: list[FloatArray] = []
         if cfg.flight == "in-loop" and cfg.flight_candidates > 1:
             paths = enc.decode(np.asarray(X_last))
-            ev = problem.evaluate(paths)
-            order = np.argsort(np.where(ev.feasible, ev.cost, np.inf), kind="stable")
+            # the feasible rows by cost (what problem.evaluate's feasibility and cost give, bit
+            # for bit: the checks cascade, and the cost only of the rows that pass them)
+            b = problem.validator.batch(paths)
+            ok = problem.validator.passing(b)
+            feasible = np.zeros(len(paths), dtype=bool)
+            feasible[ok] = True
+            key = np.full(len(paths), np.inf)
+            if ok.size:
+                key[ok] = problem.cost(b.paths[ok])
+            order = np.argsort(key, kind="stable")
             seen = {best.waypoints.round(6).tobytes()}
             for i in order[: 4 * cfg.flight_candidates]:
-                key = paths[i].round(6).tobytes()
-                if not ev.feasible[i] or key in seen:
+                k = paths[i].round(6).tobytes()
+                if not feasible[i] or k in seen:
                     continue
-                seen.add(key)
-                others.append(result(paths[i]))
+                seen.add(k)
+                others.append(paths[i])
                 if len(others) >= cfg.flight_candidates - 1:
                     break
-        return best, np.asarray(X_last), [best, *others]
+        return best, np.asarray(X_last), Candidates(best, others, result)
+
+    def _swarm_evaluator(
+        self, problem: PathProblem, enc: Any, objective: Constrained, opt: Any
+    ) -> Callable[[FloatArray], FloatArray]:
+        """What evaluates the swarm of a low-level run: ``objective.evaluate`` (the reference),
+        or, under the "inf" rule with PSO, only the particles that can matter: PSO keeps a
+        particle's position only if its cost is below its personal best, and a check can
+        only make a cost infinite, so a particle whose cost without the checks is not below
+        it cannot change the swarm and is not checked (the same swarm, bit for bit:
+        ``PathProblem.evaluate_cv(below=...)``); in one kernel where
+        :class:`~uavplan.planners.fleet_objective.FleetObjective` applies."""
+        lazy = (self.config.constraints == "inf" and type(opt) is PSO
+                and isinstance(enc, CartesianEncoding))  # fmt: skip
+        if not lazy:
+            return objective.evaluate
+        fused = FleetObjective.of(problem, enc)
+        if fused is not None:
+            return lambda X: fused.evaluate(X, opt.pbest_f)
+
+        def below(X: FloatArray) -> FloatArray:
+            enc.evaluations += len(X)
+            f, cv = problem.evaluate_cv(enc.decode(X), exact=False, below=opt.pbest_f)
+            return infinite_if_violated(f, cv)
+
+        return below
 
     def _waited(
-        self, scenario: Scenario, later: Task, table: ReservationTable, cands: list[PlanResult]
+        self, scenario: Scenario, later: Task, table: ReservationTable, cands: Candidates
     ) -> list[PlanResult]:
         """The candidates' polylines re-timed to take off at ``later.start_time``, evaluated
         there (the same path, waiting on the ground at its start)."""
@@ -516,11 +554,14 @@ class PrioritizedPlanner(FleetPlanner):
                 evaluations_history=c.evaluations_history,
                 wall_time=0.0,
             )
-            for c in cands
+            for c in (cands[i] for i in range(min(3, len(cands))))
         ]
 
     def _in_loop_flight(
-        self, scenario: Scenario, table: ReservationTable, candidates: list[PlanResult]
+        self,
+        scenario: Scenario,
+        table: ReservationTable,
+        candidates: Candidates | list[PlanResult],
     ) -> PlanResult:
         """The first candidate whose flight passes every check, with that flight declared:
         the feasible polylines best first, then the best one if its polyline is not feasible
@@ -533,21 +574,26 @@ class PrioritizedPlanner(FleetPlanner):
         cfg = self.config
         task_of = {t.id: t for t in scenario.tasks}
         first: tuple[PlanResult, Flight] | None = None
-        order = [r for r in candidates if r.feasible]
+        n = len(candidates)
+        if isinstance(candidates, Candidates):  # not made into results before they are flown
+            order = [i for i in range(n) if i > 0 or candidates[0].feasible]
+        else:
+            order = [i for i in range(n) if candidates[i].feasible]
         if not candidates[0].feasible:
-            order.append(candidates[0])
+            order.append(0)
         uav = scenario.uav
         floor = max(uav.min_speed, 0.5 * uav.speed)
         speeds: list[float | None] = [None]
         speeds += [uav.speed - k * (uav.speed - floor) / cfg.speed_steps
                    for k in range(1, cfg.speed_steps + 1)]  # fmt: skip
         for v in speeds:
-            for r in order:
+            for i in order:
+                r = candidates[i]
                 f = fly(scenario, task_of[r.uav_id], r.waypoints, r.times, table,
                         cfg.smooth_timing, cfg.smooth_step, cruise=v)  # fmt: skip
                 if f.ok:
                     how = "slower" if v is not None else (
-                        "first" if r is candidates[0] else "candidate")  # fmt: skip
+                        "first" if i == 0 else "candidate")  # fmt: skip
                     d = declare(r, f)
                     cost = d.cost
                     if not math.isfinite(cost) and "cost_without_separation" in r.info:
@@ -557,6 +603,34 @@ class PrioritizedPlanner(FleetPlanner):
                     first = (r, f)
         assert first is not None
         return declare(*first)
+
+
+class Candidates(Sequence[PlanResult]):
+    """A UAV's in-loop flight candidates: its best result, then the other distinct polylines
+    of its last swarm that pass every check, best first; each made into a result (one
+    evaluation) only when asked for: most UAVs fly their best."""
+
+    def __init__(
+        self, best: PlanResult, paths: list[FloatArray], make: Callable[[FloatArray], PlanResult]
+    ) -> None:
+        self._items: list[PlanResult | None] = [best, *([None] * len(paths))]
+        self._paths = [best.waypoints, *paths]
+        self._make = make
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    @overload
+    def __getitem__(self, i: int) -> PlanResult: ...
+    @overload
+    def __getitem__(self, i: slice) -> list[PlanResult]: ...
+    def __getitem__(self, i: int | slice) -> PlanResult | list[PlanResult]:
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(len(self)))]
+        item = self._items[i]
+        if item is None:
+            item = self._items[i] = self._make(self._paths[i])
+        return item
 
 
 def _candidate(problem: PathProblem, path: FloatArray, in_loop: bool, **kw: Any) -> PlanResult:

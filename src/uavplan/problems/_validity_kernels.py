@@ -13,43 +13,22 @@ the two on random batches.
 from __future__ import annotations
 
 import numpy as np
-from numba import prange
+from numba import njit, prange
 
 from uavplan.kernel_builds import population_kernel
 from uavplan.world._terrain_kernels import _segment_min_clearance, ground_one, snap_one
 from uavplan.world.geometry import seg_cyl_dist
 
 
-@population_kernel()
-def static_world_ok(
-    paths,
-    lo,
-    hi,
-    bounds_tol,
-    cyl_c,
-    cyl_r,
-    cyl_lo,
-    cyl_hi,
-    has_terrain,
-    H,
-    flat,
-    off,
-    shp,
-    nH,
-    nflat,
-    noff,
-    nshp,
-    grid,
-    need,
-    has_band,
-    band_ground,
-    nearest,
-    bmin,
-    bmax,
-    band_tol,
-    strict,
-):  # pragma: no cover - numba
-    """(P,) whether each path (P, N, 3) passes bounds, cylinders, terrain and the band.
+@njit(cache=True, inline="always")
+def static_path_ok(paths, p, args, waypoint_band=True):  # pragma: no cover - numba
+    """Whether path ``p`` of ``paths`` (P, N, 3) passes bounds, cylinders, terrain and the band
+    (:func:`static_world_ok`'s test of one path; the fleet's fused objective calls it too).
+    ``args``: the tuple ``(lo, hi, bounds_tol, cyl_c, cyl_r, cyl_lo, cyl_hi, has_terrain, H,
+    flat, off, shp, nH, nflat, noff, nshp, grid, need, has_band, band_ground, nearest, bmin, bmax,
+    band_tol, strict)`` (:meth:`~uavplan.problems.validity.MotionValidator.static_kernel_args`).
+    ``waypoint_band=False``: the caller knows every waypoint to be inside the band (without
+    the tolerance), so the band is checked along the segments only.
 
     ``grid``: (x0, y0, dx, dy, nx - 1, ny - 1, tol_u, tol_v) of the terrain; ``H``/``flat``/
     ``off``/``shp`` its heights and max-pyramid, ``nH``/... those of the negated heights (the
@@ -58,55 +37,90 @@ def static_world_ok(
     ``nearest`` node, else bilinear) or absolute, within ``band_tol``, and along whole segments
     when ``strict`` (ground band over terrain only).
     """
-    P, N, _ = paths.shape
+    (
+        lo,
+        hi,
+        bounds_tol,
+        cyl_c,
+        cyl_r,
+        cyl_lo,
+        cyl_hi,
+        has_terrain,
+        H,
+        flat,
+        off,
+        shp,
+        nH,
+        nflat,
+        noff,
+        nshp,
+        grid,
+        need,
+        has_band,
+        band_ground,
+        nearest,
+        bmin,
+        bmax,
+        band_tol,
+        strict,
+    ) = args
+    N = paths.shape[1]
     J = cyl_c.shape[0]
     x0, y0, dx, dy = grid[0], grid[1], grid[2], grid[3]
     nx1, ny1, tol_u, tol_v = grid[4], grid[5], grid[6], grid[7]
     ceiling = -(bmax + band_tol)
+    ok = True
+    for k in range(N):  # bounds at the waypoints
+        for d in range(3):
+            c = paths[p, k, d]
+            if not (c >= lo[d] - bounds_tol and c <= hi[d] + bounds_tol):
+                ok = False
+    if ok and has_band and waypoint_band:  # the band at the waypoints
+        for k in range(N):
+            z = paths[p, k, 2]
+            h = z
+            if band_ground:
+                x, y = paths[p, k, 0], paths[p, k, 1]
+                h = z - ground_one(H, has_terrain, nearest, x0, y0, dx, dy, x, y)
+            if h < bmin - band_tol or h > bmax + band_tol:
+                ok = False
+                break
+    if ok:  # cylinders along the segments
+        for s in range(N - 1):
+            for j in range(J):
+                if seg_cyl_dist(paths, p, s, cyl_c, cyl_lo, cyl_hi, j) < cyl_r[j]:
+                    ok = False
+                    break
+            if not ok:
+                break
+    if ok and has_terrain:  # the terrain, and the band's ceiling, along the segments
+        for s in range(N - 1):
+            u0 = snap_one((paths[p, s, 0] - x0) / dx, nx1, tol_u)
+            v0 = snap_one((paths[p, s, 1] - y0) / dy, ny1, tol_v)
+            u1 = snap_one((paths[p, s + 1, 0] - x0) / dx, nx1, tol_u)
+            v1 = snap_one((paths[p, s + 1, 1] - y0) / dy, ny1, tol_v)
+            z0 = paths[p, s, 2]
+            z1 = paths[p, s + 1, 2]
+            m = _segment_min_clearance(H, flat, off, shp, u0, v0, z0, u1, v1, z1, need, True)
+            if not m >= need:
+                ok = False
+                break
+            if strict:
+                m = _segment_min_clearance(
+                    nH, nflat, noff, nshp, u0, v0, -z0, u1, v1, -z1, ceiling, True
+                )
+                if not m >= ceiling:
+                    ok = False
+                    break
+    return ok
+
+
+@population_kernel()
+def static_world_ok(paths, args):  # pragma: no cover - numba
+    """(P,) whether each path (P, N, 3) passes bounds, cylinders, terrain and the band
+    (:func:`static_path_ok` of each, with its ``args``)."""
+    P = paths.shape[0]
     out = np.zeros(P, dtype=np.bool_)
     for p in prange(P):
-        ok = True
-        for k in range(N):  # bounds at the waypoints
-            for d in range(3):
-                c = paths[p, k, d]
-                if not (c >= lo[d] - bounds_tol and c <= hi[d] + bounds_tol):
-                    ok = False
-        if ok and has_band:  # the band at the waypoints
-            for k in range(N):
-                z = paths[p, k, 2]
-                h = z
-                if band_ground:
-                    x, y = paths[p, k, 0], paths[p, k, 1]
-                    h = z - ground_one(H, has_terrain, nearest, x0, y0, dx, dy, x, y)
-                if h < bmin - band_tol or h > bmax + band_tol:
-                    ok = False
-                    break
-        if ok:  # cylinders along the segments
-            for s in range(N - 1):
-                for j in range(J):
-                    if seg_cyl_dist(paths, p, s, cyl_c, cyl_lo, cyl_hi, j) < cyl_r[j]:
-                        ok = False
-                        break
-                if not ok:
-                    break
-        if ok and has_terrain:  # the terrain, and the band's ceiling, along the segments
-            for s in range(N - 1):
-                u0 = snap_one((paths[p, s, 0] - x0) / dx, nx1, tol_u)
-                v0 = snap_one((paths[p, s, 1] - y0) / dy, ny1, tol_v)
-                u1 = snap_one((paths[p, s + 1, 0] - x0) / dx, nx1, tol_u)
-                v1 = snap_one((paths[p, s + 1, 1] - y0) / dy, ny1, tol_v)
-                z0 = paths[p, s, 2]
-                z1 = paths[p, s + 1, 2]
-                m = _segment_min_clearance(H, flat, off, shp, u0, v0, z0, u1, v1, z1, need, True)
-                if not m >= need:
-                    ok = False
-                    break
-                if strict:
-                    m = _segment_min_clearance(
-                        nH, nflat, noff, nshp, u0, v0, -z0, u1, v1, -z1, ceiling, True
-                    )
-                    if not m >= ceiling:
-                        ok = False
-                        break
-        out[p] = ok
+        out[p] = static_path_ok(paths, p, args)
     return out

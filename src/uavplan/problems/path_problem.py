@@ -404,7 +404,9 @@ class PathProblem:
         """Total cost only, (pop,)."""
         return self._total(self.validator.batch(paths))
 
-    def evaluate_cv(self, paths: FloatArray, exact: bool = True) -> tuple[FloatArray, FloatArray]:
+    def evaluate_cv(
+        self, paths: FloatArray, exact: bool = True, below: FloatArray | None = None
+    ) -> tuple[FloatArray, FloatArray]:
         """Cost and constraint violation apart (pymoo's ``F`` and ``G``): ``(f, cv)``, (pop,)
         each, ``cv >= 0`` and 0 for a path that passes every check.
 
@@ -415,8 +417,18 @@ class PathProblem:
         needs), and the work stops early: the world's checks cascade, cheap ones first
         (:meth:`MotionValidator.passing`), the cost only for the paths that pass them, then
         separation only for those left with a finite cost.
+
+        ``below`` (pop,), without ``exact``: only the rows whose cost ``f`` is below it are
+        checked (the cost first, then the checks of those rows); every other row is reported
+        ``(inf, 1)`` unchecked. Its ``f`` would be ``>= below`` whatever the checks say (a
+        check can only make it inf), which is all that an optimizer that keeps a point only
+        when it improves on ``below`` (PSO's personal bests) needs to know; the rows checked
+        get the values the call without ``below`` gives, bit for bit (every quantity is
+        computed per row).
         """
         b = self.validator.batch(paths)
+        if below is not None and not exact:
+            return self._evaluate_below(b, np.asarray(below, dtype=np.float64))
         if exact:
             total = self._total(b, checks_too=False)
             violations = self.validator.violations(b)
@@ -440,6 +452,24 @@ class PathProblem:
                 bad = (sub if fin.all() else sub.subset(np.flatnonzero(fin))).conflicts
                 cv[rows[bad]] = 1.0
                 total[rows[bad]] = np.inf
+        return total, cv
+
+    def _evaluate_below(self, b: Batch, below: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """:meth:`evaluate_cv` with ``below``: the cost of every row, the checks of the rows
+        whose cost is below ``below`` (the same cascade, on those rows only)."""
+        n = b.paths.shape[0]
+        f = self._total(b, checks_too=False)
+        total = np.full(n, np.inf)
+        cv = np.ones(n)
+        rows = np.flatnonzero(f < below)
+        if rows.size:
+            sub = b if rows.size == n else b.subset(rows)
+            ok = self.validator.passing(sub, skip=("separation",))
+            table = self.validator.reservations
+            if ok.size and table is not None and len(table):
+                ok = ok[~(sub if ok.size == rows.size else sub.subset(ok)).conflicts]
+            total[rows[ok]] = f[rows[ok]]
+            cv[rows[ok]] = 0.0
         return total, cv
 
     def feasible(self, paths: FloatArray) -> BoolArray:

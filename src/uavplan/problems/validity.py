@@ -441,7 +441,7 @@ class MotionValidator:
 
     @cached_property
     def segment_kernel(self) -> tuple[Any, tuple[object, ...]] | None:
-        """``(kernel, args)`` such that ``kernel(paths, *args)`` is :meth:`paths_valid` of
+        """``(kernel, args)`` such that ``kernel(paths, args)`` is :meth:`paths_valid` of
         untimed 3-D paths, callable from other Numba code without a Python round trip (the fused
         static kernel's serial build), where that kernel answers every applicable check alone:
         a 3-D world of bounds, fewer than ``GRID_MIN_CYLINDERS`` cylinders, terrain read
@@ -451,6 +451,20 @@ class MotionValidator:
         if args is None or self._cylinders_by_grid or not set(self.checks()) <= STATIC:
             return None
         return VK.static_world_ok.serial, args
+
+    def static_kernel_args(self) -> tuple[object, ...] | None:
+        """The fused static kernel's arguments after the paths
+        (:func:`uavplan.problems._validity_kernels.static_path_ok`'s after ``p``) when that
+        kernel alone is :meth:`passing` but for ``separation`` (a 3-D world whose every other
+        check it makes: no circles, polygons, moving obstacles or indexed cylinders, no
+        kinematics), else None: what a kernel that checks a whole population in one pass
+        needs."""
+        args = self._static_args
+        if args is None or self._cylinders_by_grid:
+            return None
+        if set(self.checks()) - {"separation"} - STATIC:
+            return None
+        return args
 
     def passing(self, b: Batch, skip: Iterable[str] = ()) -> NDArray[np.intp]:
         """The rows of ``b`` that pass every applicable check (but ``skip``), found by
@@ -466,7 +480,7 @@ class MotionValidator:
         idx = np.arange(b.paths.shape[0])
         args = self._static_args
         if args is not None and not skipped & STATIC:
-            idx = idx[VK.static_world_ok(b.paths, *args)]
+            idx = idx[VK.static_world_ok(b.paths, args)]
             fused = STATIC - {"cylinders"} if self._cylinders_by_grid else STATIC
             names = [c for c in names if c not in fused]
         for c in names:

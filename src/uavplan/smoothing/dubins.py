@@ -171,6 +171,58 @@ class DubinsPath:
         return out
 
 
+def sample_pieces(pieces: Sequence[DubinsPath], step: float) -> list[FloatArray]:
+    """``[p.sample(step) for p in pieces]`` bit for bit, in one vectorized pass over every
+    sample of every piece (the same operations on each sample: NumPy's ``linspace`` formula,
+    the three pieces advanced in closed form, the exact ends); what :func:`smooth_path` uses,
+    :meth:`DubinsPath.sample` being its reference."""
+    if not (step > 0.0 and math.isfinite(step)):
+        raise ValueError(f"step must be a positive finite length, got {step!r}")
+    if not pieces:
+        return []
+    totals = [p.length for p in pieces]
+    counts = np.array([max(2, math.ceil(t / step) + 1) for t in totals], dtype=np.intp)
+    ends = np.cumsum(counts)
+    starts = ends - counts
+    piece = np.repeat(np.arange(len(pieces)), counts)
+
+    def per(values: Sequence[float]) -> FloatArray:
+        return np.asarray(values, dtype=np.float64)[piece]
+
+    j = np.arange(int(ends[-1]), dtype=np.float64) - per([float(a) for a in starts])
+    tot = per(totals)
+    div = per([float(c - 1) for c in counts])
+    inc = tot / div
+    # np.linspace(0.0, total, n): j * (total / (n - 1)) + 0.0, or (j / (n - 1)) * total where
+    # that step is 0; the last one exactly total
+    s = np.where(inc == 0, (j / div) * tot, j * inc) + 0.0
+    s[ends - 1] = tot[ends - 1]
+    l1, l2, l3 = (per([p.lengths[i] for p in pieces]) for i in range(3))
+    k1 = per([p.curvatures[0] for p in pieces])
+    k3 = per([p.curvatures[2] for p in pieces])
+    x = per([p.q0[0] for p in pieces])
+    y = per([p.q0[1] for p in pieces])
+    h = per([p.q0[2] for p in pieces])
+    x, y, h = _advance_each(x, y, h, np.clip(s, 0.0, l1), k1)
+    d = np.clip(s - l1, 0.0, l2)
+    x, y = x + d * np.cos(h), y + d * np.sin(h)
+    x, y, h = _advance_each(x, y, h, np.clip(s - l1 - l2, 0.0, l3), k3)
+    out = np.stack([x, y, wrap_angle(h)], axis=1)
+    for i, p in enumerate(pieces):  # the exact end poses (positions bit for bit)
+        out[starts[i]] = (p.q0[0], p.q0[1], float(wrap_angle(p.q0[2])))
+        out[ends[i] - 1] = (p.q1[0], p.q1[1], float(wrap_angle(p.q1[2])))
+    return np.split(out, ends[:-1])
+
+
+def _advance_each(
+    x: FloatArray, y: FloatArray, h: FloatArray, s: FloatArray, curvature: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """:func:`_advance` with a curvature per pose (arcs only: none is 0)."""
+    h1 = h + curvature * s
+    r = 1.0 / curvature
+    return x + r * (np.sin(h1) - np.sin(h)), y + r * (np.cos(h) - np.cos(h1)), h1
+
+
 def _csc_lengths(q0: Pose, q1: Pose, rho: float, kind: str) -> tuple[float, float, float] | None:
     """Arc, straight, arc lengths (m) of the CSC word ``kind`` from ``q0`` to ``q1``.
 
@@ -427,15 +479,16 @@ def smooth_path(
             raise ValueError(f"headings must be ({p.shape[0]},) finite, got {h_in.shape}")
         hd = h_in[keep]
 
-    pieces: list[DubinsPath] = []
+    pieces = [
+        dubins_csc((wp[i, 0], wp[i, 1], hd[i]), (wp[i + 1, 0], wp[i + 1, 1], hd[i + 1]), rho, kinds)
+        for i in range(wp.shape[0] - 1)
+    ]
     chunks_xyz: list[FloatArray] = [wp[:1]]
     chunks_h: list[FloatArray] = [wrap_angle(hd[:1])]
     index = [0]
-    for i in range(wp.shape[0] - 1):
+    sampled = sample_pieces(pieces, step)  # (n_i, 3) x, y, heading each; exact ends
+    for i, (piece, samples) in enumerate(zip(pieces, sampled, strict=True)):
         a, b = wp[i], wp[i + 1]
-        piece = dubins_csc((a[0], a[1], hd[i]), (b[0], b[1], hd[i + 1]), rho, kinds)
-        pieces.append(piece)
-        samples = piece.sample(step)  # (n_i, 3) x, y, heading; exact ends
         total = piece.length
         if total > 0.0:
             frac = np.linspace(0.0, 1.0, samples.shape[0])

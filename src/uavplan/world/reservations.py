@@ -331,97 +331,107 @@ def _piece_min_box(a0, a1, ta0, ta1, b0, b1, tb0, tb1, w):  # pragma: no cover -
     return best
 
 
-@population_kernel()
-def _query(
-    paths,
-    times,
-    dt,
-    origin,
-    cell,
-    dims,
-    sep,
-    tkey,
-    tstart,
-    tcount,
-    e_idx,
-    rp0,
-    rp1,
-    rt0,
-    rt1,
-    rpad,
-    want_min,
-    box,
-    w,
-):  # pragma: no cover - numba
-    """Per path: the smallest distance to a reserved piece found within the searched cells,
-    less the piece's pad (inf if none), stopping at the first one below ``sep`` unless
-    ``want_min``. ``box``: the scaled Chebyshev distance with weights ``w`` instead of the
-    Euclidean one."""
-    P, N, _ = paths.shape
+@njit(cache=True, inline="always")
+def path_query(paths, times, p, args):  # pragma: no cover - numba
+    """:func:`_query` of path ``p`` of ``paths`` (P, N, 3) at ``times`` (P, N): the smallest
+    distance to a reserved piece found within the searched cells, less the piece's pad (inf if
+    none), stopping at the first one below ``sep`` unless ``want_min``. ``args``: the tuple
+    ``(dt, origin, cell, dims, sep, tkey, tstart, tcount, e_idx, rp0, rp1, rt0, rt1, rpad,
+    want_min, box, w)`` (:meth:`ReservationTable.query_args`)."""
+    (
+        dt,
+        origin,
+        cell,
+        dims,
+        sep,
+        tkey,
+        tstart,
+        tcount,
+        e_idx,
+        rp0,
+        rp1,
+        rt0,
+        rt1,
+        rpad,
+        want_min,
+        box,
+        w,
+    ) = args
+    N = paths.shape[1]
     nx, ny, nz = dims[0], dims[1], dims[2]
     mask = np.int64(tkey.shape[0] - 1)
-    out = np.full(P, np.inf)
-    for p in prange(P):
-        best = np.inf
-        a0 = np.empty(3)
-        a1 = np.empty(3)
-        done = False
-        for s in range(N - 1):
-            if done:
-                break
-            ta = times[p, s]
-            tb = times[p, s + 1]
-            if not tb > ta:
-                continue
-            k = int(np.floor(ta / dt))
-            lo = ta
-            while lo < tb and not done:
-                hi = min((k + 1) * dt, tb)
-                if hi > lo:
-                    fa = (lo - ta) / (tb - ta)
-                    fb = (hi - ta) / (tb - ta)
-                    for d in range(3):
-                        a0[d] = paths[p, s, d] + fa * (paths[p, s + 1, d] - paths[p, s, d])
-                        a1[d] = paths[p, s, d] + fb * (paths[p, s + 1, d] - paths[p, s, d])
-                    ix0, ix1 = _cell_range(a0[0], a1[0], 0.0, origin[0], cell, nx)
-                    iy0, iy1 = _cell_range(a0[1], a1[1], 0.0, origin[1], cell, ny)
-                    iz0, iz1 = _cell_range(a0[2], a1[2], 0.0, origin[2], cell, nz)
-                    for ix in range(ix0, ix1 + 1):
-                        for iy in range(iy0, iy1 + 1):
-                            for iz in range(iz0, iz1 + 1):
-                                key = (((k + 1) * nx + ix) * ny + iy) * nz + iz
-                                h = _lookup(key, tkey, mask)
-                                if h < 0:
+    best = np.inf
+    a0 = np.empty(3)
+    a1 = np.empty(3)
+    done = False
+    for s in range(N - 1):
+        if done:
+            break
+        ta = times[p, s]
+        tb = times[p, s + 1]
+        if not tb > ta:
+            continue
+        k = int(np.floor(ta / dt))
+        lo = ta
+        while lo < tb and not done:
+            hi = min((k + 1) * dt, tb)
+            if hi > lo:
+                fa = (lo - ta) / (tb - ta)
+                fb = (hi - ta) / (tb - ta)
+                for d in range(3):
+                    a0[d] = paths[p, s, d] + fa * (paths[p, s + 1, d] - paths[p, s, d])
+                    a1[d] = paths[p, s, d] + fb * (paths[p, s + 1, d] - paths[p, s, d])
+                ix0, ix1 = _cell_range(a0[0], a1[0], 0.0, origin[0], cell, nx)
+                iy0, iy1 = _cell_range(a0[1], a1[1], 0.0, origin[1], cell, ny)
+                iz0, iz1 = _cell_range(a0[2], a1[2], 0.0, origin[2], cell, nz)
+                for ix in range(ix0, ix1 + 1):
+                    for iy in range(iy0, iy1 + 1):
+                        for iz in range(iz0, iz1 + 1):
+                            key = (((k + 1) * nx + ix) * ny + iy) * nz + iz
+                            h = _lookup(key, tkey, mask)
+                            if h < 0:
+                                continue
+                            for e in range(tstart[h], tstart[h] + tcount[h]):
+                                r = e_idx[e]
+                                if box:
+                                    dist = _piece_min_box(
+                                        a0, a1, lo, hi, rp0[r], rp1[r], rt0[r], rt1[r], w
+                                    )
+                                else:
+                                    dist = np.sqrt(
+                                        _piece_min_dist2(
+                                            a0, a1, lo, hi, rp0[r], rp1[r], rt0[r], rt1[r]
+                                        )
+                                    )
+                                if dist == np.inf:
                                     continue
-                                for e in range(tstart[h], tstart[h] + tcount[h]):
-                                    r = e_idx[e]
-                                    if box:
-                                        dist = _piece_min_box(
-                                            a0, a1, lo, hi, rp0[r], rp1[r], rt0[r], rt1[r], w
-                                        )
-                                    else:
-                                        dist = np.sqrt(
-                                            _piece_min_dist2(
-                                                a0, a1, lo, hi, rp0[r], rp1[r], rt0[r], rt1[r]
-                                            )
-                                        )
-                                    if dist == np.inf:
-                                        continue
-                                    dist -= rpad[r]
-                                    if dist < best:
-                                        best = dist
-                                        if best < sep and not want_min:
-                                            done = True
-                                            break
-                                if done:
-                                    break
+                                dist -= rpad[r]
+                                if dist < best:
+                                    best = dist
+                                    if best < sep and not want_min:
+                                        done = True
+                                        break
                             if done:
                                 break
                         if done:
                             break
-                lo = hi
-                k += 1
-        out[p] = best
+                    if done:
+                        break
+            lo = hi
+            k += 1
+    return best
+
+
+@population_kernel()
+def _query(paths, times, args):  # pragma: no cover - numba
+    """Per path (:func:`path_query` with ``args``): the smallest
+    distance to a reserved piece found within the searched cells, less the piece's pad (inf
+    if none), stopping at the first one below the separation unless ``want_min``; with
+    ``box``, the scaled Chebyshev distance instead of the Euclidean one."""
+    P = paths.shape[0]
+    out = np.full(P, np.inf)
+    for p in prange(P):
+        out[p] = path_query(paths, times, p, args)
     return out
 
 
@@ -551,9 +561,14 @@ class ReservationTable:
         self._t1 = np.concatenate([self._t1, t1])
         self._pad = np.concatenate([self._pad, pad])
         self._owner = np.concatenate([self._owner, np.full(len(t0), len(self.owners) - 1)])
-        self._keys = np.concatenate([self._keys, keys])
-        self._idx = np.concatenate([self._idx, idx + base])
-        self._build()
+        # the entries stay sorted by key, equal keys in the order added (what a stable sort of
+        # all of them gives): the new ones, sorted, go after the equal keys already there
+        order = np.argsort(keys, kind="stable")
+        keys, idx = keys[order], idx[order] + base
+        at = np.searchsorted(self._keys, keys, side="right")
+        self._keys = np.insert(self._keys, at, keys)
+        self._idx = np.insert(self._idx, at, idx)
+        self._tkey, self._tstart, self._tcount = _build_table(self._keys)
 
     def trajectories(self) -> list[tuple[FloatArray, FloatArray]]:
         """Every reserved trajectory as ``(points (n, 3), times (n,))``, in the order added
@@ -583,13 +598,17 @@ class ReservationTable:
             raise ValueError(f"need paths (pop, n, 3) and times (pop, n), got {p.shape}, {t.shape}")
         if self.n_pieces == 0:
             return np.full(p.shape[0], np.inf)
-        d = _query(
-            p, t, self.dt, self.origin, self.cell, self.dims, self.separation,
+        return np.asarray(_query(p, t, self.query_args(want_min)))
+
+    def query_args(self, want_min: bool = False) -> tuple[Any, ...]:
+        """The ``args`` of :func:`path_query`: the table as a kernel reads it (what a kernel
+        that checks paths against the table passes on)."""
+        return (
+            self.dt, self.origin, self.cell, self.dims, self.separation,
             self._tkey, self._tstart, self._tcount, self._idx,
-            self._p0, self._p1, self._t0, self._t1, self._pad, want_min,
+            self._p0, self._p1, self._t0, self._t1, self._pad, bool(want_min),
             self.axes is not None, self._w,
         )  # fmt: skip
-        return np.asarray(d)
 
     def conflicts(self, paths: FloatArray, times: FloatArray) -> NDArray[np.bool_]:
         """Whether each timed path (pop, n, 3) at ``times`` (pop, n) comes closer than the
