@@ -102,7 +102,8 @@ def _pair(problem: PathProblem) -> tuple[PathProblem, CartesianEncoding]:
 def test_lazy_swarms_are_the_reference_swarms(
     fleet6: Scenario, flight: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """The whole fleet, bit for bit, with every particle checked (the reference evaluator)
+    """The whole fleet, bit for bit (the costs per iteration to 1e-12), with every particle
+    checked (the reference evaluator)
     and with only those that can improve on their personal best."""
     opts = {"pop_size": 30, "n_iter": 6, "n_restart": 2, "rrt_iterations": 1500,
             "flight": flight}  # fmt: skip
@@ -115,5 +116,6 @@ def test_lazy_swarms_are_the_reference_swarms(
     for a, b in zip(fast.results, ref.results, strict=True):
         np.testing.assert_array_equal(a.waypoints, b.waypoints)
         np.testing.assert_array_equal(a.flown_trajectory()[0], b.flown_trajectory()[0])
-        np.testing.assert_array_equal(a.history, b.history)
+        # the fused objective sums ulps apart from the reference (docs/decisions.md)
+        np.testing.assert_allclose(a.history, b.history, rtol=1e-12)
         assert a.evaluations == b.evaluations
