@@ -474,3 +474,32 @@ def test_plan_file_numbers_beyond_the_format_limits(tmp_path: Path) -> None:
         plan.write_text(json.dumps(doc))
         r = _export(plan, "kml", tmp_path / "m.kml")
         _clean_error(r, "plan.json", words)
+
+
+def test_export_origin_altitude_beyond_range(tmp_path: Path) -> None:
+    text, _ = fuzzing.real_plan("2d", _CACHE)
+    plan = tmp_path / "plan.json"
+    plan.write_text(text.decode())
+    r = runner.invoke(app, ["export", str(plan), "simple2d", "-f", "geojson", "--origin",
+                            "0,0,1e308", "-o", str(tmp_path / "m.geojson")])  # fmt: skip
+    _clean_error(r, "--origin", "altitude")
+
+
+def test_tiny_positive_lengths_are_refused(tmp_path: Path) -> None:
+    area = {"x": 50, "y": 50, "width": 3e-299, "height": 5}
+    data = _simple(uncertain_areas=[area])
+    _clean_error(_check(_scene(tmp_path, data)), "uncertain_areas[0].width", "1 mm")
+
+
+def test_figure_of_a_long_thin_dem(tmp_path: Path) -> None:
+    """A DEM of 2 x 3,000 nodes: the top view's contours keep both rows (matplotlib's
+    contour needs 2 x 2 at least; the step was taken over the long side for both)."""
+    from uavplan.viz.figures import save_plan_figure
+
+    np.save(tmp_path / "dem.npy", np.zeros((2, 3000)))
+    scene = fuzzing.dem_scene({"file": "dem.npy", "cell_size": 1.0})
+    scene["tasks"] = [{"start": [5, 0.5, 50], "goal": [2500, 0.5, 50]}]
+    from uavplan.io.scenario_file import load_scenario
+
+    scenario = load_scenario(_scene(tmp_path, scene))
+    assert save_plan_figure(scenario, [], tmp_path / "f.png").is_file()
