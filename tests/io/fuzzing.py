@@ -236,7 +236,11 @@ def mutate_tree(draw: Draw, root: Any, n: int | None = None) -> Any:
             node.extend([copy.deepcopy(node[-1])] * draw.choice((1, 5, 200)))
         elif op == 7 and isinstance(node, (int, float)) and not isinstance(node, bool):
             scale = draw.choice((-1, 0, 1e-300, 1e3, 1e6, 1e9, 1e300, 1e308, float("inf")))
-            root = _set(root, path, node * scale if node else scale)
+            try:
+                scaled = node * scale if node else scale
+            except OverflowError:  # an int beyond any float (10**400) times a float
+                scaled = scale
+            root = _set(root, path, scaled)
         elif op == 8:  # deep nesting
             deep: Any = node
             for _ in range(draw.choice((2, 30, 120))):

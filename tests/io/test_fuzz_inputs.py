@@ -503,3 +503,20 @@ def test_figure_of_a_long_thin_dem(tmp_path: Path) -> None:
 
     scenario = load_scenario(_scene(tmp_path, scene))
     assert save_plan_figure(scenario, [], tmp_path / "f.png").is_file()
+
+
+@pytest.mark.parametrize(
+    ("arrays", "words"),
+    [
+        ({"heights": np.full((10, 10), 1e307)}, "heights reach 1e+307 m"),
+        ({"heights": np.zeros((10, 10)), "dx": np.array(1e-300)}, "a DEM cell is from"),
+        ({"heights": np.zeros((10, 10)), "x0": np.array(1e300)}, "beyond 1e+07 m"),
+        ({"heights": np.zeros((100, 100)), "dx": np.array(1e5)}, "beyond the 1,000 km"),
+    ],
+)
+def test_dem_values_beyond_range(tmp_path: Path, arrays: dict[str, Any], words: str) -> None:
+    """Finite but absurd numbers inside a DEM file (found by the fuzzer: heights of 1e307
+    made the viewer's JSON fail)."""
+    with (tmp_path / "dem.npz").open("wb") as f:
+        np.savez(f, **arrays)
+    _clean_error(_check(_dem_scene(tmp_path, {"file": "dem.npz"})), "terrain", words)

@@ -32,6 +32,11 @@ class TerrainError(ValueError):
     """A DEM file or array that cannot be used, with the reason."""
 
 
+#: The largest height a terrain may have in magnitude, metres (ten times Everest: a height
+#: beyond it is a unit mistake or a corrupt file, and flight altitudes above it lose meaning).
+MAX_HEIGHT = 100_000.0
+
+
 @dataclass(frozen=True, eq=False)
 class Terrain:
     """A digital elevation model sampled on a regular grid.
@@ -59,6 +64,11 @@ class Terrain:
             raise TerrainError(f"heights must be a 2-D grid of at least 2x2, got shape {h.shape}")
         if not np.all(np.isfinite(h)):
             raise TerrainError(f"heights contain {int((~np.isfinite(h)).sum())} non-finite values")
+        if h.size and (top := float(np.abs(h).max())) > MAX_HEIGHT:
+            raise TerrainError(
+                f"heights reach {top:g} m in magnitude; a terrain's heights are within "
+                f"{MAX_HEIGHT:,.0f} m (Earth's are within 11 km: check the units or the file)"
+            )
         if not (self.dx > 0 and self.dy > 0 and np.isfinite(self.dx) and np.isfinite(self.dy)):
             raise TerrainError(
                 f"cell size must be positive and finite, got dx={self.dx}, dy={self.dy}"

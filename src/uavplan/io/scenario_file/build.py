@@ -16,9 +16,12 @@ import numpy as np
 
 from uavplan.io.scenario_file.errors import NO_VALUE, Problems, ScenarioFileError
 from uavplan.io.scenario_file.schema import (
+    MAX_CELL,
+    MAX_COORD,
     MAX_EXTENT,
     MAX_FILE_BYTES,
     MAX_PATH_POINTS,
+    MIN_CELL,
     AltitudeSpec,
     FleetSpec,
     PlanningSpec,
@@ -215,6 +218,22 @@ def _load_terrain(ts: TerrainSpec, problems: Problems, base_dir: Path) -> Terrai
         return None
 
 
+def _terrain_range(terrain: Terrain) -> str | None:
+    """Why a loaded terrain's grid is beyond the format's ranges (an .npz's own ``dx`` or
+    ``x0``, a GeoTIFF's pixel scale): its cells, its corner, its extent."""
+    xmin, xmax, ymin, ymax = terrain.extent
+    name = terrain.name
+    if not (MIN_CELL <= terrain.dx <= MAX_CELL and MIN_CELL <= terrain.dy <= MAX_CELL):
+        return (f"{name}: cells of {terrain.dx:g} x {terrain.dy:g} m; a DEM cell is from "
+                f"{MIN_CELL:g} m to {MAX_CELL:g} m")  # fmt: skip
+    if max(abs(xmin), abs(xmax), abs(ymin), abs(ymax)) > MAX_COORD:
+        return f"{name}: its grid reaches beyond {MAX_COORD:g} m from the origin (x0, y0)"
+    if max(xmax - xmin, ymax - ymin) > MAX_EXTENT:
+        return (f"{name}: {xmax - xmin:,.0f} x {ymax - ymin:,.0f} m, beyond the "
+                f"{MAX_EXTENT / 1000:,.0f} km this tool plans over")  # fmt: skip
+    return None
+
+
 def _default_z(terrain: Terrain, altitude: AltitudeSpec | None) -> tuple[float, float]:
     hmin = float(np.min(terrain.heights))
     hmax = float(np.max(terrain.heights))
@@ -246,6 +265,9 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
         if terrain is not None and spec.terrain.file is not None:
             terrain, dem_origin = _placed_dem(spec, terrain, problems)
             terrain_failed = terrain is None
+        if terrain is not None and (why := _terrain_range(terrain)) is not None:
+            problems.add(("terrain",), why, NO_VALUE)
+            terrain, terrain_failed = None, True
 
     # ---- dimension
     dim: int | None
