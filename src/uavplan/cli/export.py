@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 
 
 def _origin(text: str) -> Any:
+    from uavplan.io.scenario_file.schema import MAX_COORD
     from uavplan.world.geo import GeoError, GeoOrigin
 
     parts = text.split(",")
@@ -29,6 +30,8 @@ def _origin(text: str) -> Any:
         values = [float(p) for p in parts]
         if len(values) not in (2, 3):
             raise ValueError
+        if len(values) == 3 and not abs(values[2]) <= MAX_COORD:
+            raise GeoError(f"altitude {values[2]:g} m is not within {MAX_COORD:g} m")
         return GeoOrigin(values[0], values[1], values[2] if len(values) == 3 else 0.0,
                          note="--origin")  # fmt: skip
     except ValueError as exc:

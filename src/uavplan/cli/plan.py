@@ -36,10 +36,6 @@ def write_plan(plan: FleetPlan, out: str | Path, figure: bool = True) -> list[Pa
     return written
 
 
-#: the largest population of path points a CLI run allocates (population x points per path)
-MAX_POINTS = 20_000_000
-
-
 def _run_plan(
     scenario_ref: str,
     algorithm: str | None,
@@ -56,7 +52,7 @@ def _run_plan(
 ) -> Any:
     from uavplan.compile_clock import Stopwatch  # here: it imports Numba
     from uavplan.io.scenario_file import ScenarioFileError
-    from uavplan.io.scenario_file.schema import MAX_WAYPOINTS
+    from uavplan.io.scenario_file.schema import MAX_PATH_POINTS, MAX_WAYPOINTS
     from uavplan.optimizers.base import Budget, OptimizerError
     from uavplan.planners import PlannerError, get_planner
     from uavplan.planners.fleet_plan import plan_all
@@ -68,13 +64,6 @@ def _run_plan(
             raise fail(f"{flag} {value}: must be at least 1")
     if waypoints is not None and waypoints > MAX_WAYPOINTS:
         raise fail(f"--waypoints {waypoints}: at most {MAX_WAYPOINTS} free waypoints per path")
-    n_points = (waypoints or 10) + 2  # the free waypoints (default 10), start and goal
-    if pop_size is not None and pop_size * n_points > MAX_POINTS:
-        raise fail(
-            f"--pop-size {pop_size}: a population of {pop_size} paths of {n_points} "
-            f"points exceeds the {MAX_POINTS:,} path points a run may hold; use a smaller "
-            "population"
-        )
     if max_time is not None and not max_time > 0:
         raise fail(f"--time {max_time}: must be a positive number of seconds")
     compile_notice()
@@ -82,6 +71,26 @@ def _run_plan(
         scenario = resolve(scenario_ref)
     except ScenarioFileError as exc:
         raise fail(getattr(exc, "problems", None) or [str(exc)]) from None
+    # the scenario's planning block gives what the command line does not (checked at load)
+    block = (scenario.metadata.get("spec") or {}).get("planning") or {}
+    from_file = algorithm is None and "planner" in block
+    algorithm = algorithm or block.get("planner")
+    iterations = iterations or block.get("iterations")
+    pop_size = pop_size or block.get("pop_size")
+    max_time = max_time or block.get("time")
+    if cost is not None:
+        from uavplan.problems import preset_problem
+
+        why = preset_problem(cost, scenario.dim)
+        if why is not None:
+            raise fail(f"--cost {cost}: {why}")
+    n_points = (waypoints or scenario.n_waypoints) + 2  # the free waypoints, start and goal
+    if pop_size is not None and pop_size * n_points > MAX_PATH_POINTS:
+        raise fail(
+            f"--pop-size {pop_size}: a population of {pop_size} paths of {n_points} "
+            f"points exceeds the {MAX_PATH_POINTS:,} path points a run may hold; use a smaller "
+            "population"
+        )
     fallbacks: list[tuple[str, dict[str, Any]]] = []
     seeds = [seed]
     also: tuple[str, ...] = ()
@@ -96,7 +105,7 @@ def _run_plan(
         algorithm, kind, why = default_planner(scenario)
         d = DEFAULTS[kind]
         seeds = run_seeds(seed, d.runs)
-        if not (params or pop_size or waypoints):  # options meant for the default
+        if not (params or pop_size or waypoints or block.get("options")):  # for the default
             fallbacks = fallback_planners(scenario)
             also = d.also
         best_of = (f"; the best of {d.runs} runs" if d.runs > 1 else "") + (
@@ -104,7 +113,10 @@ def _run_plan(
         )
         out.print(f"planner: {algorithm} (the default for a {kind}: {why}{best_of}; "
                   "docs/results.md; -a NAME for another)")  # fmt: skip
-    options: dict[str, Any] = parse_params(params)
+    elif from_file:
+        out.print(f"planner: {algorithm} (the scenario's planning block; -a NAME for another)")
+    given = parse_params(params)
+    options: dict[str, Any] = {**(block.get("options") or {}), **given}
     if pop_size is not None:
         options["pop_size"] = pop_size
     if waypoints is not None:
@@ -114,7 +126,12 @@ def _run_plan(
     try:
         planner = get_planner(algorithm, **options)
     except (PlannerError, OptimizerError, TypeError, ValueError) as exc:
-        raise fail(f"--algorithm {algorithm}: {exc}") from None
+        raise fail(_option_problem(algorithm, options, given, params, exc)) from None
+    from uavplan.planners.memory import estimate_run, memory_problem
+
+    why = memory_problem(estimate_run(scenario, planner, pop_size, waypoints))
+    if why is not None:
+        raise fail(f"{scenario_ref}: {why}")
     budget = (
         Budget(max_iterations=iterations, max_time=max_time) if iterations or max_time else None
     )
@@ -183,6 +200,26 @@ def _run_plan(
     except OSError as exc:
         raise fail(f"--out {out_dir}: cannot write: {exc}") from None
     return plan, (planning, clock.compile, n_runs)
+
+
+def _option_problem(
+    algorithm: str,
+    options: dict[str, Any],
+    given: dict[str, Any],
+    params: list[str],
+    exc: Exception,
+) -> str:
+    """The line naming what the planner refused: the ``--param`` it came from if one did."""
+    from uavplan.planners import get_planner
+
+    text = " ".join(str(exc).split())
+    for k in given:
+        try:
+            get_planner(algorithm, **{k: given[k]})
+        except Exception:
+            raw = next((p for p in params if p.split("=", 1)[0].strip() == k), k)
+            return f"--param {raw}: {text}"
+    return f"--algorithm {algorithm}: {text}"
 
 
 def verified_by_the_verifier(plan: Any, out_dir: Path) -> bool:

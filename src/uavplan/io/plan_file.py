@@ -50,8 +50,12 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from uavplan import __version__
 from uavplan.io.atomic import write_json_atomic
-from uavplan.io.scenario_file.schema import OriginSpec
+from uavplan.io.scenario_file.schema import MAX_COORD, MAX_TIME, OriginSpec
 from uavplan.world.geo import GeoError, GeoOrigin
+from uavplan.world.terrain import not_a_regular_file
+
+#: The largest plan file read (JSON takes about 15 times its text in memory once decoded).
+MAX_PLAN_BYTES = 256 * 2**20
 
 if TYPE_CHECKING:
     from uavplan.planners.fleet_plan import FleetPlan
@@ -289,21 +293,33 @@ def _short(value: Any) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def _number(value: Any, where: str, finite: bool = True) -> float:
+def _number(
+    value: Any, where: str, finite: bool = True, limit: tuple[float, str] | None = None
+) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float | str):
         raise PlanFormatError([f"{where}: {_short(value)} is not a number"])
     words = ("inf", "-inf", "+inf", "nan", "infinity", "-infinity")
     if isinstance(value, str) and value.strip().lower() not in words:
         raise PlanFormatError([f"{where}: {value!r} is not a number"])
-    x = float(value)
+    try:
+        x = float(value)
+    except OverflowError:  # an integer beyond any float
+        raise PlanFormatError([f"{where}: {_short(value)} is beyond any float64"]) from None
     if finite and not math.isfinite(x):
         raise PlanFormatError([f"{where}: {value!r} is not a finite number"])
     if math.isnan(x):
         raise PlanFormatError([f"{where}: {value!r} is not a number"])
+    if limit is not None and abs(x) > limit[0]:
+        raise PlanFormatError([f"{where}: {value!r} is beyond {limit[0]:g} ({limit[1]})"])
     return x
 
 
-def _plain_array(value: list[Any], dim: int | None) -> FloatArray | None:
+#: The ranges of a plan's coordinates and times (the scenario format's limits) and why.
+_COORDS = (MAX_COORD, "coordinates are within 10,000 km, metres")
+_TIMES = (MAX_TIME, "times are within 1e7 s, about 115 days")
+
+
+def _plain_array(value: list[Any], dim: int | None, limit: tuple[float, str]) -> FloatArray | None:
     """``value`` as an array when it is plainly valid: finite JSON numbers only (no bool, no
     string), in rows of ``dim``; else None, and :func:`_array` finds the error element by
     element (the fast path: a flight has tens of thousands of points)."""
@@ -315,26 +331,29 @@ def _plain_array(value: list[Any], dim: int | None) -> FloatArray | None:
     except (TypeError, ValueError, OverflowError):
         return None
     shape_ok = a.ndim == 1 if dim is None else (a.ndim == 2 and a.shape[1] == dim)
-    if not shape_ok or not np.isfinite(a).all():
+    if not shape_ok or not np.isfinite(a).all() or (a.size and np.abs(a).max() > limit[0]):
         return None
     return a
 
 
 def _array(value: Any, where: str, dim: int | None) -> FloatArray:
+    """Points (rows of ``dim`` coordinates, within :data:`MAX_COORD`) or, ``dim`` None, times
+    (within :data:`MAX_TIME`)."""
     if not isinstance(value, list):
         raise PlanFormatError([f"{where}: expected a list, got {_short(value)}"])
-    fast = _plain_array(value, dim)
+    limit = _TIMES if dim is None else _COORDS
+    fast = _plain_array(value, dim, limit)
     if fast is not None:
         return fast.reshape(len(value), dim) if dim is not None else fast
     if dim is None:
-        return np.array([_number(v, f"{where}[{k}]") for k, v in enumerate(value)])
+        return np.array([_number(v, f"{where}[{k}]", limit=limit) for k, v in enumerate(value)])
     rows = []
     for k, row in enumerate(value):
         if not isinstance(row, list) or len(row) != dim:
             raise PlanFormatError(
                 [f"{where}[{k}]: expected a point of {dim} coordinates, got {_short(row)}"]
             )
-        rows.append([_number(v, f"{where}[{k}][{c}]") for c, v in enumerate(row)])
+        rows.append([_number(v, f"{where}[{k}][{c}]", limit=limit) for c, v in enumerate(row)])
     return np.array(rows, dtype=np.float64).reshape(len(rows), dim)
 
 
@@ -516,6 +535,12 @@ def load_plan_json(path: str | Path) -> Any:
         raise PlanFormatError([f"{p}: no such plan file"])
     if p.is_dir():
         raise PlanFormatError([f"{p}: a folder without a plan.json"])
+    why = not_a_regular_file(p)
+    if why is not None:
+        raise PlanFormatError([f"{p}: {why}, not a plan file"])
+    size = p.stat().st_size
+    if size > MAX_PLAN_BYTES:
+        raise PlanFormatError([f"{p}: {size:,} bytes; a plan file is at most {MAX_PLAN_BYTES:,}"])
     try:
         text = p.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
@@ -526,6 +551,8 @@ def load_plan_json(path: str | Path) -> Any:
         raise PlanFormatError(
             [f"{p}: invalid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}"]
         ) from None
+    except RecursionError:
+        raise PlanFormatError([f"{p}: invalid JSON: nested too deeply"]) from None
 
 
 def plan_path(path: str | Path) -> Path:

@@ -259,10 +259,24 @@ FUSED = (
         3,
     ),
 )
+#: The dimensions a preset's terms compute in, where not both: SPSO's altitude term reads z.
+PRESET_DIMS: dict[str, tuple[int, ...]] = {"spso": (3,)}
 
 
 def cost_presets() -> list[str]:
     return sorted(PRESETS)
+
+
+def preset_problem(name: str, dim: int) -> str | None:
+    """Why the cost preset ``name`` cannot cost a ``dim``-D scenario's paths, or None."""
+    if name not in PRESETS:
+        return f"unknown cost preset {name!r}; choose from {', '.join(cost_presets())}"
+    dims = PRESET_DIMS.get(name, (2, 3))
+    if dim not in dims:
+        return (
+            f"the {name} cost is for {' or '.join(f'{d}-D' for d in dims)} scenarios, not {dim}-D"
+        )
+    return None
 
 
 def _t_separation(ctx: Batch) -> FloatArray:
@@ -314,8 +328,9 @@ class PathProblem:
         self.task = task if isinstance(task, Task) else scenario.task(task)
         preset = cost if cost is not None else scenario.cost
         if isinstance(preset, str):
-            if preset not in PRESETS:
-                raise ValueError(f"unknown cost preset {preset!r}; choose from {cost_presets()}")
+            why = preset_problem(preset, scenario.dim)
+            if why is not None:
+                raise ValueError(why)
             self.cost_name = preset
             terms = PRESETS[preset]
         else:

@@ -133,8 +133,10 @@ def draw_top(
             alpha=0.8,
             aspect="equal",
         )
-        step = max(1, max(H.shape) // _MAX_CONTOUR)  # contours of a finer grid look the same
-        ax.contour(xs[::step], ys[::step], H[::step, ::step], levels=12, colors="k",
+        # contours of a finer grid look the same; each axis keeps its own step (a long, thin
+        # grid keeps its short side whole, which contour needs at least 2 nodes of)
+        sy, sx = (max(1, n // _MAX_CONTOUR) for n in H.shape)
+        ax.contour(xs[::sx], ys[::sy], H[::sy, ::sx], levels=12, colors="k",
                    linewidths=0.4, alpha=0.5)  # fmt: skip
         if colorbar:
             ax.figure.colorbar(im, ax=ax, fraction=0.04, pad=0.02, label="terrain height (m)")

@@ -155,6 +155,11 @@ class UncertainArea:
             raise ValueError(
                 f"uncertain area width and height must be positive, got {self.width}, {self.height}"
             )
+        if not (self.x + self.width > self.x and self.y + self.height > self.y):
+            raise ValueError(
+                f"uncertain area {self.width:g} x {self.height:g} m at ({self.x:g}, {self.y:g}) "
+                "is too small to have an area in float64"
+            )
 
     def as_polygon(self) -> Polygon:
         x, y, w, h = self.x, self.y, self.width, self.height

@@ -26,7 +26,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.world.geo import GeoOrigin
-from uavplan.world.terrain import Terrain, TerrainError
+from uavplan.world.terrain import MAX_DEM_CELLS, Terrain, TerrainError, not_a_regular_file
+
+#: The most samples the SRTM tiles of one scenario may hold (four 1-arc-second tiles, 3601 x
+#: 3601 each, or 41 3-arc-second ones): the mosaic is held as float64, 415 MB at most.
+MAX_SRTM_SAMPLES = 4 * 3601 * 3601
 
 FloatArray = NDArray[np.float64]
 VOID = -32768
@@ -56,6 +60,9 @@ def read_hgt(path: str | Path) -> HgtTile:
     lon = int(m.group(4)) * (1 if m.group(3).upper() == "E" else -1)
     if not (-90 <= lat < 90 and -180 <= lon < 180):
         raise TerrainError(f"{p}: tile corner {lat}, {lon} is not on Earth")
+    why = not_a_regular_file(p)
+    if why is not None:
+        raise TerrainError(f"{p}: {why}")
     size = p.stat().st_size
     n = round(math.sqrt(size / 2))
     if n not in SIZES or 2 * n * n != size:
@@ -139,6 +146,12 @@ def resample_latlon(
     if nx < 2 or ny < 2:
         size = f"{xmax - xmin:g} x {ymax - ymin:g} m"
         raise TerrainError(f"the map ({size}) is under 2 cells of {cell:g} m")
+    if nx * ny > MAX_DEM_CELLS:
+        raise TerrainError(
+            f"the map ({xmax - xmin:g} x {ymax - ymin:g} m) in cells of {cell:g} m has "
+            f"{nx:,} x {ny:,} nodes; a DEM has at most {MAX_DEM_CELLS:,} (give a larger "
+            "cell_size, or smaller bounds)"
+        )
     X, Y = np.meshgrid(xmin + cell * np.arange(nx), ymin + cell * np.arange(ny))
     G = origin.to_geodetic(np.column_stack([X.ravel(), Y.ravel()]))
     la, lo = G[:, 0], G[:, 1]
@@ -182,6 +195,12 @@ def terrain_from_srtm(
         TerrainError: a tile is unreadable, or the map reaches beyond the tiles given (naming
             the tile that is missing).
     """
+    samples = sum(Path(p).stat().st_size // 2 for p in paths if not_a_regular_file(p) is None)
+    if samples > MAX_SRTM_SAMPLES:
+        raise TerrainError(
+            f"{len(paths)} SRTM tiles hold {samples:,} samples; at most {MAX_SRTM_SAMPLES:,} "
+            "are read at once (four 1-arc-second tiles): give only the tiles under the map"
+        )
     tiles = [read_hgt(p) for p in paths]
     lats, lons, H = mosaic(tiles)
     d = float(cell_size) if cell_size else 30.0 * SIZES[tiles[0].n]  # 90 m or 30 m

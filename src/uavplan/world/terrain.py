@@ -6,6 +6,9 @@ Frame: x east, y north, z up, metres. Grid node ``heights[j, i]`` sits at
 
 from __future__ import annotations
 
+import math
+import os
+import stat
 from dataclasses import dataclass, field
 from functools import cached_property
 from importlib import resources
@@ -27,6 +30,11 @@ BUILTIN_TERRAINS = ("spso", "jacksboro", "topobathy", "virtual")
 
 class TerrainError(ValueError):
     """A DEM file or array that cannot be used, with the reason."""
+
+
+#: The largest height a terrain may have in magnitude, metres (ten times Everest: a height
+#: beyond it is a unit mistake or a corrupt file, and flight altitudes above it lose meaning).
+MAX_HEIGHT = 100_000.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,6 +64,11 @@ class Terrain:
             raise TerrainError(f"heights must be a 2-D grid of at least 2x2, got shape {h.shape}")
         if not np.all(np.isfinite(h)):
             raise TerrainError(f"heights contain {int((~np.isfinite(h)).sum())} non-finite values")
+        if h.size and (top := float(np.abs(h).max())) > MAX_HEIGHT:
+            raise TerrainError(
+                f"heights reach {top:g} m in magnitude; a terrain's heights are within "
+                f"{MAX_HEIGHT:,.0f} m (Earth's are within 11 km: check the units or the file)"
+            )
         if not (self.dx > 0 and self.dy > 0 and np.isfinite(self.dx) and np.isfinite(self.dy)):
             raise TerrainError(
                 f"cell size must be positive and finite, got dx={self.dx}, dy={self.dy}"
@@ -300,13 +313,16 @@ class Terrain:
         ``heights``/``elevation``/``topo``), with optional scalars ``dx``, ``dy``, ``x0``, ``y0``.
         """
         p = Path(path)
-        if not p.exists():
-            raise TerrainError(f"DEM file {str(p)!r} does not exist")
+        why = not_a_regular_file(p)
+        if why is not None:
+            raise TerrainError(f"DEM file {str(p)!r}: {why}")
         suffix = p.suffix.lower()
         try:
             if suffix in (".tif", ".tiff"):
                 return _load_geotiff(p, cell_size, origin)
             if suffix == ".npy":
+                with p.open("rb") as f:
+                    _check_grid(_npy_shape(f), _npy_dtype(f), p)
                 arr = np.load(p, allow_pickle=False)
                 d = cell_size or 1.0
                 return cls(arr, origin[0], origin[1], d, d, p.name)
@@ -318,6 +334,8 @@ class Terrain:
                         raise TerrainError(
                             f"{p}: no array named {' or '.join(names)} (has {z.files})"
                         )
+                    with z.zip.open(f"{found}.npy") as f:
+                        _check_grid(_npy_shape(f), _npy_dtype(f), p)
                     arr = z[found]
                     dx = float(z["dx"]) if "dx" in z.files else (cell_size or 1.0)
                     dy = float(z["dy"]) if "dy" in z.files else dx
@@ -329,6 +347,26 @@ class Terrain:
         except Exception as exc:  # a corrupt or foreign file: say which and why
             raise TerrainError(f"cannot read DEM file {str(p)!r}: {exc}") from exc
         raise TerrainError(f"DEM file {str(p)!r}: unsupported type {suffix!r} (.tif, .npy, .npz)")
+
+
+def not_a_regular_file(path: str | Path) -> str | None:
+    """Why ``path`` (links followed) is not a regular file a user's input may name, or None:
+    missing, a directory, a FIFO (reading it would wait for a writer), a device (``/dev/zero``
+    never ends), a socket, a link loop."""
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        return "not found"
+    except OSError as exc:
+        return f"cannot read: {exc.strerror or exc}"
+    if stat.S_ISREG(st.st_mode):
+        return None
+    if stat.S_ISDIR(st.st_mode):
+        return "is a directory"
+    kind = ("a FIFO (named pipe)" if stat.S_ISFIFO(st.st_mode)
+            else "a device" if stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode)
+            else "a socket" if stat.S_ISSOCK(st.st_mode) else "not a regular file")  # fmt: skip
+    return f"is {kind}, not a regular file"
 
 
 def _snap_edges(u: FloatArray, n: int) -> FloatArray:
@@ -344,6 +382,52 @@ def _round_half_up(u: FloatArray) -> NDArray[np.intp]:
     return np.asarray((f + (u - f >= 0.5)).astype(np.intp))
 
 
+#: The most grid nodes a DEM may have, in its file and once resampled onto the local grid
+#: (SRTM tiles, a geographic GeoTIFF): 25 million (5,000 x 5,000) float64 heights are 200 MB,
+#: and the clearance pyramid, the cost maps and HR-MAGA's pyramid add about three times that.
+#: ``docs/scenario-format.md``, "Limits".
+MAX_DEM_CELLS = 25_000_000
+
+
+def _check_grid(shape: tuple[int, ...], dtype: np.dtype[Any] | None, path: Path) -> None:
+    """A DEM's declared grid, refused before its data is read: too many nodes, or samples that
+    are not real numbers."""
+    cells = math.prod(int(n) for n in shape[:2]) if shape else 0
+    if cells > MAX_DEM_CELLS:
+        raise TerrainError(
+            f"DEM file {str(path)!r}: {' x '.join(str(int(n)) for n in shape)} samples; a DEM "
+            f"has at most {MAX_DEM_CELLS:,} nodes (resample it coarser, or cut it to the area)"
+        )
+    if dtype is not None and dtype.kind not in "biuf":
+        raise TerrainError(
+            f"DEM file {str(path)!r}: samples of type {dtype} are not real numbers (heights)"
+        )
+
+
+def _npy_header(f: Any) -> tuple[tuple[int, ...], bool, np.dtype[Any]]:
+    version = np.lib.format.read_magic(f)
+    if version == (1, 0):
+        return np.lib.format.read_array_header_1_0(f)
+    return np.lib.format.read_array_header_2_0(f)
+
+
+def _npy_shape(f: Any) -> tuple[int, ...]:
+    """The shape an .npy stream declares (its header only; the stream is rewound)."""
+    pos = f.tell()
+    try:
+        return tuple(_npy_header(f)[0])
+    finally:
+        f.seek(pos)
+
+
+def _npy_dtype(f: Any) -> np.dtype[Any]:
+    pos = f.tell()
+    try:
+        return _npy_header(f)[2]
+    finally:
+        f.seek(pos)
+
+
 def _read_tiff(path: Path) -> tuple[np.ndarray, dict[int, Any]]:
     import logging
 
@@ -352,6 +436,7 @@ def _read_tiff(path: Path) -> tuple[np.ndarray, dict[int, Any]]:
     logging.getLogger("tifffile").setLevel(logging.ERROR)  # GDAL_NODATA float32 tag: harmless
     with tifffile.TiffFile(path) as tif:
         page = tif.pages[0]
+        _check_grid(tuple(page.shape), np.dtype(page.dtype) if page.dtype else None, path)
         arr = page.asarray()
         tags = {t.code: t.value for t in page.tags.values()}  # type: ignore[union-attr]
     if arr.ndim == 3:

@@ -257,6 +257,24 @@ class Exporter:
 _FORMATS: dict[str, Exporter] = {}
 
 
+def uav_file(out: Path, uav_id: str, suffix: str) -> Path:
+    """The file of UAV ``uav_id`` in the folder ``out``: refused (ExportError) unless the id is
+    a plain file name, so that no id read from a plan (``../../x``, ``/etc/y``) writes
+    outside ``out``."""
+    name = f"{uav_id}{suffix}"
+    plain = (
+        uav_id not in ("", ".", "..")
+        and not any(c in uav_id for c in "/\\\0")
+        and not any(ord(c) < 32 for c in uav_id)
+    )
+    if not plain or Path(name).name != name:
+        raise ExportError(
+            f"UAV id {uav_id!r} cannot name a file in {out} (a path separator, a control "
+            "character, or '.'/'..'): rename the UAV in the scenario"
+        )
+    return out / name
+
+
 def register_exporter(
     name: str, suffix: str, description: str, per_uav: bool = False
 ) -> Callable[[ExportFn], ExportFn]:

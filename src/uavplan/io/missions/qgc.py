@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from uavplan.io.atomic import write_texts_atomic
-from uavplan.io.missions import Mission, register_exporter
+from uavplan.io.missions import Mission, register_exporter, uav_file
 
 #: MAV_AUTOPILOT and MAV_TYPE numbers
 FIRMWARE = {"px4": 12, "ardupilot": 3, "generic": 0}
@@ -93,7 +93,10 @@ def qgc_document(mission: Mission, k: int) -> dict[str, Any]:
 )
 def write_qgc(mission: Mission, out: Path) -> list[Path]:
     files = [
-        (out / f"{tr.id}.plan", json.dumps(qgc_document(mission, k), allow_nan=False) + "\n")
+        (
+            uav_file(out, tr.id, ".plan"),
+            json.dumps(qgc_document(mission, k), allow_nan=False) + "\n",
+        )
         for k, tr in enumerate(mission.trajectories())
     ]
     return write_texts_atomic(files)

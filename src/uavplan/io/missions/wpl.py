@@ -11,7 +11,7 @@ import math
 from pathlib import Path
 
 from uavplan.io.atomic import write_texts_atomic
-from uavplan.io.missions import Mission, register_exporter
+from uavplan.io.missions import Mission, register_exporter, uav_file
 
 
 def _num(v: float, decimals: int) -> str:
@@ -33,6 +33,6 @@ def wpl_text(mission: Mission, k: int) -> str:
 
 @register_exporter("wpl", ".waypoints", "MAVLink QGC WPL 110 text mission", per_uav=True)
 def write_wpl(mission: Mission, out: Path) -> list[Path]:
-    files = [(out / f"{tr.id}.waypoints", wpl_text(mission, k))
+    files = [(uav_file(out, tr.id, ".waypoints"), wpl_text(mission, k))
              for k, tr in enumerate(mission.trajectories())]  # fmt: skip
     return write_texts_atomic(files)

@@ -10,14 +10,21 @@ import math
 import os
 from functools import cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from uavplan.io.scenario_file.errors import NO_VALUE, Problems, ScenarioFileError
 from uavplan.io.scenario_file.schema import (
+    MAX_CELL,
+    MAX_COORD,
     MAX_EXTENT,
+    MAX_FILE_BYTES,
+    MAX_PATH_POINTS,
+    MIN_CELL,
     AltitudeSpec,
     FleetSpec,
+    PlanningSpec,
     ScenarioSpec,
     TerrainSpec,
     dump_spec,
@@ -39,7 +46,7 @@ from uavplan.world import (
 from uavplan.world.fleet_tasks import fleet_layout, layer_record
 from uavplan.world.geo import GeoOrigin, origin_for_projected_grid
 from uavplan.world.srtm import geographic_grid, inner_box, resample_latlon, terrain_from_srtm
-from uavplan.world.terrain import TerrainError
+from uavplan.world.terrain import TerrainError, not_a_regular_file
 
 #: Headroom above the highest terrain for the default z bound when there is no altitude band, m.
 DEFAULT_Z_HEADROOM = 500.0
@@ -69,8 +76,9 @@ def _load_srtm(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Terrai
     paths = []
     for k, name in enumerate(ts.srtm):
         path = _resolve(name, base_dir)
-        if not path.is_file():
-            problems.add(("terrain", "srtm", k), f"SRTM tile not found (or not a file): {path}")
+        why = not_a_regular_file(path)
+        if why is not None:
+            problems.add(("terrain", "srtm", k), f"SRTM tile {why}: {path}")
             return None
         paths.append(path)
     lo, hi = spec.bounds.lower, spec.bounds.upper
@@ -99,10 +107,19 @@ def _no_fly_polygons(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> 
     out: list[Polygon] = []
     for k, name in enumerate(spec.no_fly):
         path = _resolve(name, base_dir)
+        why = not_a_regular_file(path)
+        if why is not None:
+            problems.add(("no_fly", k), f"GeoJSON file {why}: {path}")
+            continue
+        if path.stat().st_size > MAX_FILE_BYTES:
+            problems.add(("no_fly", k), f"GeoJSON file {path}: {path.stat().st_size:,} bytes; "
+                         f"at most {MAX_FILE_BYTES:,}")  # fmt: skip
+            continue
         try:
             doc = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-            problems.add(("no_fly", k), f"cannot read GeoJSON {path}: {exc}")
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+            what = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)
+            problems.add(("no_fly", k), f"cannot read GeoJSON {path}: {what}")
             continue
         features = None
         if isinstance(doc, dict):
@@ -186,11 +203,9 @@ def _load_terrain(ts: TerrainSpec, problems: Problems, base_dir: Path) -> Terrai
             return None
     assert ts.file is not None
     resolved = _resolve(ts.file, base_dir)
-    if not resolved.exists():
-        problems.add(("terrain", "file"), f"DEM file not found: {resolved}")
-        return None
-    if resolved.is_dir():
-        problems.add(("terrain", "file"), f"is a directory, not a DEM file: {resolved}")
+    why = not_a_regular_file(resolved)
+    if why is not None:
+        problems.add(("terrain", "file"), f"DEM file {why}: {resolved}")
         return None
     origin = (float(ts.origin[0]), float(ts.origin[1]))
     try:
@@ -201,6 +216,22 @@ def _load_terrain(ts: TerrainSpec, problems: Problems, base_dir: Path) -> Terrai
     except Exception as exc:
         problems.add(("terrain", "file"), f"cannot read the DEM {resolved}: {exc}")
         return None
+
+
+def _terrain_range(terrain: Terrain) -> str | None:
+    """Why a loaded terrain's grid is beyond the format's ranges (an .npz's own ``dx`` or
+    ``x0``, a GeoTIFF's pixel scale): its cells, its corner, its extent."""
+    xmin, xmax, ymin, ymax = terrain.extent
+    name = terrain.name
+    if not (MIN_CELL <= terrain.dx <= MAX_CELL and MIN_CELL <= terrain.dy <= MAX_CELL):
+        return (f"{name}: cells of {terrain.dx:g} x {terrain.dy:g} m; a DEM cell is from "
+                f"{MIN_CELL:g} m to {MAX_CELL:g} m")  # fmt: skip
+    if max(abs(xmin), abs(xmax), abs(ymin), abs(ymax)) > MAX_COORD:
+        return f"{name}: its grid reaches beyond {MAX_COORD:g} m from the origin (x0, y0)"
+    if max(xmax - xmin, ymax - ymin) > MAX_EXTENT:
+        return (f"{name}: {xmax - xmin:,.0f} x {ymax - ymin:,.0f} m, beyond the "
+                f"{MAX_EXTENT / 1000:,.0f} km this tool plans over")  # fmt: skip
+    return None
 
 
 def _default_z(terrain: Terrain, altitude: AltitudeSpec | None) -> tuple[float, float]:
@@ -234,6 +265,9 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
         if terrain is not None and spec.terrain.file is not None:
             terrain, dem_origin = _placed_dem(spec, terrain, problems)
             terrain_failed = terrain is None
+        if terrain is not None and (why := _terrain_range(terrain)) is not None:
+            problems.add(("terrain",), why, NO_VALUE)
+            terrain, terrain_failed = None, True
 
     # ---- dimension
     dim: int | None
@@ -489,7 +523,59 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
     problems.raise_if_any()
     if spec.fleet is not None:
         scenario = _with_generated_fleet(scenario, spec.fleet, problems)
+    _check_planning(spec.planning, scenario, problems)
+    problems.raise_if_any()
     return scenario
+
+
+def _check_planning(ps: PlanningSpec, scenario: Scenario, problems: Problems) -> None:
+    """The ``planning`` block against the scenario and the planner registry: the cost preset
+    for the scenario's dimension, the population's size, and the planner with its options as
+    ``uavplan plan`` would build it (the planners are imported only when the block names one
+    or gives options)."""
+    from uavplan.problems import preset_problem
+
+    for where, cost in ((("planning", "cost"), ps.cost),
+                        (("planning", "options", "cost"), ps.options.get("cost"))):  # fmt: skip
+        if isinstance(cost, str):
+            reason = preset_problem(cost, scenario.dim)
+            if reason is not None:
+                problems.add(where, reason)
+    if ps.pop_size is not None and ps.pop_size * (ps.n_waypoints + 2) > MAX_PATH_POINTS:
+        problems.add(("planning", "pop_size"),
+                     f"a population of {ps.pop_size:,} paths of {ps.n_waypoints + 2} points "
+                     f"exceeds the {MAX_PATH_POINTS:,} path points a run may hold")  # fmt: skip
+    if ps.planner is None and not ps.options:
+        return
+    from uavplan.optimizers.base import OptimizerError
+    from uavplan.planners import PlannerError, get_planner
+    from uavplan.planners.defaults import default_planner
+
+    name = ps.planner if ps.planner is not None else default_planner(scenario)[0]
+    options = dict(ps.options)
+    if ps.pop_size is not None:
+        options.setdefault("pop_size", ps.pop_size)
+
+    def why(**given: Any) -> str | None:
+        try:
+            get_planner(name, **given)
+        except (PlannerError, OptimizerError, TypeError, ValueError) as exc:
+            return " ".join(str(exc).split())
+        return None
+
+    text = why(**options)
+    if text is None:
+        return
+    if ps.planner is not None and text.startswith("unknown planner"):
+        problems.add(("planning", "planner"), text)
+        return
+    alone = {k: why(**{k: v}) for k, v in options.items()}  # each option's own problem
+    for k, reason in alone.items():
+        if reason is not None:
+            where = ("planning", "pop_size") if k not in ps.options else ("planning", "options", k)
+            problems.add(where, reason)
+    if all(r is None for r in alone.values()):
+        problems.add(("planning", "options"), text)
 
 
 def _with_generated_fleet(scenario: Scenario, fleet: FleetSpec, problems: Problems) -> Scenario:

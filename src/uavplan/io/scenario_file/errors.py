@@ -46,12 +46,67 @@ def _loc_str(loc: Sequence[Any]) -> str:
     return out
 
 
+def _clip(value: Any, budget: list[int], depth: int = 0) -> Any:
+    """``value`` cut to about ``budget[0]`` scalars and 20 levels, so that formatting a value
+    costs little whatever its size (a YAML alias bomb expands to billions of items)."""
+    budget[0] -= 1
+    if budget[0] < 0 or depth > 20:
+        return ...
+    if isinstance(value, Mapping):
+        out: dict[str, Any] = {}
+        for k, v in value.items():
+            if budget[0] < 0:
+                break
+            out[str(k)[:100]] = _clip(v, budget, depth + 1)
+        return out
+    if isinstance(value, list | tuple):
+        items = []
+        for v in value:
+            if budget[0] < 0:
+                break
+            items.append(_clip(v, budget, depth + 1))
+        return items
+    if isinstance(value, str):
+        return value[:200]
+    return value
+
+
 def fmt_value(value: Any, limit: int = 100) -> str:
+    """A value as JSON-like text of at most ``limit`` characters."""
+    value = _clip(value, [limit])
     try:
         text = json.dumps(value, ensure_ascii=False, allow_nan=True, default=repr)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, RecursionError):
         text = repr(value)
+    text = text.replace("Ellipsis", "...")
     return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+#: Why a number is out of its range, by field name (the limits: ``schema.py``).
+_RANGE_WHY = {
+    **dict.fromkeys(
+        ("lower", "upper", "start", "goal", "center", "vertices", "positions", "origin", "x",
+         "y", "z_min", "z_max", "min", "max", "alt"),
+        "coordinates and altitudes are within 10,000 km (1e7 m): beyond, a float64 path "
+        "computation loses its metre-level meaning; check the units (metres)",
+    ),
+    **dict.fromkeys(
+        ("radius", "margin", "s1", "s2", "size", "turn_radius", "width", "height",
+         "min_spacing", "accuracy", "s2_axes"),
+        "lengths are from 1 mm to 1,000 km, the largest area planned over; check the units "
+        "(metres)",
+    ),
+    **dict.fromkeys(
+        ("speed", "min_speed", "max_speed"),
+        "speeds are from 0.01 to 1,000 m/s (about Mach 3); check the units (m/s)",
+    ),
+    **dict.fromkeys(("times", "start_time"), "times are within 1e7 s (about 115 days)"),
+    "cell_size": "a DEM cell is from 1 cm to 100 km",
+    "n_waypoints": "the limit of free waypoints per path (docs/scenario-format.md, Limits)",
+    "count": "the limit of UAVs per scenario (docs/scenario-format.md, Limits)",
+}  # fmt: skip
+_RANGE_OPS = {"less_than_equal": ("<=", "le"), "less_than": ("<", "lt"),
+              "greater_than_equal": (">=", "ge"), "greater_than": (">", "gt")}  # fmt: skip
 
 
 def _raw_at(data: Any, loc: Sequence[Any]) -> Any:
@@ -176,7 +231,12 @@ def _reason(err: Mapping[str, Any]) -> str:
         return f"needs {word} {bound} item(s), got {n}"
     if kind == "value_error":
         return msg.removeprefix("Value error, ")
-    return msg[:1].lower() + msg[1:]
+    text = msg[:1].lower() + msg[1:]
+    if kind in _RANGE_OPS:  # pydantic's words, and why the range is what it is
+        op, key = _RANGE_OPS[kind]
+        why = _RANGE_WHY.get(last)
+        return f"{text}: {why}" if why and not (op in (">", ">=") and ctx.get(key) == 0) else text
+    return text
 
 
 def validation_problems(exc: ValidationError, problems: Problems) -> None:

@@ -4,10 +4,13 @@ types they use, :func:`schema` and :func:`dump_spec` (a spec as plain data).
 
 from __future__ import annotations
 
+import math
+import re
 from collections.abc import Mapping
 from typing import Annotated, Any, Literal
 
 from pydantic import (
+    AfterValidator,
     BaseModel,
     BeforeValidator,
     ConfigDict,
@@ -25,9 +28,6 @@ def _no_bool(value: Any) -> Any:
     return value
 
 
-Num = Annotated[float, BeforeValidator(_no_bool)]
-PosNum = Annotated[float, BeforeValidator(_no_bool), Field(gt=0)]
-NonNegNum = Annotated[float, BeforeValidator(_no_bool), Field(ge=0)]
 #: Degrees in (0, 90].
 Angle = Annotated[float, BeforeValidator(_no_bool), Field(gt=0, le=90)]
 #: The largest coordinate accepted, metres (10,000 km: UTM northings fit; a float64 path
@@ -40,12 +40,54 @@ MAX_EXTENT = 1e6
 #: generated fleet), the entries of each obstacle list, a polygon's vertices, a moving
 #: obstacle's samples and the free waypoints per path.
 MAX_FILE_BYTES = 64 * 2**20
+#: A YAML scenario file's size: PyYAML builds Python objects node by node (3 MB of obstacles
+#: took 26 s with libyaml's parser on the shared 2-core machine), JSON reads 100 times faster.
+MAX_YAML_BYTES = 2**20
 MAX_UAVS = 10_000
 MAX_ITEMS = 100_000
 MAX_VERTICES = 100_000
 MAX_SAMPLES = 1_000_000
 MAX_WAYPOINTS = 1_000
+#: The most path points a population may hold (population size x points per path): 20 million
+#: points of 3 float64 are 480 MB per copy of the population.
+MAX_PATH_POINTS = 20_000_000
+#: The largest iteration budget a scenario may ask for.
+MAX_ITERATIONS = 1_000_000
+#: The largest length that is not a coordinate (a radius, a margin, a safety distance, a turn
+#: radius, an area's width, a fleet's spacing), metres: the largest extent of a box.
+MAX_LENGTH = MAX_EXTENT
+#: The smallest length that must be positive (a radius, an area's width, a spacing), metres:
+#: 1 mm; below, a shape added to a coordinate of 10,000 km vanishes in float64.
+MIN_LENGTH = 1e-3
+#: Speeds, m/s: from 1 cm/s to 1,000 m/s (about Mach 3, beyond any UAV); a path of 1,000 km at
+#: the slowest speed still takes a time a float64 holds to the nanosecond.
+MIN_SPEED = 0.01
+MAX_SPEED = 1000.0
+#: Times (knots of moving obstacles, departures), seconds: within about 115 days.
+MAX_TIME = 1e7
+#: A DEM's grid spacing, metres: from 1 cm to 100 km.
+MIN_CELL = 0.01
+MAX_CELL = 1e5
 Coord = Annotated[float, BeforeValidator(_no_bool), Field(ge=-MAX_COORD, le=MAX_COORD)]
+Length = Annotated[float, BeforeValidator(_no_bool), Field(ge=0, le=MAX_LENGTH)]
+
+
+def _not_tiny(value: float) -> float:
+    if value < MIN_LENGTH:
+        raise ValueError(
+            f"must be at least {MIN_LENGTH:g} m (1 mm): a shape smaller than that vanishes when "
+            "added to a coordinate in float64"
+        )
+    return value
+
+
+PosLength = Annotated[
+    float, BeforeValidator(_no_bool), Field(gt=0, le=MAX_LENGTH), AfterValidator(_not_tiny)
+]
+Speed = Annotated[float, BeforeValidator(_no_bool), Field(ge=MIN_SPEED, le=MAX_SPEED)]
+Time = Annotated[float, BeforeValidator(_no_bool), Field(ge=-MAX_TIME, le=MAX_TIME)]
+Departure = Annotated[float, BeforeValidator(_no_bool), Field(ge=0, le=MAX_TIME)]
+Cell = Annotated[float, BeforeValidator(_no_bool), Field(ge=MIN_CELL, le=MAX_CELL)]
 XY = Annotated[list[Coord], Field(min_length=2, max_length=2)]
 Point = Annotated[list[Coord], Field(min_length=2, max_length=3)]
 
@@ -90,7 +132,7 @@ class TerrainSpec(_Spec):
         "mosaicked and resampled onto the local grid over 'bounds' through 'origin' "
         "(both required); voids are filled high and counted.",
     )
-    cell_size: PosNum | None = Field(
+    cell_size: Cell | None = Field(
         None,
         description="Grid spacing in metres (file or srtm). Default: the GeoTIFF pixel scale, "
         "the .npz dx/dy, else 1; SRTM: 90 m (3 arc-seconds) or 30 m (1 arc-second).",
@@ -129,15 +171,15 @@ class CylinderSpec(_Spec):
     """A vertical cylinder threat (3-D only)."""
 
     center: XY = Field(description="Axis position [x, y], metres.")
-    radius: PosNum = Field(description="Radius, metres (> 0).")
-    z_min: Num | None = Field(None, description="Bottom, absolute metres; null = unbounded.")
-    z_max: Num | None = Field(None, description="Top, absolute metres; null = unbounded.")
-    height: PosNum | None = Field(
+    radius: PosLength = Field(description="Radius, metres (> 0).")
+    z_min: Coord | None = Field(None, description="Bottom, absolute metres; null = unbounded.")
+    z_max: Coord | None = Field(None, description="Top, absolute metres; null = unbounded.")
+    height: PosLength | None = Field(
         None,
         description="Top above the terrain at the center, metres (z_max = ground(center) + "
         "height); excludes z_max.",
     )
-    margin: NonNegNum = Field(
+    margin: Length = Field(
         0.0, description="Added to the radius for collision checks (e.g. the drone size), metres."
     )
 
@@ -152,8 +194,8 @@ class CircleSpec(_Spec):
     """A disc obstacle (an infinitely tall prism in 3-D)."""
 
     center: XY = Field(description="Center [x, y], metres.")
-    radius: PosNum = Field(description="Radius, metres (> 0).")
-    margin: NonNegNum = Field(0.0, description="Added to the radius for collision checks, m.")
+    radius: PosLength = Field(description="Radius, metres (> 0).")
+    margin: Length = Field(0.0, description="Added to the radius for collision checks, m.")
 
 
 class PolygonSpec(_Spec):
@@ -162,31 +204,31 @@ class PolygonSpec(_Spec):
     vertices: Annotated[list[XY], Field(min_length=3, max_length=MAX_VERTICES)] = Field(
         description="At least 3 vertices [[x, y], ...] in order, metres."
     )
-    margin: NonNegNum = Field(0.0, description="Distance a path must keep from it, metres.")
+    margin: Length = Field(0.0, description="Distance a path must keep from it, metres.")
 
 
 class DangerAreaSpec(_Spec):
     """A cylindrical area that may be crossed at a cost (HR-MAGA Eq. 1)."""
 
     center: XY = Field(description="Center [x, y], metres.")
-    radius: PosNum = Field(description="Radius, metres (> 0).")
+    radius: PosLength = Field(description="Radius, metres (> 0).")
 
 
 class UncertainAreaSpec(_Spec):
     """A rectangle known only once revealed; revealed areas are no-fly (HR-MAGA Eq. 2)."""
 
-    x: Num = Field(description="West edge, metres.")
-    y: Num = Field(description="South edge, metres.")
-    width: PosNum = Field(description="Extent along x, metres (> 0).")
-    height: PosNum = Field(description="Extent along y, metres (> 0).")
+    x: Coord = Field(description="West edge, metres.")
+    y: Coord = Field(description="South edge, metres.")
+    width: PosLength = Field(description="Extent along x, metres (> 0).")
+    height: PosLength = Field(description="Extent along y, metres (> 0).")
     revealed: bool = Field(True, description="Whether the planner knows about it.")
 
 
 class MovingObstacleSpec(_Spec):
     """A sphere (a disc in 2-D) moving along a timed piecewise-linear trajectory."""
 
-    radius: PosNum = Field(description="Radius, metres (> 0).")
-    times: Annotated[list[Num], Field(min_length=1, max_length=MAX_SAMPLES)] = Field(
+    radius: PosLength = Field(description="Radius, metres (> 0).")
+    times: Annotated[list[Time], Field(min_length=1, max_length=MAX_SAMPLES)] = Field(
         description="Knot times, strictly increasing seconds."
     )
     positions: Annotated[list[Point], Field(min_length=1, max_length=MAX_SAMPLES)] = Field(
@@ -197,8 +239,8 @@ class MovingObstacleSpec(_Spec):
 class AltitudeSpec(_Spec):
     """Allowed altitudes."""
 
-    min: Num = Field(description="Lowest allowed altitude, metres.")
-    max: Num = Field(description="Highest allowed altitude, metres (> min).")
+    min: Coord = Field(description="Lowest allowed altitude, metres.")
+    max: Coord = Field(description="Highest allowed altitude, metres (> min).")
     reference: Literal["ground", "absolute"] = Field(
         "ground", description="'ground': above the terrain; 'absolute': z values."
     )
@@ -208,22 +250,22 @@ class UAVSpec(_Spec):
     """UAV limits (speed, s1, s2 as PPSwarm Sect. 5.1; no turn, climb or minimum-speed limit
     unless given)."""
 
-    speed: PosNum = Field(
+    speed: Speed = Field(
         20.0, description="Cruise speed, m/s (> 0); planners time their paths with it."
     )
-    turn_radius: NonNegNum = Field(
+    turn_radius: Length = Field(
         0.0,
         description="Minimum turn radius of the horizontal track, metres (>= 0; 0 = no limit, "
         "the UAV turns in place).",
     )
-    s1: NonNegNum = Field(15.0, description="Safety distance to threats, metres.")
-    s2: NonNegNum = Field(10.0, description="Safety distance between UAVs, metres.")
-    size: NonNegNum = Field(1.0, description="UAV size, metres.")
-    min_speed: NonNegNum = Field(
+    s1: Length = Field(15.0, description="Safety distance to threats, metres.")
+    s2: Length = Field(10.0, description="Safety distance between UAVs, metres.")
+    size: Length = Field(1.0, description="UAV size, metres.")
+    min_speed: Annotated[float, BeforeValidator(_no_bool), Field(ge=0, le=MAX_SPEED)] = Field(
         0.0,
         description="Slowest allowed speed, m/s (0 <= min_speed <= speed; 0 = it may hover).",
     )
-    max_speed: PosNum | None = Field(
+    max_speed: Speed | None = Field(
         None, description="Fastest allowed speed, m/s (>= speed); null = speed."
     )
     max_climb_angle: Angle | None = Field(
@@ -234,7 +276,7 @@ class UAVSpec(_Spec):
         None,
         description="Steepest descent, degrees below the horizontal, in (0, 90]; null = no limit.",
     )
-    s2_axes: tuple[PosNum, PosNum, PosNum] | None = Field(
+    s2_axes: tuple[PosLength, PosLength, PosLength] | None = Field(
         None,
         description="Separation between UAVs per axis [x, y, z], metres (e.g. the RSCDWOA "
         "paper's [50, 50, 20]): two UAVs are too close when closer than all three at once (an "
@@ -272,11 +314,11 @@ class OriginSpec(_Spec):
     lon: Annotated[float, Field(ge=-180, le=180, allow_inf_nan=False)] = Field(
         description="Longitude of the local point (x, y), degrees (WGS84)."
     )
-    alt: Num = Field(0.0, description="Altitude above mean sea level of the local z = 0, m.")
-    x: Num = Field(0.0, description="Local x of the origin, metres.")
-    y: Num = Field(0.0, description="Local y of the origin, metres.")
+    alt: Coord = Field(0.0, description="Altitude above mean sea level of the local z = 0, m.")
+    x: Coord = Field(0.0, description="Local x of the origin, metres.")
+    y: Coord = Field(0.0, description="Local y of the origin, metres.")
     note: str = Field("", description="Where the origin comes from.")
-    accuracy: NonNegNum = Field(
+    accuracy: Length = Field(
         0.0,
         description="At most this far (m) may an exported position lie from where the "
         "terrain data puts the local point (a lat/lon DEM laid out flat); exports warn "
@@ -292,7 +334,21 @@ class TaskSpec(_Spec):
     )
     start: Point = Field(description="Start [x, y] or [x, y, z], metres (z: see task_z).")
     goal: Point = Field(description="Goal, same form as start, metres.")
-    start_time: NonNegNum = Field(0.0, description="Departure time, seconds.")
+    start_time: Departure = Field(0.0, description="Departure time, seconds.")
+
+    @field_validator("id")
+    @classmethod
+    def _plain_id(cls, value: str | None) -> str | None:
+        """An id names the UAV's files in per-UAV exports: no path in it."""
+        if value is not None and (
+            value in (".", "..") or any(c in value for c in "/\\") or not value.isprintable()
+        ):
+            raise ValueError(
+                "a task id names files (one per UAV in exports): no '/', '\\', control "
+                "characters, '.' or '..'"
+            )
+        return value
+
     frame: Literal["local", "wgs84"] = Field(
         "local",
         description="local: start and goal in metres; wgs84: [lat, lon] or [lat, lon, alt] "
@@ -312,6 +368,50 @@ class PlanningSpec(_Spec):
     n_waypoints: Annotated[int, BeforeValidator(_no_bool), Field(ge=1, le=MAX_WAYPOINTS)] = Field(
         10, description="Free path nodes between start and goal."
     )
+    planner: str | None = Field(
+        None,
+        min_length=1,
+        description="Planner name (`uavplan planners`); default: the one for the scenario's "
+        "kind. `uavplan plan -a` overrides it.",
+    )
+    options: dict[str, Any] = Field(
+        default_factory=dict,
+        description="Planner options, NAME: value as `uavplan planners NAME` lists them, "
+        "checked against the planner's declared options when the file is read; `uavplan plan "
+        "--param` overrides them.",
+    )
+    iterations: Annotated[int, BeforeValidator(_no_bool), Field(ge=1, le=MAX_ITERATIONS)] | None = (
+        Field(None, description="Iteration budget of `uavplan plan` (--iterations overrides it).")
+    )
+    pop_size: Annotated[int, BeforeValidator(_no_bool), Field(ge=1, le=MAX_PATH_POINTS)] | None = (
+        Field(None, description="Population size of `uavplan plan` (--pop-size overrides it).")
+    )
+    time: Annotated[float, BeforeValidator(_no_bool), Field(gt=0, le=MAX_TIME)] | None = Field(
+        None, description="Wall-time budget per UAV's search, seconds (--time overrides it)."
+    )
+
+    @field_validator("options", mode="before")
+    @classmethod
+    def _numbers(cls, value: Any) -> Any:
+        """Numbers YAML 1.1 reads as text (``1e9``: PyYAML wants ``1.0e9``) as numbers, the way
+        every typed field of the format takes them."""
+        if not isinstance(value, Mapping):
+            return value
+        return {k: _number(v) for k, v in value.items()}
+
+
+_NUMBER = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
+
+
+def _number(value: Any) -> Any:
+    """A string that spells a finite number, as that number (else the value as it is)."""
+    if isinstance(value, str) and _NUMBER.fullmatch(value.strip()):
+        text = value.strip()
+        number = float(text)
+        if re.fullmatch(r"[-+]?\d+", text):
+            return int(text)
+        return number if math.isfinite(number) else value
+    return value
 
 
 class FleetSpec(_Spec):
@@ -325,10 +425,10 @@ class FleetSpec(_Spec):
         description="'crossing': starts along the west/south edges, goals along the east/north "
         "edges, paired at random so the lines cross; 'random': anywhere.",
     )
-    seed: Annotated[int, BeforeValidator(_no_bool), Field(ge=0)] = Field(
+    seed: Annotated[int, BeforeValidator(_no_bool), Field(ge=0, lt=2**63)] = Field(
         0, description="Seed of the generator (the same seed gives the same tasks)."
     )
-    min_spacing: PosNum | None = Field(
+    min_spacing: PosLength | None = Field(
         None,
         description="Least distance between two starts, and between two goals, metres; "
         "null = 3 * uav.s2.",

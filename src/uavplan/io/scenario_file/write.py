@@ -17,7 +17,7 @@ from uavplan.io.atomic import write_text_atomic
 from uavplan.io.scenario_file.build import builtin_terrain
 from uavplan.io.scenario_file.errors import ScenarioFileError
 from uavplan.io.scenario_file.read import JSON_SUFFIXES, YAML_SUFFIXES, parse_scenario_spec
-from uavplan.io.scenario_file.schema import ScenarioSpec, dump_spec
+from uavplan.io.scenario_file.schema import MAX_YAML_BYTES, ScenarioSpec, dump_spec
 from uavplan.world import UAV, Scenario
 from uavplan.world.terrain import BUILTIN_TERRAINS
 
@@ -240,5 +240,14 @@ def save_scenario(
     if base_dir is None and isinstance(spec, Scenario):
         base_dir = spec.metadata.get("base_dir")
     _rebase_terrain_file(data, Path(base_dir) if base_dir else Path.cwd(), p.parent)
-    _atomic_write(p, dumps_scenario(data, "json" if suffix in JSON_SUFFIXES else "yaml"))
+    text = dumps_scenario(data, "json" if suffix in JSON_SUFFIXES else "yaml")
+    size = len(text.encode("utf-8"))
+    if suffix in YAML_SUFFIXES and size > MAX_YAML_BYTES:
+        raise ScenarioFileError(
+            [
+                f"{path}: cannot write: {size:,} bytes of YAML, more than a YAML scenario file may "
+                f"hold ({MAX_YAML_BYTES:,}); write it as .json"
+            ]
+        )
+    _atomic_write(p, text)
     return p
