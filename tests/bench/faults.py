@@ -248,6 +248,7 @@ class Outcome:
     final_equal: bool = False
     seconds: float = 0.0
     notes: list[str] = field(default_factory=list)
+    t0: float = field(default_factory=time.monotonic)
 
     @property
     def ok(self) -> bool:
@@ -298,6 +299,14 @@ def _finish(cmd: SweepCommand, reference: pd.DataFrame, outcome: Outcome, before
     _conclude(cmd, reference, outcome, before, proc, wait_end(proc))
 
 
+def _begin(what: str, cmd: SweepCommand, reference: pd.DataFrame) -> tuple[Outcome, set[str]]:
+    """A campaign's outcome, and the runs the folder holds before it (checked)."""
+    outcome = Outcome(f"{what} ({cmd.executor}, {cmd.workers} workers)")
+    check = check_folder(cmd.out, set(), reference)
+    outcome.problems += check.problems
+    return outcome, check.stored
+
+
 def _count_kill(
     cmd: SweepCommand, reference: pd.DataFrame, outcome: Outcome, stored: set[str]
 ) -> tuple[set[str], str]:
@@ -320,9 +329,7 @@ def kill_runner(
 ) -> Outcome:
     """SIGKILL the whole ``bench run`` process ``kills`` times at random moments, starting it
     again after each; then let it finish."""
-    outcome = Outcome(f"runner killed ({cmd.executor}, {cmd.workers} workers)")
-    t0 = time.monotonic()
-    stored: set[str] = check_folder(cmd.out, set(), reference).stored
+    outcome, stored = _begin("runner killed", cmd, reference)
     while outcome.kills < kills:
         proc = cmd.start()
         shards0 = n_shards(cmd.out)
@@ -342,7 +349,7 @@ def kill_runner(
         stored, line = _count_kill(cmd, reference, outcome, stored)
         log(f"  kill {outcome.kills}: {line}; {len(kids)} workers, {len(orphans)} orphaned")
     _finish(cmd, reference, outcome, stored)
-    outcome.seconds = time.monotonic() - t0
+    outcome.seconds = time.monotonic() - outcome.t0
     return outcome
 
 
@@ -356,9 +363,7 @@ def kill_workers(
     """One sweep; SIGKILL one of its workers (a pool worker, or a Dask worker with
     ``cmd.executor == "dask"``) at a random moment once runs are being stored, ``kills``
     times; the runner goes on by itself. The folder is checked after every kill."""
-    outcome = Outcome(f"worker killed ({cmd.executor}, {cmd.workers} workers)")
-    t0 = time.monotonic()
-    stored: set[str] = check_folder(cmd.out, set(), reference).stored
+    outcome, stored = _begin("worker killed", cmd, reference)
     proc = cmd.start()
     try:
         while outcome.kills < kills:
@@ -381,7 +386,7 @@ def kill_workers(
             proc.kill()
             proc.wait()
     _conclude(cmd, reference, outcome, stored, proc, err)
-    outcome.seconds = time.monotonic() - t0
+    outcome.seconds = time.monotonic() - outcome.t0
     return outcome
 
 
@@ -422,8 +427,7 @@ def disk_full(
     left, so that the next shard's write starts and fails part way); the sweep must stop
     with exit code 2 and one line saying so, no traceback, every shard intact, no temporary
     file left; free the space, run again: it must end equal to the uninterrupted sweep."""
-    outcome = Outcome(f"disk full ({cmd.executor}, {cmd.workers} workers)")
-    t0 = time.monotonic()
+    outcome, _ = _begin("disk full", cmd, reference)
     proc = cmd.start()
     try:
         wait_for(lambda: n_shards(cmd.out) >= 2, 180.0, proc)
@@ -452,7 +456,7 @@ def disk_full(
     outcome.problems += check.problems
     filler.unlink()
     _finish(cmd, reference, outcome, check.stored)
-    outcome.seconds = time.monotonic() - t0
+    outcome.seconds = time.monotonic() - outcome.t0
     return outcome
 
 
