@@ -13,6 +13,7 @@ Prints one line per kill and a summary line per kind of fault; exit code 1 if an
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import tempfile
 import time
@@ -26,6 +27,8 @@ from bench import faults
 
 
 def main() -> int:
+    # a SIGTERM ends the campaign like Ctrl-C: the sweep running is killed, the folder removed
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--kills", type=int, default=20, help="faults of each kind [20]")
     ap.add_argument("--runs", type=int, default=3000, help="runs of the sweep [3000]")

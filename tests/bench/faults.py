@@ -35,7 +35,7 @@ import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 
-from uavplan.bench.store import MEASURED_COLUMNS
+from bench.compare import differing_cells, result_frame
 
 PLAN = "overhead"
 
@@ -104,12 +104,6 @@ class SweepCommand:
         return stored_rows(folder)
 
 
-def result_frame(df: pd.DataFrame) -> pd.DataFrame:
-    """The columns that are a function of the run alone, indexed and sorted by run id."""
-    keep = [c for c in df.columns if c not in MEASURED_COLUMNS]
-    return df[keep].set_index("run_id").sort_index()
-
-
 def stored_rows(folder: Path) -> pd.DataFrame:
     """Every row of every shard, read shard by shard (a shard that does not read whole raises,
     a duplicate run id stays visible)."""
@@ -117,44 +111,6 @@ def stored_rows(folder: Path) -> pd.DataFrame:
     if not shards:
         return pd.DataFrame({"run_id": []})
     return pd.concat([pq.read_table(s).to_pandas() for s in shards], ignore_index=True)
-
-
-def same_values(a: Any, b: Any) -> bool:
-    """Bit-identical values of one cell (arrays element by element; NaN equals NaN)."""
-    if isinstance(a, np.ndarray | list) or isinstance(b, np.ndarray | list):
-        x, y = np.asarray(a), np.asarray(b)
-        if x.shape != y.shape:
-            return False
-        if x.dtype.kind == "f" and y.dtype.kind == "f":
-            return bool(np.array_equal(x, y, equal_nan=True))
-        return bool(np.array_equal(x, y))
-    if a is None or b is None:
-        return (a is None or _nan(a)) and (b is None or _nan(b))
-    if _nan(a) and _nan(b):
-        return True
-    return bool(a == b)
-
-
-def _nan(v: Any) -> bool:
-    try:
-        return bool(np.isnan(v))
-    except (TypeError, ValueError):
-        return v is pd.NA
-
-
-def differing_cells(got: pd.DataFrame, want: pd.DataFrame, limit: int = 10) -> list[str]:
-    """Where two result frames (:func:`result_frame`, same index) differ: ``run_id: column``."""
-    out: list[str] = []
-    cols = sorted(set(got.columns) | set(want.columns))
-    for rid in got.index:
-        for c in cols:
-            if c not in got.columns or c not in want.columns:
-                out.append(f"{rid}: column {c} only in one")
-            elif not same_values(got.at[rid, c], want.at[rid, c]):
-                out.append(f"{rid}: {c} = {got.at[rid, c]!r}, uninterrupted {want.at[rid, c]!r}")
-            if len(out) >= limit:
-                return out
-    return out
 
 
 @dataclass
@@ -332,17 +288,20 @@ def kill_runner(
     outcome, stored = _begin("runner killed", cmd, reference)
     while outcome.kills < kills:
         proc = cmd.start()
-        shards0 = n_shards(cmd.out)
-        if rng.random() < 0.25:  # any moment: starting, warming up, first runs
-            wait_for(lambda: False, float(rng.uniform(0.0, 4.0)), proc)
-        else:  # once runs are being stored, a random moment later
-            wait_for(lambda s=shards0: n_shards(cmd.out) > s, 120.0, proc)
-            wait_for(lambda: False, float(rng.uniform(0.0, cmd.within)), proc)
-        if proc.poll() is not None:
-            outcome.notes.append(f"the sweep ended before kill {outcome.kills + 1}")
-            break
-        kids = workers_of(proc.pid)
-        os.kill(proc.pid, signal.SIGKILL)
+        try:
+            shards0 = n_shards(cmd.out)
+            if rng.random() < 0.25:  # any moment: starting, warming up, first runs
+                wait_for(lambda: False, float(rng.uniform(0.0, 4.0)), proc)
+            else:  # once runs are being stored, a random moment later
+                wait_for(lambda s=shards0: n_shards(cmd.out) > s, 120.0, proc)
+                wait_for(lambda: False, float(rng.uniform(0.0, cmd.within)), proc)
+            if proc.poll() is not None:
+                outcome.notes.append(f"the sweep ended before kill {outcome.kills + 1}")
+                break
+            kids = workers_of(proc.pid)
+        finally:
+            if proc.poll() is None:
+                os.kill(proc.pid, signal.SIGKILL)
         wait_end(proc)
         orphans = orphans_after(kids)
         outcome.orphans += len(orphans)

@@ -5,6 +5,15 @@ function), ``fleet`` (a fleet planner, its plan checked by the independent verif
 whose runs need something else registers its own kind with :func:`register_kind` in its module
 under :mod:`uavplan.bench.papers`. A kind takes the :class:`~uavplan.bench.plans.RunSpec` and
 returns the run's metrics (the columns of its row).
+
+**The verifier as a gate.** Every kind that plans paths runs the independent verifier
+(:mod:`uavplan.verify`, which imports no planning code) in the worker on every trajectory the
+run calls feasible, and records the verdict with :func:`gate`: ``verifier_ok`` (True: all of
+them pass; False: the verifier rejects one; None: the run calls nothing feasible),
+``verifier_rejects`` (the first violations of a rejected one) and ``band_between_waypoints``
+(polylines feasible under the papers' criterion that leave the altitude band between two
+waypoints). ``tests/bench/test_plans.py`` asserts ``verifier_ok`` on every smoke run that calls
+a plan feasible; the report counts them.
 """
 
 from __future__ import annotations
@@ -81,8 +90,72 @@ def plan_run(spec: RunSpec) -> Any:
     return planner.plan(_scenario(spec.scenario), None, _budget(p), spec.seed)
 
 
+#: A claim the verifier judged: (what, its report, the waypoint times of a polyline the
+#: planner judged with the altitude band at its waypoints only, else None).
+Claim = tuple[str, Any, Any]
+
+
+def gate(claims: list[Claim]) -> dict[str, Any]:
+    """The gate's columns from the verifier's reports on what a run calls feasible:
+
+    * ``verifier_ok``: True when every claim passes the verifier, False when it rejects one,
+      None when the run calls nothing feasible;
+    * ``verifier_rejects``: the first violations of the rejected claims;
+    * ``band_between_waypoints``: how many polylines, called feasible under the papers'
+      criterion (the altitude band checked at the waypoints: PPSwarm Eq. 7, SPSO,
+      ``docs/decisions.md``), leave the band between two waypoints. The verifier checks the
+      band along whole segments, so such a polyline is not rejected for that alone (it is the
+      criterion the paper's results are compared under), but it is counted; the trajectory
+      that is flown is checked along whole segments like everything else.
+    """
+    notes: list[str] = []
+    rejected = between = 0
+    for what, rep, waypoint_times in claims:
+        hard = [v for v in rep.violations if not _between(v, waypoint_times)]
+        between += len(hard) < len(rep.violations)
+        rejected += bool(hard)
+        notes += [f"{what}: {v.kind}: {v.message}" for v in hard]
+    return {
+        "verifier_ok": None if not claims else not rejected,
+        "verifier_rejects": "; ".join(notes[:3]),
+        "band_between_waypoints": between,
+    }
+
+
+def _between(v: Any, waypoint_times: Any) -> bool:
+    """An altitude-band violation strictly between two waypoints of a polyline judged with
+    the band at its waypoints (its worst point is at none of the waypoint times)."""
+    if waypoint_times is None or v.kind != "altitude" or v.time is None:
+        return False
+    return bool(np.min(np.abs(np.asarray(waypoint_times) - v.time)) > 1e-9)
+
+
+def result_claims(
+    r: Any, scenario: Any, prefix: str = "", flown: bool = True, band_at_waypoints: bool = True
+) -> list[Claim]:
+    """The verifier on what a single-UAV :class:`~uavplan.planners.PlanResult` calls feasible:
+    its planned polyline (a geometric path: clearances, bounds, maximum speed; judged by the
+    planner with the band at its waypoints unless ``band_at_waypoints`` is False, see
+    :func:`gate`) and the trajectory it is to fly
+    (kinematic limits too, the band along whole segments, as ``uavplan plan`` checks before it
+    exits 0; unless ``flown`` is False), each if the result claims it."""
+    from uavplan.verify import Trajectory, verify_trajectories
+
+    claims: list[Claim] = []
+    if r.feasible:
+        times = np.asarray(r.times)
+        line = Trajectory(r.uav_id, np.asarray(r.waypoints), times, True)
+        rep = verify_trajectories([line], scenario, kinematics=False)
+        claims.append((f"{prefix}planned", rep, times if band_at_waypoints else None))
+    if flown and r.flown_feasible:
+        pts, ts = r.flown_trajectory()
+        fly = Trajectory(r.uav_id, np.asarray(pts), np.asarray(ts), True)
+        claims.append((f"{prefix}flown", verify_trajectories([fly], scenario), None))
+    return claims
+
+
 def planner_row(r: Any, scenario: Any) -> dict[str, Any]:
-    """The row of a single-UAV planner run."""
+    """The row of a single-UAV planner run, the verifier's verdict on it included."""
     return {
         "best_cost": r.cost,
         "path_length": r.length,
@@ -97,6 +170,7 @@ def planner_row(r: Any, scenario: Any) -> dict[str, Any]:
         "waypoints": np.asarray(r.waypoints).ravel().tolist(),
         "reference_length": scenario.metadata.get("reference_length"),
         "n_dim": int(np.asarray(r.waypoints).shape[1]),
+        **gate(result_claims(r, scenario)),
     }
 
 
@@ -153,6 +227,19 @@ def run_fleet(spec: RunSpec) -> dict[str, Any]:
     rep_f = verify_plan(d, scenario, trajectory="flown")
     smoothed = all(r.smoothed is not None for r in fr.results)
     rep_s = verify_plan(d, scenario, smoothed=True) if smoothed else None
+    # the claims: the polylines (together where they were planned apart; else each alone,
+    # kept apart only from the others' flights), and the flown fleet it guarantees
+    claims: list[Claim] = []
+    if fr.planned_feasible:
+        if rep is not None:
+            claims.append(("planned", rep, None))  # the engine checks the band along segments
+        else:
+            for r in fr.results:
+                # the engine checks the band along whole segments (strict_altitude)
+                claims += result_claims(
+                    r, scenario, f"{r.uav_id} ", flown=False, band_at_waypoints=False
+                )
+    claims += [("flown", rep_f, None)] if fr.feasible else []
     flown_length = 0.0
     for r in fr.results:
         pts, _ = r.flown_trajectory()
@@ -185,4 +272,5 @@ def run_fleet(spec: RunSpec) -> dict[str, Any]:
         "smoothed_not_clear": int(sum(r.smoothed_ok is False for r in fr.results)),
         "rrt_time": float(fr.info.get("rrt_time", 0.0)),
         "planner_wall_time": float(fr.wall_time),
+        **gate(claims),
     }

@@ -332,7 +332,9 @@ def _sweep(
     dask_client: Any,
     only: Sequence[str] | None,
 ) -> SweepSummary:
-    store = ResultStore(out)
+    # a shard per finished chunk, written when it ends (no timer: it would write a chunk's
+    # first row alone)
+    store = ResultStore(out, flush_seconds=math.inf)
     try:
         store.remove_stale_temporaries()
         write_json_atomic(
@@ -390,7 +392,7 @@ def _sweep(
                             prog.failed += 1
                             failures.append(f"{row['run_id']}: {row.get('error')}")
                     # a finished chunk is on disk before anything else happens: a kill now
-                    # loses nothing (the store's own timer would keep all but its first row)
+                    # loses nothing
                     store.flush()
                     if progress:
                         progress(prog)
