@@ -188,9 +188,10 @@ def test_a_killed_writers_temporary_file_is_removed_and_never_read(tmp_path: Pat
     runs = tmp_path / "runs"
     runs.mkdir()
     (runs / ".part-20260101T000000-dead-00001.parquet.k3j2.tmp").write_bytes(b"PAR1 half")
+    (tmp_path / ".manifest.json.x8a1.tmp").write_text('{"plan": ')
     assert ResultStore(tmp_path).finished_ids() == set()
     run_sweep(PLAN, tmp_path, executor="serial")
-    assert not list(runs.glob(".part-*"))
+    assert not list(runs.glob(".part-*")) and not list(tmp_path.glob(".*.tmp"))
 
 
 def test_an_unreadable_shard_is_named(tmp_path: Path) -> None:

@@ -162,11 +162,14 @@ class ResultStore:
         return len(self._buffer)
 
     def remove_stale_temporaries(self) -> int:
-        """Remove the temporary files of shard writes that never finished (a writer killed
-        mid-write). Only while no other process writes to this store (the runner holds the
-        folder's lock). Returns how many were removed."""
+        """Remove the temporary files of writes that never finished (a writer killed mid-write:
+        shards, the sweep's manifest and timing). Only while no other process writes to this
+        store (the runner holds the folder's lock). Returns how many were removed."""
         n = 0
-        for tmp in self.dir.glob(".part-*.tmp"):
+        stale = [*self.dir.glob(".part-*.tmp")]
+        for name in ("manifest.json", "last_sweep.json"):
+            stale += self.root.glob(f".{name}.*.tmp")
+        for tmp in stale:
             with contextlib.suppress(FileNotFoundError):
                 tmp.unlink()
                 n += 1
