@@ -110,9 +110,9 @@ def _pooled_sections(df: pd.DataFrame) -> list[tuple[str, str, Any]]:
 
 GATE_NOTE = (
     "; verified = runs whose plan, called feasible, the independent verifier passes; rejected "
-    "= runs where it rejects something called feasible (must be 0); band_between_waypoints = "
-    "polylines feasible under the papers' criterion (the altitude band at the waypoints) that "
-    "leave the band between two of them (the flown trajectories are checked along segments)"
+    "= runs where it rejects something called feasible (must be 0); band_paper_criterion = "
+    "polylines feasible under the papers' altitude criterion (the band at the waypoints) whose "
+    "band the verifier rejects along whole segments (what is flown is gated on it)"
 )
 
 
@@ -124,8 +124,8 @@ def _gate_columns(ok: pd.DataFrame, by: list[str]) -> pd.DataFrame | None:
         return None
     v = ok["verifier_ok"].astype("boolean")
     g = pd.DataFrame({"verified": v.eq(True), "rejected": v.eq(False)}).fillna(False).astype(int)
-    if "band_between_waypoints" in ok:
-        g["band_between_waypoints"] = ok["band_between_waypoints"].fillna(0).astype(int)
+    if "band_paper_criterion" in ok:
+        g["band_paper_criterion"] = ok["band_paper_criterion"].fillna(0).astype(int)
     return g.groupby([ok[c] for c in by]).sum()
 
 

@@ -95,7 +95,7 @@ class StoreError(OSError):
 
     def __init__(self, message: str, errno: int | None = None):
         super().__init__(message)
-        self.errno = errno  # type: ignore[misc]
+        self.errno = errno
 
 
 class ResultStore:

@@ -379,7 +379,7 @@ def run_mission(spec: RunSpec) -> dict[str, Any]:
         # the mission as flown (the area revealed), the first plan and the plan made knowing
         # the area, each where it is called feasible
         **gate(
-            ([("mission", rep, None)] if m.feasible else [])
+            ([("mission", rep, False)] if m.feasible else [])
             + result_claims(first, sc0, "first ")
             + result_claims(full, world, "full ")
         ),

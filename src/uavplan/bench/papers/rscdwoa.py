@@ -219,7 +219,7 @@ def run_rscdwoa(spec: RunSpec) -> dict[str, Any]:
         "n_arrived": int(sum(per["arrived"])),
         "flown_verified": bool(rep.ok),
         "feasible_but_failed": int(feasible and not rep.ok),
-        **gate([("flown", rep, None)] if feasible else []),
+        **gate([("flown", rep, False)] if feasible else []),
         "min_separation": float(rep.min_separation),
         **{f"uav_{k}": v for k, v in per.items() if k != "fitness_history"},
         "fitness_history": [
