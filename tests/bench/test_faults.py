@@ -141,12 +141,29 @@ def test_workers_lost_in_a_row_stop_the_sweep_with_one_line(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setattr(runner, "_iter_serial", _lossy([True, False, False, False]))
-    with pytest.raises(SweepStopped, match=r"workers died 3 times in a row .* are saved in"):
+    with pytest.raises(SweepStopped, match=r"workers lost 3 times in a row .* are saved in"):
         run_sweep(PLAN, tmp_path, executor="serial", max_pool_restarts=2)
     saved = ResultStore(tmp_path).finished_ids()
     assert saved  # the chunk before the losses
     monkeypatch.undo()
     assert run_sweep(PLAN, tmp_path, executor="serial").skipped == len(saved)
+
+
+def test_a_dask_cluster_without_workers_does_not_hang_the_sweep(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A local cluster whose nannies gave up restarting killed workers (seen in the fault
+    campaign: the sweep waited for ever) or a remote one that lost every node: after
+    NO_WORKER_TIMEOUT the workers count as lost; the sweep starts a new local cluster, or,
+    lost again and again, stops with one line."""
+    distributed = pytest.importorskip("distributed")
+    monkeypatch.setattr(runner, "NO_WORKER_TIMEOUT", 2.0)
+    with (
+        distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster,
+        distributed.Client(cluster) as client,
+        pytest.raises(SweepStopped, match=r"workers lost 2 times in a row .* no worker for 2 s"),
+    ):
+        run_sweep(PLAN, tmp_path, executor="dask", dask_client=client, max_pool_restarts=1)
 
 
 def test_a_full_disk_stops_the_sweep_and_keeps_what_was_written(

@@ -400,7 +400,7 @@ def _sweep(
                 losses += 1
                 if losses > max_pool_restarts:
                     raise SweepStopped(
-                        f"workers died {losses} times in a row with no chunk finishing in "
+                        f"workers lost {losses} times in a row with no chunk finishing in "
                         f"between (last: {exc}); {store.written} runs of this sweep are saved in "
                         f"{out}; if a run kills its worker (memory?), run fewer at once "
                         "(--workers) and run the same command again to resume"
@@ -461,17 +461,36 @@ def _flush_quietly(store: ResultStore) -> None:
         store.flush()
 
 
+#: seconds a Dask cluster may have no worker while runs wait before the runner counts its
+#: workers lost (a local cluster's nannies can give up restarting killed workers; a remote
+#: cluster can lose every node): the sweep then goes on with a new local cluster, or stops
+#: with one line after ``max_pool_restarts`` such losses in a row
+NO_WORKER_TIMEOUT = 60.0
+
+
 def _iter_dask_client(chunks: list[list[RunSpec]], client: Any) -> Iterator[list[dict[str, Any]]]:
-    from distributed import as_completed
+    from distributed import wait as dask_wait
     from distributed.scheduler import KilledWorker
 
     futures = client.map(execute_chunk, chunks, pure=False)
+    pending = set(futures)
+    without = 0.0  # seconds since the cluster was last seen with a worker
     try:
-        for fut in as_completed(futures):
+        while pending:
             try:
-                rows = fut.result()
-            except KilledWorker as exc:  # Dask gave up on a chunk whose workers kept dying
-                raise _WorkerLost(str(exc)) from exc
-            yield rows
+                done, pending = dask_wait(pending, timeout=2.0, return_when="FIRST_COMPLETED")
+            except TimeoutError:
+                without = 0.0 if client.nthreads() else without + 2.0
+                if without >= NO_WORKER_TIMEOUT:
+                    raise _WorkerLost(
+                        f"the Dask cluster has had no worker for {without:.0f} s"
+                    ) from None
+                continue
+            for fut in done:
+                try:
+                    rows = fut.result()
+                except KilledWorker as exc:  # Dask gave up on a chunk whose workers kept dying
+                    raise _WorkerLost(str(exc)) from exc
+                yield rows
     finally:
         client.cancel(futures)
