@@ -197,6 +197,7 @@ class Outcome:
     """What a fault campaign did and found."""
 
     kind: str
+    asked: int = 1
     kills: int = 0
     problems: list[str] = field(default_factory=list)
     orphans: int = 0
@@ -208,12 +209,13 @@ class Outcome:
 
     @property
     def ok(self) -> bool:
-        return not self.problems and not self.orphans and self.finished and self.final_equal
+        clean = not self.problems and not self.orphans
+        return self.kills >= self.asked and clean and self.finished and self.final_equal
 
     def line(self) -> str:
         verdict = "ok" if self.ok else "FAILED"
         text = (
-            f"{self.kind}: {self.kills} kills, {len(self.problems)} problems, "
+            f"{self.kind}: {self.kills} kills of {self.asked}, {len(self.problems)} problems, "
             f"{self.orphans} orphaned workers, resumed to the end: {self.finished}, equal to "
             f"the uninterrupted sweep: {self.final_equal}; {self.seconds:.0f} s: {verdict}"
         )
@@ -255,9 +257,11 @@ def _finish(cmd: SweepCommand, reference: pd.DataFrame, outcome: Outcome, before
     _conclude(cmd, reference, outcome, before, proc, wait_end(proc))
 
 
-def _begin(what: str, cmd: SweepCommand, reference: pd.DataFrame) -> tuple[Outcome, set[str]]:
+def _begin(
+    what: str, cmd: SweepCommand, reference: pd.DataFrame, asked: int = 1
+) -> tuple[Outcome, set[str]]:
     """A campaign's outcome, and the runs the folder holds before it (checked)."""
-    outcome = Outcome(f"{what} ({cmd.executor}, {cmd.workers} workers)")
+    outcome = Outcome(f"{what} ({cmd.executor}, {cmd.workers} workers)", asked)
     check = check_folder(cmd.out, set(), reference)
     outcome.problems += check.problems
     return outcome, check.stored
@@ -285,7 +289,7 @@ def kill_runner(
 ) -> Outcome:
     """SIGKILL the whole ``bench run`` process ``kills`` times at random moments, starting it
     again after each; then let it finish."""
-    outcome, stored = _begin("runner killed", cmd, reference)
+    outcome, stored = _begin("runner killed", cmd, reference, kills)
     while outcome.kills < kills:
         proc = cmd.start()
         try:
@@ -322,7 +326,7 @@ def kill_workers(
     """One sweep; SIGKILL one of its workers (a pool worker, or a Dask worker with
     ``cmd.executor == "dask"``) at a random moment once runs are being stored, ``kills``
     times; the runner goes on by itself. The folder is checked after every kill."""
-    outcome, stored = _begin("worker killed", cmd, reference)
+    outcome, stored = _begin("worker killed", cmd, reference, kills)
     proc = cmd.start()
     try:
         while outcome.kills < kills:
