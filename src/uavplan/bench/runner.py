@@ -175,6 +175,7 @@ def _iter_process(chunks: list[list[RunSpec]], workers: int) -> Iterator[list[di
     pending: set[Future[list[dict[str, Any]]]] = set()
     queue = list(reversed(chunks))
     complete = False
+    dead_for = 0.0  # seconds since a dead worker was seen with no chunk finishing
     try:
         while queue or pending:
             while queue and len(pending) < 2 * workers:
@@ -182,7 +183,13 @@ def _iter_process(chunks: list[list[RunSpec]], workers: int) -> Iterator[list[di
                     pending.add(pool.submit(execute_chunk, queue.pop()))
                 except BrokenProcessPool as exc:  # a worker died since the last wait
                     raise _WorkerLost(str(exc)) from exc
-            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            done, pending = wait(pending, timeout=2.0, return_when=FIRST_COMPLETED)
+            if not done:  # a dead worker the pool has not noticed (seen once in 3.11) is lost
+                dead_for = dead_for + 2.0 if _dead_worker(pool) else 0.0
+                if dead_for >= DEAD_WORKER_TIMEOUT:
+                    raise _WorkerLost(f"a worker died {dead_for:.0f} s ago, its pool hangs")
+                continue
+            dead_for = 0.0
             lost: BaseException | None = None
             for fut in done:  # the chunks that finished are stored before the loss is handled
                 try:
@@ -200,6 +207,17 @@ def _iter_process(chunks: list[list[RunSpec]], workers: int) -> Iterator[list[di
         if not complete:  # the sweep stops: the runs in flight would be stored by nobody
             _terminate_workers(pool)
         pool.shutdown(wait=False, cancel_futures=True)
+
+
+#: seconds a worker may be seen dead, with no chunk finishing, before the runner counts it lost
+#: itself (the pool normally notices at once and fails its futures)
+DEAD_WORKER_TIMEOUT = 20.0
+
+
+def _dead_worker(pool: ProcessPoolExecutor) -> bool:
+    """Whether one of the pool's worker processes has ended (private attribute, as above)."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    return any(p.exitcode is not None for p in procs)
 
 
 def _terminate_workers(pool: ProcessPoolExecutor) -> None:
