@@ -43,11 +43,34 @@ def test_plan_runs_at_smoke_scale(name: str, tmp_path: Path) -> None:
         apart = ok["verified"].notna()
         assert not (ok["feasible"].astype(bool) & apart & ~ok["verified"].astype("boolean")).any()
         assert (flown | (ok["flown_not_ok"] > 0)).all()  # a failed fleet names its UAVs
+    assert_gate(plan.kind, df)
     html, md = write_report(tmp_path)
     text = html.read_text()
     assert "<table>" in text and "data:image/png;base64," in text
     if plan.reference and len(plan.algorithms) > 1:
         assert "rank-sum" in md.read_text()
+
+
+def assert_gate(kind: str, df: pd.DataFrame) -> None:
+    """The verifier as a gate (issue 19 item 6): every run that calls its plan feasible
+    (``feasible``: the path, the fleet's polylines, the mission as flown, and ``flown_feasible``
+    where the row has it) has the independent verifier's verdict on it, and the verifier
+    passes it (it also passes everything else the run calls feasible: ``verifier_ok`` is never
+    False). Benchmark functions plan nothing."""
+    if kind == "function":
+        return
+    ok = df[df["status"] == "ok"]
+    assert "verifier_ok" in ok.columns, f"run kind {kind!r} records no verifier verdict"
+    verdict = ok["verifier_ok"].astype("boolean")
+    claimed = ok["feasible"].astype(bool)
+    if "flown_feasible" in ok.columns:
+        claimed |= ok["flown_feasible"].astype(bool)
+    unchecked = ok[claimed & verdict.isna()]
+    assert unchecked.empty, f"called feasible, not verified: {unchecked['run_id'].tolist()}"
+    rejected = ok[verdict.fillna(True) == False]  # noqa: E712 - a nullable boolean column
+    assert rejected.empty, "called feasible, rejected by the verifier:\n" + "\n".join(
+        f"{r.run_id}: {r.verifier_rejects}" for r in rejected.itertuples()
+    )
 
 
 def test_run_counts_match_the_runs_of_every_plan_and_scale() -> None:

@@ -2,12 +2,6 @@
 
 from __future__ import annotations
 
-import os
-import signal
-import subprocess
-import sys
-import textwrap
-import time
 from pathlib import Path
 
 import numpy as np
@@ -107,52 +101,6 @@ def test_interrupt_saves_finished_runs(tmp_path: Path) -> None:
     rest = run_sweep(PLAN, tmp_path, executor="serial")
     assert rest.skipped == len(saved) and rest.skipped + rest.executed == 24
     assert _results(tmp_path).run_id.is_unique
-
-
-def test_killed_sweep_resumes_without_loss_or_duplicates(tmp_path: Path) -> None:
-    """SIGKILL the whole sweep process mid-way, start again: every run exactly once, and the
-    same values as an uninterrupted sweep."""
-    script = textwrap.dedent(f"""
-        from uavplan.bench.plans import Algorithm, ExperimentPlan, Scale
-        from uavplan.bench.runner import run_sweep
-        import uavplan.bench.store as st
-        st.ResultStore.__init__.__defaults__ = (3, 0.05)
-        plan = ExperimentPlan("t-kill", "t", ("sphere6",), (Algorithm("pso", "pso"),),
-            {{"smoke": Scale(runs=60, iterations=30, pop_size=30),
-              "paper": Scale(runs=60, iterations=30, pop_size=30)}}, kind="function")
-        run_sweep(plan, {str(tmp_path / "killed")!r}, executor="serial")
-    """)
-    proc = subprocess.Popen([sys.executable, "-c", script])
-    shards = tmp_path / "killed" / "runs"
-    deadline = time.time() + 120
-    while time.time() < deadline:
-        if shards.exists() and len(list(shards.glob("part-*.parquet"))) >= 2:
-            break
-        time.sleep(0.02)
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.wait()
-    partial = ResultStore(tmp_path / "killed").finished_ids()
-    assert 0 < len(partial) < 60, len(partial)
-    # no half-written shard is ever visible under its final name
-    for shard in shards.glob("part-*.parquet"):
-        pd.read_parquet(shard)
-    subprocess.run([sys.executable, "-c", script], check=True)
-    killed = _results(tmp_path / "killed")
-    assert len(killed) == 60 and killed.run_id.is_unique
-    plan = ExperimentPlan(
-        "t-kill",
-        "t",
-        ("sphere6",),
-        (Algorithm("pso", "pso"),),
-        {
-            "smoke": Scale(runs=60, iterations=30, pop_size=30),
-            "paper": Scale(runs=60, iterations=30, pop_size=30),
-        },
-        kind="function",
-    )
-    run_sweep(plan, tmp_path / "clean", executor="serial")
-    clean = _results(tmp_path / "clean")
-    assert killed.best_cost.tolist() == clean.best_cost.tolist()
 
 
 def test_failing_runs_are_recorded_and_sweep_goes_on(tmp_path: Path) -> None:

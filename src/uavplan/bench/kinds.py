@@ -5,6 +5,15 @@ function), ``fleet`` (a fleet planner, its plan checked by the independent verif
 whose runs need something else registers its own kind with :func:`register_kind` in its module
 under :mod:`uavplan.bench.papers`. A kind takes the :class:`~uavplan.bench.plans.RunSpec` and
 returns the run's metrics (the columns of its row).
+
+**The verifier as a gate.** Every kind that plans paths runs the independent verifier
+(:mod:`uavplan.verify`, which imports no planning code) in the worker on every trajectory the
+run calls feasible, and records the verdict with :func:`gate`: ``verifier_ok`` (True: all of
+them pass; False: the verifier rejects one; None: the run calls nothing feasible),
+``verifier_rejects`` (the first violations of a rejected one) and ``band_paper_criterion``
+(polylines feasible under the papers' altitude criterion, the band at the waypoints, that the
+verifier's band check along whole segments fails). ``tests/bench/test_plans.py`` asserts
+``verifier_ok`` on every smoke run that calls a plan feasible; the report counts them.
 """
 
 from __future__ import annotations
@@ -81,8 +90,63 @@ def plan_run(spec: RunSpec) -> Any:
     return planner.plan(_scenario(spec.scenario), None, _budget(p), spec.seed)
 
 
+#: A claim the verifier judged: (what, its report, whether it was called feasible under the
+#: papers' altitude criterion: a polyline whose band a planner checks at its waypoints only).
+Claim = tuple[str, Any, bool]
+
+
+def gate(claims: list[Claim]) -> dict[str, Any]:
+    """The gate's columns from the verifier's reports on what a run calls feasible:
+
+    * ``verifier_ok``: True when every claim passes the verifier, False when it rejects one,
+      None when the run calls nothing feasible;
+    * ``verifier_rejects``: the first violations of the rejected claims;
+    * ``band_paper_criterion``: how many polylines called feasible under the papers' altitude
+      criterion (the band checked at the waypoints, heights read as the paper reads them:
+      PPSwarm Eq. 7, SPSO's nearest DEM cell; ``docs/decisions.md``) the verifier's band check
+      fails (along whole segments on the bilinear DEM). Such a polyline is counted, not
+      rejected, for the band alone: it is the criterion the papers' results are compared under;
+      every other check of it is gated, and the trajectory that is flown is gated on all of
+      them, the band along whole segments included.
+    """
+    notes: list[str] = []
+    rejected = band = 0
+    for what, rep, paper_band in claims:
+        hard = [v for v in rep.violations if not (paper_band and v.kind == "altitude")]
+        band += len(hard) < len(rep.violations)
+        rejected += bool(hard)
+        notes += [f"{what}: {v.kind}: {v.message}" for v in hard]
+    return {
+        "verifier_ok": None if not claims else not rejected,
+        "verifier_rejects": "; ".join(notes[:3]),
+        "band_paper_criterion": band,
+    }
+
+
+def result_claims(
+    r: Any, scenario: Any, prefix: str = "", flown: bool = True, paper_band: bool = True
+) -> list[Claim]:
+    """The verifier on what a single-UAV :class:`~uavplan.planners.PlanResult` calls feasible:
+    its planned polyline (a geometric path: clearances, bounds, maximum speed; its band judged
+    by the papers' criterion unless ``paper_band`` is False, see :func:`gate`) and the
+    trajectory it is to fly (kinematic limits too, the band along whole segments, as ``uavplan
+    plan`` checks before it exits 0; unless ``flown`` is False), each if the result claims it."""
+    from uavplan.verify import Trajectory, verify_trajectories
+
+    claims: list[Claim] = []
+    if r.feasible:
+        line = Trajectory(r.uav_id, np.asarray(r.waypoints), np.asarray(r.times), True)
+        rep = verify_trajectories([line], scenario, kinematics=False)
+        claims.append((f"{prefix}planned", rep, paper_band))
+    if flown and r.flown_feasible:
+        pts, ts = r.flown_trajectory()
+        fly = Trajectory(r.uav_id, np.asarray(pts), np.asarray(ts), True)
+        claims.append((f"{prefix}flown", verify_trajectories([fly], scenario), False))
+    return claims
+
+
 def planner_row(r: Any, scenario: Any) -> dict[str, Any]:
-    """The row of a single-UAV planner run."""
+    """The row of a single-UAV planner run, the verifier's verdict on it included."""
     return {
         "best_cost": r.cost,
         "path_length": r.length,
@@ -97,6 +161,7 @@ def planner_row(r: Any, scenario: Any) -> dict[str, Any]:
         "waypoints": np.asarray(r.waypoints).ravel().tolist(),
         "reference_length": scenario.metadata.get("reference_length"),
         "n_dim": int(np.asarray(r.waypoints).shape[1]),
+        **gate(result_claims(r, scenario)),
     }
 
 
@@ -153,6 +218,17 @@ def run_fleet(spec: RunSpec) -> dict[str, Any]:
     rep_f = verify_plan(d, scenario, trajectory="flown")
     smoothed = all(r.smoothed is not None for r in fr.results)
     rep_s = verify_plan(d, scenario, smoothed=True) if smoothed else None
+    # the claims: the polylines (together where they were planned apart; else each alone,
+    # kept apart only from the others' flights), and the flown fleet it guarantees
+    claims: list[Claim] = []
+    if fr.planned_feasible:
+        if rep is not None:
+            claims.append(("planned", rep, False))  # the engine checks the band along segments
+        else:
+            for r in fr.results:
+                # the engine checks the band along whole segments (strict_altitude)
+                claims += result_claims(r, scenario, f"{r.uav_id} ", flown=False, paper_band=False)
+    claims += [("flown", rep_f, False)] if fr.feasible else []
     flown_length = 0.0
     for r in fr.results:
         pts, _ = r.flown_trajectory()
@@ -185,4 +261,5 @@ def run_fleet(spec: RunSpec) -> dict[str, Any]:
         "smoothed_not_clear": int(sum(r.smoothed_ok is False for r in fr.results)),
         "rrt_time": float(fr.info.get("rrt_time", 0.0)),
         "planner_wall_time": float(fr.wall_time),
+        **gate(claims),
     }

@@ -98,11 +98,35 @@ def _pooled_sections(df: pd.DataFrame) -> list[tuple[str, str, Any]]:
         evaluations=("evaluations", "mean"),
         wall_time_s=("wall_time", "mean"),
     )
+    gate = _gate_columns(ok, ["algorithm"])
+    if gate is not None:
+        table = table.join(gate)
     note = (
         f"{ok['scenario'].nunique()} scenarios: per-scenario tables and figures are left out; "
-        "means over every run of every scenario"
+        "means over every run of every scenario" + GATE_NOTE * (gate is not None)
     )
     return [("Runs per algorithm", note, table)]
+
+
+GATE_NOTE = (
+    "; verified = runs whose plan, called feasible, the independent verifier passes; rejected "
+    "= runs where it rejects something called feasible (must be 0); band_paper_criterion = "
+    "polylines feasible under the papers' altitude criterion (the band at the waypoints) whose "
+    "band the verifier rejects along whole segments (what is flown is gated on it)"
+)
+
+
+def _gate_columns(ok: pd.DataFrame, by: list[str]) -> pd.DataFrame | None:
+    """The verifier's verdicts per group (``verifier_ok``, see :mod:`uavplan.bench.kinds`):
+    runs verified and runs rejected; None for runs without the column (benchmark functions,
+    results stored before it existed)."""
+    if "verifier_ok" not in ok or ok["verifier_ok"].isna().all():
+        return None
+    v = ok["verifier_ok"].astype("boolean")
+    g = pd.DataFrame({"verified": v.eq(True), "rejected": v.eq(False)}).fillna(False).astype(int)
+    if "band_paper_criterion" in ok:
+        g["band_paper_criterion"] = ok["band_paper_criterion"].fillna(0).astype(int)
+    return g.groupby([ok[c] for c in by]).sum()
 
 
 def build_sections(df: pd.DataFrame, manifest: dict[str, Any]) -> list[tuple[str, str, Any]]:
@@ -132,12 +156,17 @@ def build_sections(df: pd.DataFrame, manifest: dict[str, Any]) -> list[tuple[str
     )
     if "path_length" in ok and ok["path_length"].notna().any():
         extra["path_length"] = ok.groupby(["scenario", "algorithm"])["path_length"].mean()
+    gate = _gate_columns(ok, ["scenario", "algorithm"])
+    if gate is not None:
+        extra = extra.join(gate)
     sections.append(
         (
             "Feasibility, F-Measure and effort",
             "feasible = share of runs whose final path is feasible (exact, continuous segments); "
             "first_feasible_iteration = mean 1-based iteration of the first feasible candidate "
-            "(RGG-PSO+'s F-Measure counts the iterations before it); wall time per run in seconds",
+            "(RGG-PSO+'s F-Measure counts the iterations before it); wall time per run in seconds"
+            + GATE_NOTE
+            * (gate is not None),
             extra,
         )
     )

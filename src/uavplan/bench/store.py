@@ -1,10 +1,12 @@
 """The results store: finished runs as Parquet shards under ``DIR/runs/``.
 
-Each shard is written atomically (a temporary file, then ``os.replace``), so a reader (pandas,
-DuckDB, pyarrow) never sees a half-written record, and a sweep killed at any instant leaves only
-whole shards behind. A run is *finished* once its row is in a shard; starting the same sweep
-again skips finished runs. Rows are tidy: one per run, metrics and run metadata as columns,
-the convergence history as a compact ``list<float32>`` column.
+Each shard is written atomically (a fsynced temporary file, then ``os.replace``, then a fsync of
+the folder), so a reader (pandas, DuckDB, pyarrow) never sees a half-written record, and a sweep
+killed at any instant, or stopped by a full disk, leaves only whole shards behind (and at most a
+hidden ``.part-*.tmp`` file, which the next sweep removes). A run is *finished* once its row is
+in a shard; starting the same sweep again skips finished runs. Rows are tidy: one per run,
+metrics and run metadata as columns, the convergence history as a compact ``list<float32>``
+column.
 
 Read everything with ``pandas.read_parquet(DIR / "runs")`` or, in DuckDB,
 ``SELECT * FROM read_parquet('DIR/runs/*.parquet')``.
@@ -12,6 +14,7 @@ Read everything with ``pandas.read_parquet(DIR / "runs")`` or, in DuckDB,
 
 from __future__ import annotations
 
+import contextlib
 import os
 import time
 import uuid
@@ -23,6 +26,8 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
+
+from uavplan.io.atomic import write_bytes_atomic
 
 #: Columns every row has (others, plan-specific, may be added).
 BASE_COLUMNS = (
@@ -53,6 +58,45 @@ BASE_COLUMNS = (
     "history",
 )
 
+#: Columns that measure the machine and the moment rather than the run: times, memory, the
+#: host and the code's version. Every other column is a function of the run's identity (plan,
+#: scale, scenario, configuration, run index, root seed) alone: the same bits on any executor,
+#: with any number of workers, on a rerun (``tests/bench/test_determinism.py`` compares them).
+#: A run kind that records a new measurement adds its column here.
+MEASURED_COLUMNS = frozenset(
+    {
+        # every row (bench/execute.py)
+        "wall_time",
+        "compile_time",
+        "start_time",
+        "end_time",
+        "peak_rss_mb",
+        "rss_before_mb",
+        "version",
+        "git_commit",
+        "host",
+        "cpu",
+        "python",
+        # the fleet kind: the planner's own clocks
+        "planner_wall_time",
+        "rrt_time",
+        # the rscdwoa kind: planning time per UAV
+        "uav_plan_s",
+        # the mission kind: the repair's compute time and whether it met its deadline
+        "repair_ms",
+        "deadline_missed",
+    }
+)
+
+
+class StoreError(OSError):
+    """The store cannot be written (a full disk, a read-only folder) or read (a shard that is
+    not Parquet); the message (``str``) names the folder or file; ``errno`` is the cause's."""
+
+    def __init__(self, message: str, errno: int | None = None):
+        super().__init__(message)
+        self.errno = errno
+
 
 class ResultStore:
     """Append-only store of run rows in ``root/runs/*.parquet``.
@@ -73,6 +117,12 @@ class ResultStore:
         self._last_flush = time.monotonic()
         self._session = uuid.uuid4().hex[:8]
         self._seq = 0
+        # column types of the shards on disk: known (non-null) types, and the shards where a
+        # column is all null (scanned once, then kept up to date with this store's writes)
+        self._known: dict[str, pa.DataType] | None = None
+        self._nulls: dict[Path, list[str]] = {}
+        #: rows written to shards by this store object
+        self.written = 0
 
     # ------------------------------------------------------------------ writing
     def add(self, row: Mapping[str, Any]) -> None:
@@ -84,17 +134,66 @@ class ResultStore:
             self.flush()
 
     def flush(self) -> Path | None:
-        """Write the buffered rows as one shard, atomically. Returns its path (or None)."""
+        """Write the buffered rows as one shard, atomically. Returns its path (or None).
+
+        Raises:
+            StoreError: the shard could not be written (e.g. no space left); the rows stay
+                buffered, every shard already written is intact and no temporary file is left.
+        """
         self._last_flush = time.monotonic()
         if not self._buffer:
             return None
-        table = self._harmonize(rows_to_table(self._buffer))
-        self._seq += 1
-        name = f"part-{time.strftime('%Y%m%dT%H%M%S')}-{self._session}-{self._seq:05d}.parquet"
-        final = self.dir / name
-        _write_shard(table, final)
+        try:
+            table = self._harmonize(rows_to_table(self._buffer))
+            self._seq += 1
+            name = f"part-{time.strftime('%Y%m%dT%H%M%S')}-{self._session}-{self._seq:05d}.parquet"
+            final = self.dir / name
+            _write_shard(table, final)
+        except OSError as exc:
+            raise StoreError(f"cannot write to {self.dir}: {_reason(exc)}", exc.errno) from exc
+        self._note_schema(final, table.schema)
+        self.written += len(self._buffer)
         self._buffer.clear()
         return final
+
+    @property
+    def buffered(self) -> int:
+        """Rows added and not yet written."""
+        return len(self._buffer)
+
+    def remove_stale_temporaries(self) -> int:
+        """Remove the temporary files of writes that never finished (a writer killed mid-write:
+        shards, the sweep's manifest and timing). Only while no other process writes to this
+        store (the runner holds the folder's lock). Returns how many were removed."""
+        n = 0
+        stale = [*self.dir.glob(".part-*.tmp")]
+        for name in ("manifest.json", "last_sweep.json"):
+            stale += self.root.glob(f".{name}.*.tmp")
+        for tmp in stale:
+            with contextlib.suppress(FileNotFoundError):
+                tmp.unlink()
+                n += 1
+        return n
+
+    def _scan_schemas(self) -> dict[str, pa.DataType]:
+        if self._known is None:
+            self._known = {}
+            for shard in self.shards():
+                self._note_schema(shard, _read_schema(shard))
+        return self._known
+
+    def _note_schema(self, shard: Path, schema: pa.Schema) -> None:
+        known = self._known if self._known is not None else self._scan_schemas()
+        nulls = []
+        for f in schema:
+            if _nullish(f.type):
+                nulls.append(f.name)
+            else:
+                known.setdefault(f.name, f.type)
+        if nulls:
+            self._nulls[shard] = nulls
+        else:
+            self._nulls.pop(shard, None)
 
     def _harmonize(self, table: pa.Table) -> pa.Table:
         """One type per column across the store's shards. A kind's own metric that is null in
@@ -102,26 +201,20 @@ class ResultStore:
         first shard's schema and cannot cast numbers to null. So a null column takes the type
         the other shards give it, and earlier shards where it was null are rewritten with the
         type this one brings (each atomically, as written)."""
-        known: dict[str, pa.DataType] = {}
-        nulls: dict[Path, list[str]] = {}
-        for shard in self.shards():
-            for f in pq.read_schema(shard):
-                if _nullish(f.type):
-                    nulls.setdefault(shard, []).append(f.name)
-                else:
-                    known.setdefault(f.name, f.type)
+        known = self._scan_schemas()
         for i, f in enumerate(table.schema):
             if _nullish(f.type) and f.name in known:
                 table = table.set_column(i, f.name, table.column(i).cast(known[f.name]))
         mine = {f.name: f.type for f in table.schema if not _nullish(f.type)}
-        for shard, cols in nulls.items():
+        for shard, cols in list(self._nulls.items()):
             fix = [c for c in cols if c in mine and c not in known]
             if fix:
-                old = pq.read_table(shard)
+                old = _read_table(shard)
                 for c in fix:
                     i = old.schema.get_field_index(c)
                     old = old.set_column(i, c, old.column(i).cast(mine[c]))
                 _write_shard(old, shard)
+                self._note_schema(shard, old.schema)
         return table
 
     # ------------------------------------------------------------------ reading
@@ -132,7 +225,7 @@ class ResultStore:
         """Ids of the runs already in the store (by default errored runs count as finished)."""
         ids: set[str] = set()
         for shard in self.shards():
-            t = pq.read_table(shard, columns=["run_id", "status"])
+            t = _read_table(shard, columns=["run_id", "status"])
             run_ids = t.column("run_id").to_pylist()
             if include_errors:
                 ids.update(run_ids)
@@ -147,7 +240,7 @@ class ResultStore:
         shards = self.shards()
         if not shards:
             return pd.DataFrame(columns=list(columns or BASE_COLUMNS))
-        tables = [pq.read_table(s, columns=columns) for s in shards]
+        tables = [_read_table(s, columns=columns) for s in shards]
         df = pa.concat_tables(tables, promote_options="default").to_pandas()
         if "run_id" in df.columns:
             df = df.drop_duplicates("run_id", keep="last").reset_index(drop=True)
@@ -202,12 +295,43 @@ def _nullish(t: pa.DataType) -> bool:
 
 
 def _write_shard(table: pa.Table, path: Path) -> None:
-    """Write ``table`` to ``path`` atomically: a fsynced temporary file, then a rename."""
-    tmp = path.parent / f".{path.name}.tmp"
-    pq.write_table(table, tmp, compression="zstd")
-    with open(tmp, "rb+") as f:
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
+    """Write ``table`` to ``path`` atomically: a fsynced temporary file (removed if the write
+    fails), a rename, then a fsync of the folder, so that the rename outlives a crash of the
+    machine too."""
+    sink = pa.BufferOutputStream()
+    pq.write_table(table, sink, compression="zstd")
+    write_bytes_atomic(path, sink.getvalue().to_pybytes())
+    with contextlib.suppress(OSError):  # not every platform opens folders
+        fd = os.open(path.parent, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+
+def _reason(exc: OSError) -> str:
+    return exc.strerror or str(exc)
+
+
+def _unreadable(shard: Path, exc: Exception) -> StoreError:
+    return StoreError(
+        f"{shard}: not a readable Parquet shard ({exc}); move it out of {shard.parent} "
+        "and its runs are run again by the next sweep",
+    )
+
+
+def _read_table(shard: Path, columns: list[str] | None = None) -> pa.Table:
+    try:
+        return pq.read_table(shard, columns=columns)
+    except (pa.ArrowException, OSError) as exc:
+        raise _unreadable(shard, exc) from exc
+
+
+def _read_schema(shard: Path) -> pa.Schema:
+    try:
+        return pq.read_schema(shard)
+    except (pa.ArrowException, OSError) as exc:
+        raise _unreadable(shard, exc) from exc
 
 
 def rows_to_table(rows: list[dict[str, Any]]) -> pa.Table:

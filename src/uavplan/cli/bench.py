@@ -67,11 +67,16 @@ def run(
         typer.Option(help="Run only these configurations (comma-separated labels) of PLAN."),
     ] = None,
 ) -> None:
-    """Run PLAN; finished runs in --out are skipped, so the same command resumes a sweep."""
+    """Run PLAN; finished runs in --out are skipped, so the same command resumes a sweep.
+
+    Exit codes: 0 every run ok; 1 some runs failed (recorded; --retry-failed runs them again);
+    2 bad input, or the sweep stopped (results cannot be written, e.g. a full disk; --out in use
+    by another sweep; an unreadable shard): one line says why, everything stored before is
+    intact and the same command resumes; 130 Ctrl-C."""
     from uavplan.bench.catalog import get_plan
     from uavplan.bench.plans import PlanError
     from uavplan.bench.runner import Progress as SweepProgress
-    from uavplan.bench.runner import SweepInterrupted, run_sweep
+    from uavplan.bench.runner import SweepInterrupted, SweepStopped, run_sweep
 
     try:
         p = get_plan(plan)
@@ -134,6 +139,8 @@ def run(
             )
         except SweepInterrupted as exc:
             raise _fail(str(exc), 130) from None
+        except SweepStopped as exc:  # a full disk, a folder in use, an unreadable shard
+            raise _fail(f"bench run {plan}: {exc}") from None
         except (OSError, RuntimeError, ValueError) as exc:
             raise _fail(f"bench run {plan}: {exc}", 1) from None
     out.print(
@@ -152,10 +159,7 @@ def run(
     if len(summary.failures) > 20:
         err.print(f"... and {len(summary.failures) - 20} more failures")
     if report:
-        from uavplan.bench.report import write_report
-
-        paths = write_report(folder)
-        out.print(f"report: {paths[0]}")
+        out.print(f"report: {_write_report(folder)[0]}")
     if summary.failed:
         raise typer.Exit(1)
 
@@ -164,9 +168,22 @@ def report(
     folder: Annotated[Path, typer.Argument(help="A results folder written by `bench run`.")],
 ) -> None:
     """Write FOLDER/report.html (self-contained) and FOLDER/report.md, figures as PNG."""
-    from uavplan.bench.report import write_report
-
     if not (folder / "runs").is_dir():
         raise _fail(f"{folder}: not a results folder (no runs/ inside)")
-    html_path, md_path = write_report(folder)
+    html_path, md_path = _write_report(folder)
     out.print(f"wrote {html_path} and {md_path}")
+
+
+def _write_report(folder: Path) -> tuple[Path, Path]:
+    """The report of ``folder``, or a one-line error (a shard that cannot be read, no space)."""
+    from uavplan.bench.report import write_report
+    from uavplan.bench.store import StoreError
+
+    try:
+        return write_report(folder)
+    except StoreError as exc:
+        raise _fail(f"report: {exc}") from None
+    except OSError as exc:
+        why = exc.strerror or exc
+        raise _fail(f"report: cannot write to {folder}: {why}; the runs are kept; "
+                    f"`uavplan report {folder}` writes the report again") from None  # fmt: skip

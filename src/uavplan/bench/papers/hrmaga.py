@@ -30,7 +30,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from uavplan._lazy import lazy_module
-from uavplan.bench.kinds import _budget, plan_run, planner_row, register_kind
+from uavplan.bench.kinds import (
+    _budget,
+    gate,
+    plan_run,
+    planner_row,
+    register_kind,
+    result_claims,
+)
 from uavplan.bench.plans import Algorithm, ExperimentPlan, RunSpec, Scale, register_plan
 from uavplan.bench.stats import stack_histories
 
@@ -369,6 +376,13 @@ def run_mission(spec: RunSpec) -> dict[str, Any]:
         "full_feasible": bool(full.feasible),
         "loss_vs_full": float(loss.cost[0]) / float(full.cost) if full.cost else np.nan,
         "area_at": frac,
+        # the mission as flown (the area revealed), the first plan and the plan made knowing
+        # the area, each where it is called feasible
+        **gate(
+            ([("mission", rep, False)] if m.feasible else [])
+            + result_claims(first, sc0, "first ")
+            + result_claims(full, world, "full ")
+        ),
     }
 
 

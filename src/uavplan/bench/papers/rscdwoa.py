@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from uavplan._lazy import lazy_module
-from uavplan.bench.kinds import register_kind
+from uavplan.bench.kinds import gate, register_kind
 from uavplan.bench.plans import Algorithm, ExperimentPlan, RunSpec, Scale, register_plan
 from uavplan.bench.stats import stack_histories
 
@@ -219,6 +219,7 @@ def run_rscdwoa(spec: RunSpec) -> dict[str, Any]:
         "n_arrived": int(sum(per["arrived"])),
         "flown_verified": bool(rep.ok),
         "feasible_but_failed": int(feasible and not rep.ok),
+        **gate([("flown", rep, False)] if feasible else []),
         "min_separation": float(rep.min_separation),
         **{f"uav_{k}": v for k, v in per.items() if k != "fitness_history"},
         "fitness_history": [
