@@ -294,8 +294,9 @@ def kill_runner(
         proc = cmd.start()
         try:
             shards0 = n_shards(cmd.out)
-            if rng.random() < 0.25:  # any moment: starting, warming up, first runs
-                wait_for(lambda: False, float(rng.uniform(0.0, 4.0)), proc)
+            if rng.random() < 0.25:  # any moment while starting, up to the first new shard
+                # (a fixed span could outlast a short sweep on an idle machine)
+                wait_for(lambda s=shards0: n_shards(cmd.out) > s, float(rng.uniform(0, 4)), proc)
             else:  # once runs are being stored, a random moment later
                 wait_for(lambda s=shards0: n_shards(cmd.out) > s, 120.0, proc)
                 wait_for(lambda: False, float(rng.uniform(0.0, cmd.within)), proc)

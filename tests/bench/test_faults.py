@@ -24,7 +24,7 @@ from uavplan.bench.store import ResultStore
 
 #: the default run's sweep: short runs, one worker (each start of a worker costs 1-2 s of CPU
 #: on imports and kernels), kills soon after a shard is stored
-QUICK: dict[str, Any] = {"runs": 600, "iterations": 20, "within": 0.5, "workers": 1}
+QUICK: dict[str, Any] = {"runs": 600, "iterations": 80, "within": 0.5, "workers": 1}
 #: the slow campaign's: long enough for 20 kills
 LONG: dict[str, Any] = {"runs": 6000, "iterations": 40, "within": 1.0}
 
