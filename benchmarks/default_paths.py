@@ -10,11 +10,12 @@ also through the CLI with its defaults (polished, as a user gets them):
 
 * ``len/shortest``: median and worst length over the shortest feasible path any run reached,
   whatever it cost under the scenario's objective;
-* ``cost/best`` and ``len/best``: the median cost over the best (lowest) cost any run reached
-  under the scenario's own cost preset (every plan is scored by it: the plan's ``cost``), and
-  the median and worst length over that best result's length. Where the objective is length
-  alone the two references are the same path; where it weighs more than length (threats, danger
-  areas, terrain height) the shortest path can be a worse result (it crosses a danger area).
+* ``cost/best`` and ``len/best``: the median and worst cost over the best (lowest) cost any run
+  reached under the scenario's own cost preset (every plan is scored by it: the plan's
+  ``cost``), and the median and worst length over that best result's length. Where the
+  objective is length alone the two references are the same path; where it weighs more than
+  length (threats, danger areas, terrain height) the shortest path can be a worse result (it
+  crosses a danger area).
 
 Fleets: the length and cost are the fleet's totals.
 
@@ -77,7 +78,8 @@ def main() -> int:
     names = a.scenarios.split(",") if a.scenarios else builtin_names()
     bad = 0
     head = ["scenario".ljust(18), "planner".ljust(8), "feasible", "loops"]
-    head += ["len/shortest", "cost/best", "len/best".rjust(13), " shortest from; best from"]
+    head += ["len/shortest", "cost/best".rjust(13), "len/best".rjust(13)]
+    head += [" shortest from; best from"]
     print(" ".join(head))
     for name in names:
         fleet = len(load_builtin(name).tasks) > 1
@@ -111,10 +113,10 @@ def main() -> int:
         best = min(ok, key=lambda r: r["cost"])
         to_short = np.array([r["length"] / short["length"] for r in mine])
         to_best = np.array([r["length"] / best["length"] for r in mine])
-        cost = np.median([r["cost"] / best["cost"] for r in mine])
+        cost = np.array([r["cost"] / best["cost"] for r in mine])
 
         print(f"{name:18} {rows[0]['algorithm']:8} {n_ok:>4}/{len(rows):<3} {loops:>5} "
-              f"{pair(to_short):>13} {cost:>9.3f} {pair(to_best):>13}  "
+              f"{pair(to_short):>13} {pair(cost):>13} {pair(to_best):>13}  "
               f"{short['algorithm']} ({short['length']:,.0f} m); "
               f"{best['algorithm']} ({best['length']:,.0f} m, cost {best['cost']:,.1f})",
               flush=True)  # fmt: skip
