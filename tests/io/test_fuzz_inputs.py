@@ -132,6 +132,51 @@ def test_deep_nesting_is_a_clean_error(tmp_path: Path, suffix: str) -> None:
     _clean_error(_check(path), path.name, "not valid")
 
 
+@pytest.mark.parametrize("text", ["[" * 100_000 + "]" * 100_000, "\n" + "- " * 100_000 + "x"])
+def test_deep_nesting_with_the_pure_python_parser(
+    tmp_path: Path, text: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The parser used where libyaml is older than 0.2.6 (no nesting limit: its composer
+    overflowed the C stack and killed the process under PyYAML 6.0.3, CI of 4 Dec)."""
+    from uavplan.io.scenario_file import read
+
+    monkeypatch.setattr(read, "LOADER", read.PY_LOADER)
+    path = tmp_path / "scene.yaml"
+    path.write_text("name: x\ntasks: " + text + "\n")
+    _clean_error(_check(path), path.name, "nested too deeply")
+
+
+def test_libyaml_is_used_only_with_its_nesting_limit() -> None:
+    from uavplan.io.scenario_file import read
+
+    if not getattr(yaml, "__with_libyaml__", False):
+        assert read.LOADER is read.PY_LOADER
+        return
+    from yaml import _yaml
+
+    assert (read.LOADER is not read.PY_LOADER) == (tuple(_yaml.get_version()) >= (0, 2, 6))
+
+
+@pytest.mark.parametrize(
+    ("line", "words"),
+    [
+        ("task_z: 2026-13-45", ["task_z", "2026-13-45"]),  # a date PyYAML cannot build
+        ("task_z: 2026-02-30 25:61:00", ["task_z", "2026-02-30 25:61:00"]),
+        ("task_z: !!timestamp 2020-99-99", ["task_z", "2020-99-99"]),
+        ("bounds: !!int abc", ["not valid YAML", "abc"]),
+        ("bounds: !!float x", ["not valid YAML"]),
+    ],
+)
+def test_dates_and_mistagged_scalars_are_clean_errors(
+    tmp_path: Path, line: str, words: list[str]
+) -> None:
+    """Found by ``benchmarks/fuzz_inputs.py --seed 1`` (a ValueError out of PyYAML's
+    timestamp constructor): no field is a date, so a date-like scalar stays text."""
+    path = tmp_path / "scene.yaml"
+    path.write_text("name: x\n" + line + "\ntasks: [[0, 0], [10, 10]]\n")
+    _clean_error(_check(path), path.name, *words)
+
+
 def test_large_yaml_is_refused_before_parsing_and_json_is_not(tmp_path: Path) -> None:
     from uavplan.io.scenario_file.schema import MAX_YAML_BYTES
 

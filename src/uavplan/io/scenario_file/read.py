@@ -29,14 +29,20 @@ YAML_SUFFIXES = (".yaml", ".yml")
 JSON_SUFFIXES = (".json",)
 
 
-#: libyaml's parser where PyYAML has it (about 3 times faster, and it refuses nesting deeper
-#: than 1,000 levels); the constructor is the safe one either way: no tag builds a Python
-#: object, runs code or reads a file.
-_SafeBase: Any = yaml.CSafeLoader if getattr(yaml, "__with_libyaml__", False) else yaml.SafeLoader
+def _libyaml_limits_nesting() -> bool:
+    """True when PyYAML has libyaml 0.2.6 or later, which refuses nesting deeper than 1,000
+    levels. Older libyaml (PyYAML 6.0.3 bundles 0.2.5) has no limit, and its composer recurses
+    in C: ``[`` x 100,000 overflows the C stack and kills the process (a segfault, not an
+    exception), so with it we read with the pure-Python parser, whose recursion Python catches.
+    """
+    if not getattr(yaml, "__with_libyaml__", False):
+        return False
+    try:
+        from yaml import _yaml  # type: ignore[attr-defined]
 
-
-class _UniqueKeyLoader(_SafeBase):
-    """A safe YAML loader that rejects duplicate keys (PyYAML keeps the last one silently)."""
+        return tuple(_yaml.get_version()) >= (0, 2, 6)
+    except (ImportError, AttributeError, TypeError):
+        return False
 
 
 def _construct_mapping(loader: Any, node: yaml.MappingNode) -> dict[Any, Any]:
@@ -54,10 +60,26 @@ def _construct_mapping(loader: Any, node: yaml.MappingNode) -> dict[Any, Any]:
     return loader.construct_mapping(node, deep=True)
 
 
-_UniqueKeyLoader.add_constructor(
-    yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
-    _construct_mapping,
-)
+def _construct_text(loader: Any, node: yaml.ScalarNode) -> str:
+    return str(loader.construct_scalar(node))
+
+
+def _unique_key_loader(base: Any) -> Any:
+    """A safe YAML loader on ``base`` that rejects duplicate keys (PyYAML keeps the last one
+    silently). The constructor is the safe one either way: no tag builds a Python object, runs
+    code or reads a file."""
+    loader: Any = type("UniqueKeyLoader", (base,), {})
+    loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
+    # No field of a scenario is a date: a timestamp-like scalar stays the text it is, so the
+    # schema names the field and value ("2026-13-45" is not a date PyYAML can build: ValueError).
+    loader.add_constructor("tag:yaml.org,2002:timestamp", _construct_text)
+    return loader
+
+
+#: Pure-Python parsing (safe at any nesting: its recursion raises RecursionError).
+PY_LOADER: Any = _unique_key_loader(yaml.SafeLoader)
+#: libyaml's parser where it is safe (above; about 3 times faster), else the pure-Python one.
+LOADER: Any = _unique_key_loader(yaml.CSafeLoader) if _libyaml_limits_nesting() else PY_LOADER
 
 
 def _no_duplicate_pairs(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
@@ -82,7 +104,7 @@ def _parse_text(text: str, fmt: str, source: str) -> Any:
         except RecursionError:
             raise ScenarioFileError([f"{source}: not valid JSON: nested too deeply"]) from None
     try:
-        return yaml.load(text, Loader=_UniqueKeyLoader)  # a SafeLoader subclass
+        return yaml.load(text, Loader=LOADER)  # a SafeLoader subclass
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
@@ -93,6 +115,9 @@ def _parse_text(text: str, fmt: str, source: str) -> Any:
         raise ScenarioFileError([f"{source}: not valid YAML: {what}"]) from None
     except RecursionError:
         raise ScenarioFileError([f"{source}: not valid YAML: nested too deeply"]) from None
+    except (ValueError, TypeError, OverflowError) as exc:  # an explicit tag on the wrong text
+        what = " ".join(str(exc).split())[:200]  # ('!!int abc', '!!float x'): a constructor's
+        raise ScenarioFileError([f"{source}: not valid YAML: {what}"]) from None  # own error
 
 
 def _format_for(path: Path) -> str:
