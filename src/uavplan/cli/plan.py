@@ -303,16 +303,25 @@ def _summary(plan: Any, times: tuple[float, float, int], out_dir: Path) -> None:
             if fleet.planned_feasible
             else f"{n_bad} UAV polyline(s) infeasible"
         )
-        restarts = [round(float(c), 1) for c in fleet.restart_costs]
+        restarts = ", ".join(f"{float(c):.1f}" if np.isfinite(c) else "inf"
+                             for c in fleet.restart_costs)  # fmt: skip
         extra = (
             " (each UAV planned against the flights before it, longest first)"
             if fleet.info.get("frame") == "sequential"
-            else f", restarts {restarts}, best restart {fleet.info.get('best_restart')}"
+            else f", restarts ({restarts}), best restart {fleet.info.get('best_restart')}"
         )
         delayed = fleet.info.get("delayed") or {}
         if delayed:
             extra += f"; {len(delayed)} UAV(s) take off later (up to {max(delayed.values()):g} s)"
-        out.print(f"fleet of {n}: cost {fleet.cost:.6g}, {verdict}{extra}")
+        out.print(f"fleet of {n}: cost {fleet.cost:.6g}, {verdict}{extra}", markup=False)
+        repair = fleet.info.get("repair") or {}
+        if repair:
+            out.print(
+                f"repaired after planning (--raw skips this): {len(repair)} UAV(s) re-flown "
+                "against all the others' flights: "
+                + "; ".join(f"{u} ({how})" for u, how in repair.items()),
+                markup=False,
+            )
         sm = fleet.info.get("smoothing", {})
         if sm:
             out.print(
@@ -402,8 +411,8 @@ def plan(
     raw: Annotated[
         bool,
         typer.Option(
-            help="Keep the optimizer's path as found (no terrain following, no "
-            "line-of-sight shortcut)."
+            help="Keep the planner's paths as found (no terrain following, no "
+            "line-of-sight shortcut, no repair of a fleet's looping or failing UAVs)."
         ),
     ] = False,
 ) -> None:
@@ -411,7 +420,9 @@ def plan(
     single UAV's path is polished unless --raw (the experiments use the raw paths): where its
     flight leaves the altitude band, points are moved or added vertically (terrain following),
     then it is shortened by line of sight; kept when it stays feasible and costs no more, or
-    flies where the raw path did not."""
+    flies where the raw path did not. A fleet's UAVs whose tracks loop or whose flights fail
+    are repaired one by one against all the others' flights (loop cut, else RRT* and a later
+    take-off), unless --raw."""
     result, times = _run_plan(
         scenario, algorithm, seed, out_dir, iterations, pop_size, waypoints, cost, param or [],
         raw=raw, max_time=max_time,

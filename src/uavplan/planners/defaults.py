@@ -115,17 +115,13 @@ def best_plan(plans: Sequence[FleetPlan]) -> FleetPlan:
 FALLBACK_STEP_SHARE = 0.02
 
 
-def fallback_planners(scenario: Scenario) -> list[tuple[str, dict[str, object]]]:
-    """The planners (name, options) tried in order when the default's plan does not fly (the
-    CLI without ``-a``): RRT* (every edge checked as flown; its step scaled to the map, at
-    least its default 50 m; informed, anytime within its iteration budget, its shortest tree
-    paths tightened), then RGG-PSO+
-    (a graph path, then optimized). None for fleets (minutes per try)."""
-    if len(scenario.tasks) > 1:
-        return []
+def fallback_rrt_options(scenario: Scenario) -> dict[str, object]:
+    """RRT* as a fallback (here and in :mod:`~uavplan.planners.fleet_polish`): every edge
+    checked as flown; its step scaled to the map (at least its default 50 m); informed, anytime
+    within its iteration budget, its shortest tree paths tightened."""
     lo, hi = scenario.bounds.lo, scenario.bounds.hi
     step = max(50.0, FALLBACK_STEP_SHARE * float(np.hypot(hi[0] - lo[0], hi[1] - lo[1])))
-    rrt: dict[str, object] = {
+    return {
         "step": step,
         "goal_radius": step,
         "near_radius": 2 * step,
@@ -133,7 +129,16 @@ def fallback_planners(scenario: Scenario) -> list[tuple[str, dict[str, object]]]
         "stop_at_goal": False,
         "tighten": True,
     }
-    return [("rrt-star", rrt), ("rgg-pso+", {})]
+
+
+def fallback_planners(scenario: Scenario) -> list[tuple[str, dict[str, object]]]:
+    """The planners (name, options) tried in order when the default's plan does not fly (the
+    CLI without ``-a``): RRT* (:func:`fallback_rrt_options`), then RGG-PSO+ (a graph path, then
+    optimized). None for fleets (minutes per try): a fleet's failing UAVs are re-planned one by
+    one instead (:mod:`~uavplan.planners.fleet_polish`)."""
+    if len(scenario.tasks) > 1:
+        return []
+    return [("rrt-star", fallback_rrt_options(scenario)), ("rgg-pso+", {})]
 
 
 def scenario_kind(scenario: Scenario) -> str:

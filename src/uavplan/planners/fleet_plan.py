@@ -60,11 +60,16 @@ def plan_all(
     single-UAV planner in the prioritized frame (refused, naming the planners that can, for a
     planner whose search cannot keep clear of other UAVs). Never several UAVs planned alone.
     ``polish``: a single UAV's path is shortened by line of sight where that keeps it feasible
-    and costs no more (:meth:`Planner.plan`); fleets are not polished (their timing is
-    checked against each other as planned)."""
+    and costs no more (:meth:`Planner.plan`); a fleet planner's looping or failing UAVs are
+    repaired one by one against all the others' flights
+    (:func:`~uavplan.planners.fleet_polish.polish_fleet`)."""
     if isinstance(planner, FleetPlanner):
         cb = progress("fleet") if progress else None
         fr = planner.plan_fleet(scenario, budget, seed, cb, tuple(tasks) if tasks else None)
+        if polish and len(fr.results) > 1:
+            from uavplan.planners.fleet_polish import polish_fleet
+
+            fr = polish_fleet(scenario, fr, seed, planner.describe())
         return FleetPlan(scenario, planner.name, planner.describe(), seed, fr.results, fr)
     chosen = tuple(t for t in scenario.tasks if tasks is None or t.id in tasks)
     if not chosen:

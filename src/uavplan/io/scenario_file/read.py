@@ -38,7 +38,7 @@ def _libyaml_limits_nesting() -> bool:
     if not getattr(yaml, "__with_libyaml__", False):
         return False
     try:
-        from yaml import _yaml  # type: ignore[attr-defined]
+        from yaml import _yaml
 
         return tuple(_yaml.get_version()) >= (0, 2, 6)
     except (ImportError, AttributeError, TypeError):

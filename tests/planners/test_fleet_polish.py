@@ -1,0 +1,118 @@
+"""The CLI's repair of a fleet's looping or failing UAVs (``planners/fleet_polish.py``): what it
+keeps flies (the independent verifier agrees), it is deterministic, and it leaves alone a fleet
+that needs nothing."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from uavplan.io.plan_file import plan_document
+from uavplan.planners import get_planner
+from uavplan.planners.base import separated_problem
+from uavplan.planners.fleet_plan import FleetPlan
+from uavplan.planners.fleet_polish import _others_table, cut_loops, first_crossing, polish_fleet
+from uavplan.planners.flight import declare, fly
+from uavplan.planners.results import FleetResult, PlanResult, make_result
+from uavplan.scenarios import resolve
+from uavplan.verify import verify_plan
+from uavplan.world import Scenario
+from uavplan.world.fleet_tasks import with_fleet
+from uavplan.world.geometry import track_crosses_itself
+
+SMALL = {"pop_size": 24, "n_iter": 6, "n_restart": 1, "rrt_iterations": 2000}
+
+
+def test_cut_loops_removes_every_crossing_and_keeps_the_ends() -> None:
+    p = np.array([[0.0, 0, 5], [10, 0, 5], [10, 10, 5], [5, -5, 5], [20, 0, 5], [20, 9, 5],
+                  [15, 5, 5], [30, 5, 5]])  # fmt: skip
+    assert track_crosses_itself(p)
+    i, j, x = first_crossing(p)  # type: ignore[misc]
+    assert (i, j) == (0, 2) and np.allclose(x, [20 / 3, 0, 5])
+    q = cut_loops(p)
+    assert not track_crosses_itself(q)
+    assert np.array_equal(q[0], p[0]) and np.array_equal(q[-1], p[-1])
+    L = lambda a: np.linalg.norm(np.diff(a, axis=0), axis=1).sum()  # noqa: E731
+    assert L(q) < L(p)
+    straight = np.array([[0.0, 0, 1], [5, 1, 1], [9, 0, 1]])
+    assert first_crossing(straight) is None and np.array_equal(cut_loops(straight), straight)
+
+
+@pytest.fixture(scope="module")
+def planned() -> tuple[Scenario, FleetResult, dict[str, object]]:
+    sc = with_fleet(resolve("ppswarm1"), 3, seed=0)
+    planner = get_planner("ppswarm", **SMALL)
+    fr = planner.plan_fleet(sc, seed=5)
+    assert fr.feasible
+    return sc, fr, planner.describe()
+
+
+def _replace_uav(sc: Scenario, fr: FleetResult, k: int, path: np.ndarray) -> FleetResult:
+    """``fr`` with UAV ``k`` declared to fly ``path`` (its flight checked against the others)."""
+    results = list(fr.results)
+    r = results[k]
+    task = sc.task(r.uav_id)
+    table = _others_table(sc, results, k, 0.0, 1.0)
+    new = make_result(separated_problem(sc, task, table), path, algorithm=r.algorithm,
+                      history=r.history, evaluations=r.evaluations,
+                      evaluations_history=r.evaluations_history, wall_time=0.0)  # fmt: skip
+    results[k] = declare(new, fly(sc, task, new.waypoints, new.times, table))
+    feasible = all(x.flown_feasible for x in results)
+    return dataclasses.replace(fr, results=tuple(results), feasible=feasible)
+
+
+def _verified(sc: Scenario, fr: FleetResult) -> bool:
+    d = plan_document(FleetPlan(sc, "ppswarm", {}, 5, fr.results, fr))
+    return bool(verify_plan(d, sc).ok)
+
+
+def test_a_uav_through_a_cylinder_is_replanned_and_verified(planned) -> None:  # type: ignore[no-untyped-def]
+    sc, fr, cfg = planned
+    task = sc.tasks[1]
+    c = sc.cylinders[int(np.argmin([np.hypot(*(np.asarray(cy.center[:2]) -
+                                               (np.asarray(task.start[:2]) + task.goal[:2]) / 2))
+                                    for cy in sc.cylinders]))]  # fmt: skip
+    through = np.array([task.start, [c.center[0], c.center[1], task.start[2]], task.goal])
+    k = [r.uav_id for r in fr.results].index(task.id)
+    bad = _replace_uav(sc, fr, k, through)
+    assert not bad.feasible and not bad.results[k].flown_ok
+    assert not _verified(sc, bad)
+    out = polish_fleet(sc, bad, 7, cfg)
+    assert out.feasible and np.isfinite(out.cost)
+    assert set(out.info["repair"]) == {task.id} and out.info["repair"][task.id].startswith("RRT*")
+    assert out.results[k].info["repaired"] == out.info["repair"][task.id]
+    assert _verified(sc, out)
+    for j, (a, b) in enumerate(zip(bad.results, out.results, strict=True)):  # others untouched
+        assert (a is b) == (j != k)
+    again = polish_fleet(sc, bad, 7, cfg)
+    assert np.array_equal(again.results[k].waypoints, out.results[k].waypoints)
+
+
+def test_a_looping_uav_is_untangled(planned) -> None:  # type: ignore[no-untyped-def]
+    sc, fr, cfg = planned
+    k = 0
+    r: PlanResult = fr.results[k]
+    W = np.array(r.waypoints, dtype=np.float64)
+    m = len(W) // 2
+    a, b = W[m - 1], W[m]
+    d = (b - a)[:2] / np.linalg.norm((b - a)[:2])
+    n = np.array([-d[1], d[0]])
+    # a wide loop after vertex m - 1: ahead, to the side, then back across the segment
+    loop = [a + np.r_[d * 300, 0], a + np.r_[d * 300 + n * 300, 0], a + np.r_[d * 100 - n * 200, 0]]
+    looping = np.vstack([W[:m], np.array(loop), W[m:]])
+    assert track_crosses_itself(looping)
+    bent = _replace_uav(sc, fr, k, looping)
+    assert bent.results[k].flown_ok  # it flies, around its loop
+    out = polish_fleet(sc, bent, 7, cfg)
+    assert out.info["repair"] == {r.uav_id: "loop cut"}
+    assert not track_crosses_itself(out.results[k].waypoints)
+    assert out.results[k].length < bent.results[k].length
+    assert out.feasible and _verified(sc, out)
+
+
+def test_a_fleet_that_needs_nothing_is_left_as_it_is(planned) -> None:  # type: ignore[no-untyped-def]
+    sc, fr, cfg = planned
+    out = polish_fleet(sc, fr, 7, cfg)
+    assert out.info["repair"] == {} and out.results == fr.results and out.cost == fr.cost
