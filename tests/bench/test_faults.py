@@ -127,6 +127,50 @@ def _lossy(losses: list[bool]) -> Any:
     return it
 
 
+def test_the_incremental_folder_check_sees_every_fault(tmp_path: Path) -> None:
+    """The harness's check reads only new or rewritten shards, and still sees a shard gone, a
+    run stored twice, a row unlike the reference's, a rewritten shard and one that is cut."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    run_sweep(PLAN, tmp_path / "ref", executor="serial")
+    reference = faults.stored_rows(tmp_path / "ref")
+    out = tmp_path / "out"
+    (out / "runs").mkdir(parents=True)
+    shards = sorted((tmp_path / "ref" / "runs").glob("part-*.parquet"))
+    assert len(shards) >= 3
+    checker = faults.FolderCheck(out, reference)
+    stored: set[str] = set()
+    for s in shards[:2]:
+        (out / "runs" / s.name).write_bytes(s.read_bytes())
+        c = checker.check(stored)
+        assert not c.problems and len(c.stored) > len(stored)
+        stored = c.stored
+    assert checker.equal
+    first = out / "runs" / shards[0].name
+    first.rename(first.with_name("gone.parquet"))  # a shard removed: its runs lost
+    c = checker.check(stored)
+    assert any("runs lost" in p for p in c.problems), c.problems
+    first.with_name("gone.parquet").rename(first)
+    assert not checker.check(stored).problems
+    twice = out / "runs" / "part-twice.parquet"  # the same runs in a second shard
+    twice.write_bytes(first.read_bytes())
+    c = checker.check(stored)
+    assert any("stored twice" in p for p in c.problems) and not checker.equal, c.problems
+    twice.unlink()
+    assert not checker.check(stored).problems and checker.equal
+    table = pq.read_table(first)  # a shard rewritten with a wrong cost
+    cost = table.column("best_cost").to_numpy().copy()
+    cost[0] += 1e-12
+    pq.write_table(table.set_column(table.schema.get_field_index("best_cost"), "best_cost",
+                                    pa.array(cost)), first)  # fmt: skip
+    c = checker.check(stored)
+    assert any("best_cost" in p for p in c.problems) and not checker.equal, c.problems
+    cut = out / "runs" / shards[2].name  # a new shard cut short
+    cut.write_bytes(shards[2].read_bytes()[:-100])
+    assert any("does not read" in p for p in checker.check(stored).problems)
+
+
 def test_workers_lost_now_and_then_never_stop_the_sweep(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
