@@ -505,6 +505,23 @@ def disk_full(
     return outcome
 
 
+def die_while_sending(*_args: Any) -> None:
+    """Run in a pool worker in place of a chunk: die as a worker killed half way through
+    sending its result (a message header and a part of the bytes on the result pipe, then
+    SIGKILL)."""
+    import struct
+    import types
+
+    frame: types.FrameType | None = sys._getframe()
+    while frame is not None and "result_queue" not in frame.f_locals:
+        frame = frame.f_back
+    if frame is None:
+        raise RuntimeError("not in a concurrent.futures process worker")
+    fd = frame.f_locals["result_queue"]._writer.fileno()
+    os.write(fd, struct.pack("!i", 100_000) + b"x" * 1000)
+    os.kill(os.getpid(), signal.SIGKILL)
+
+
 def fresh(folder: Path) -> Path:
     shutil.rmtree(folder, ignore_errors=True)
     return folder

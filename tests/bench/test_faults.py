@@ -7,6 +7,9 @@ corrupt, no orphaned worker, and the resumed sweep equals an uninterrupted one
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
+import textwrap
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -214,13 +217,41 @@ def test_a_dead_worker_the_pool_does_not_notice_is_lost_all_the_same(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """Once in the default test run a pool whose only worker was killed never failed its
-    futures (Python 3.11; not reproduced since): the runner counts a worker seen dead with no
-    chunk finishing for DEAD_WORKER_TIMEOUT as lost, and stops the pool's other workers."""
+    futures (Python 3.11; a worker killed while it sends its result does that, see the next
+    test): the runner counts a worker seen dead with no chunk finishing for
+    DEAD_WORKER_TIMEOUT as lost, and stops the pool's other workers."""
     monkeypatch.setattr(runner, "DEAD_WORKER_TIMEOUT", 2.0)
     monkeypatch.setattr(runner, "_dead_worker", lambda pool: True)  # as if the pool hung
     long = PLAN.runs("smoke", runs=1, iterations=10**7)  # a run that does not end by itself
     with pytest.raises(runner._WorkerLost, match="its pool hangs"):
         list(runner._iter_process([long], workers=1))
+
+
+def test_a_worker_killed_while_it_sends_its_rows_does_not_hang_the_runner() -> None:
+    """A worker killed half way through sending a chunk's rows leaves the pool's manager
+    thread reading the rest for ever: the runner counts the worker lost after
+    DEAD_WORKER_TIMEOUT and must end that thread, or the process never exits (the fault
+    campaign saw a sweep stopped by a full disk print its one line and hang: its workers were
+    terminated while one was sending). In a subprocess, so that a hang fails this test only."""
+    script = textwrap.dedent(
+        f"""
+        import sys
+        sys.path[:0] = {[str(Path(faults.__file__).parents[1])]!r}
+        from bench import faults
+        from uavplan.bench import runner
+        runner.execute_chunk = faults.die_while_sending
+        runner.DEAD_WORKER_TIMEOUT = 2.0
+        try:
+            list(runner._iter_process([[None]], workers=1))
+        except runner._WorkerLost as exc:
+            print("lost:", exc)
+        """
+    )
+    res = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=120
+    )
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert "lost: a worker died" in res.stdout, res.stdout + res.stderr[-2000:]
 
 
 def test_a_full_disk_stops_the_sweep_and_keeps_what_was_written(
