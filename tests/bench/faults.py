@@ -19,6 +19,7 @@ number of runs and iterations: fast, and the same code path as any plan.
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import shutil
 import signal
@@ -26,6 +27,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections import Counter
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -121,27 +123,84 @@ class Check:
     problems: list[str] = field(default_factory=list)
 
 
-def check_folder(folder: Path, before: set[str], reference: pd.DataFrame) -> Check:
-    """Nothing lost since ``before``, nothing twice, every shard whole, every row the
-    uninterrupted sweep's."""
-    problems = []
-    try:
-        rows = stored_rows(folder)
-    except Exception as exc:  # a shard that does not read whole
-        return Check(set(before), [f"a shard does not read: {exc}"])
-    ids = rows["run_id"].tolist()
-    stored = set(ids)
-    if len(ids) != len(stored):
-        dup = rows["run_id"][rows["run_id"].duplicated()].tolist()
-        problems.append(f"{len(ids) - len(stored)} duplicated rows, e.g. {dup[:3]}")
-    lost = before - stored
-    if lost:
-        problems.append(f"{len(lost)} runs lost, e.g. {sorted(lost)[:3]}")
-    if stored and not problems:
+@dataclass
+class _Shard:
+    """A shard as last read: its file's identity, its run ids, whether its rows were the
+    reference's."""
+
+    key: tuple[int, int, int]  # inode, size, mtime (ns): a rewrite (os.replace) changes it
+    ids: list[str]
+    equal: bool
+
+
+class FolderCheck:
+    """Checks one results folder again and again while sweeps write to it, reading only the
+    shards that are new or rewritten since the last check (the store rewrites a shard, whole
+    and atomically, when a column that was all null in it gets a type): every shard must read
+    whole, its rows must equal the uninterrupted sweep's, no run id may be in two rows of the
+    folder, and no run stored before may be gone."""
+
+    def __init__(self, folder: Path, reference: pd.DataFrame):
+        self.folder = folder
+        self.reference = result_frame(reference)  # once: it is the slow part of a check
+        self.shards: dict[Path, _Shard] = {}
+        self.reported: set[str] = set()  # duplicated run ids already reported
+        self.unreadable: set[Path] = set()  # shards that did not read at the last check
+
+    def check(self, before: set[str]) -> Check:
+        """Nothing lost since ``before``, nothing twice, every shard whole, every row the
+        uninterrupted sweep's."""
+        problems: list[str] = []
+        self.unreadable = set()
+        now = sorted((self.folder / "runs").glob("part-*.parquet"))
+        for gone in set(self.shards) - set(now):  # a shard is never removed: its runs are lost
+            del self.shards[gone]
+        for path in now:
+            try:
+                st = path.stat()
+                key = (st.st_ino, st.st_size, st.st_mtime_ns)
+                if path in self.shards and self.shards[path].key == key:
+                    continue
+                rows = pq.read_table(path).to_pandas()
+            except Exception as exc:  # a shard that does not read whole (or vanished)
+                self.shards.pop(path, None)
+                self.unreadable.add(path)
+                problems.append(f"{path.name} does not read: {exc}")
+                continue
+            self.shards[path] = _Shard(key, rows["run_id"].tolist(), True)
+            problems += self._compare(path, rows)
+        ids = [i for s in self.shards.values() for i in s.ids]
+        stored = set(ids)
+        if len(ids) != len(stored):
+            dup = {i for i, n in Counter(ids).items() if n > 1}
+            new = sorted(dup - self.reported)
+            self.reported |= dup
+            if new:
+                problems.append(f"{len(new)} runs stored twice, e.g. {new[:3]}")
+        lost = before - stored
+        if lost:
+            problems.append(f"{len(lost)} runs lost, e.g. {sorted(lost)[:3]}")
+        return Check(stored, problems)
+
+    def _compare(self, path: Path, rows: pd.DataFrame) -> list[str]:
+        if rows["run_id"].duplicated().any():
+            self.shards[path].equal = False
+            return [f"{path.name} holds a run twice"]
         got = result_frame(rows)
-        want = result_frame(reference).loc[got.index]
-        problems += differing_cells(got, want)
-    return Check(stored, problems)
+        unknown = got.index.difference(self.reference.index)
+        if len(unknown):
+            self.shards[path].equal = False
+            return [f"{path.name}: {len(unknown)} runs not in the sweep, e.g. {list(unknown[:3])}"]
+        diff = differing_cells(got, self.reference.loc[got.index])
+        self.shards[path].equal = not diff
+        return [f"{path.name}: {d}" for d in diff]
+
+    @property
+    def equal(self) -> bool:
+        """Every shard of the last check read whole, with the reference's rows, none twice."""
+        ids = [i for s in self.shards.values() for i in s.ids]
+        whole = not self.unreadable and all(s.equal for s in self.shards.values())
+        return whole and len(ids) == len(set(ids))
 
 
 def descendants(pid: int) -> list[Any]:
@@ -242,13 +301,18 @@ def _conclude(
     err: str,
 ) -> None:
     """The last sweep has ended: it must have ended well with every run of the sweep stored,
-    equal to the uninterrupted sweep's."""
+    equal to the uninterrupted sweep's (the whole folder read once more, not incrementally)."""
     outcome.finished = proc.returncode == 0
     if not outcome.finished:
         outcome.problems.append(f"the last sweep exited {proc.returncode}: {err[-600:]}")
-    check = check_folder(cmd.out, before, reference)
+    full = FolderCheck(cmd.out, reference)
+    check = full.check(before)
     outcome.problems += check.problems
-    outcome.final_equal = check.stored == cmd.expected(reference) and not check.problems
+    expected = cmd.expected(reference)
+    if check.stored != expected:
+        missing, extra = len(expected - check.stored), len(check.stored - expected)
+        outcome.problems.append(f"the finished folder lacks {missing} runs, has {extra} more")
+    outcome.final_equal = check.stored == expected and not check.problems and full.equal
 
 
 def _finish(cmd: SweepCommand, reference: pd.DataFrame, outcome: Outcome, before: set[str]) -> None:
@@ -259,21 +323,21 @@ def _finish(cmd: SweepCommand, reference: pd.DataFrame, outcome: Outcome, before
 
 def _begin(
     what: str, cmd: SweepCommand, reference: pd.DataFrame, asked: int = 1
-) -> tuple[Outcome, set[str]]:
-    """A campaign's outcome, and the runs the folder holds before it (checked)."""
+) -> tuple[Outcome, FolderCheck, set[str]]:
+    """A campaign's outcome, the check of its folder, and the runs the folder holds before it
+    (checked)."""
     outcome = Outcome(f"{what} ({cmd.executor}, {cmd.workers} workers)", asked)
-    check = check_folder(cmd.out, set(), reference)
+    checker = FolderCheck(cmd.out, reference)
+    check = checker.check(set())
     outcome.problems += check.problems
-    return outcome, check.stored
+    return outcome, checker, check.stored
 
 
-def _count_kill(
-    cmd: SweepCommand, reference: pd.DataFrame, outcome: Outcome, stored: set[str]
-) -> tuple[set[str], str]:
-    """A kill happened: check the folder against what was stored before; the runs stored now
-    and a line for the log."""
+def _count_kill(checker: FolderCheck, outcome: Outcome, stored: set[str]) -> tuple[set[str], str]:
+    """A kill happened: check the folder against what was stored before (the shards written
+    since the last check); the runs stored now and a line for the log."""
     outcome.kills += 1
-    check = check_folder(cmd.out, stored, reference)
+    check = checker.check(stored)
     outcome.problems += [f"kill {outcome.kills}: {p}" for p in check.problems]
     gained = len(check.stored) - len(stored)
     line = f"{len(check.stored)} runs stored (+{gained}), {len(check.problems)} problems"
@@ -289,7 +353,7 @@ def kill_runner(
 ) -> Outcome:
     """SIGKILL the whole ``bench run`` process ``kills`` times at random moments, starting it
     again after each; then let it finish."""
-    outcome, stored = _begin("runner killed", cmd, reference, kills)
+    outcome, checker, stored = _begin("runner killed", cmd, reference, kills)
     while outcome.kills < kills:
         proc = cmd.start()
         try:
@@ -310,7 +374,7 @@ def kill_runner(
         wait_end(proc)
         orphans = orphans_after(kids)
         outcome.orphans += len(orphans)
-        stored, line = _count_kill(cmd, reference, outcome, stored)
+        stored, line = _count_kill(checker, outcome, stored)
         log(f"  kill {outcome.kills}: {line}; {len(kids)} workers, {len(orphans)} orphaned")
     _finish(cmd, reference, outcome, stored)
     outcome.seconds = time.monotonic() - outcome.t0
@@ -327,7 +391,7 @@ def kill_workers(
     """One sweep; SIGKILL one of its workers (a pool worker, or a Dask worker with
     ``cmd.executor == "dask"``) at a random moment once runs are being stored, ``kills``
     times; the runner goes on by itself. The folder is checked after every kill."""
-    outcome, stored = _begin("worker killed", cmd, reference, kills)
+    outcome, checker, stored = _begin("worker killed", cmd, reference, kills)
     proc = cmd.start()
     try:
         while outcome.kills < kills:
@@ -342,7 +406,7 @@ def kill_workers(
             victim = victims[int(rng.integers(len(victims)))]
             with contextlib.suppress(ProcessLookupError):
                 os.kill(victim.pid, signal.SIGKILL)
-            stored, line = _count_kill(cmd, reference, outcome, stored)
+            stored, line = _count_kill(checker, outcome, stored)
             log(f"  kill {outcome.kills}: worker {victim.pid} of {len(victims)}; {line}")
         err = wait_end(proc)
     finally:
@@ -387,22 +451,40 @@ def disk_full(
     rng: np.random.Generator,
     log: Callable[[str], None] = print,
 ) -> Outcome:
-    """``cmd.out`` on a small tmpfs: once the sweep stores runs, fill the disk (a few KiB
-    left, so that the next shard's write starts and fails part way); the sweep must stop
-    with exit code 2 and one line saying so, no traceback, every shard intact, no temporary
-    file left; free the space, run again: it must end equal to the uninterrupted sweep."""
-    outcome, _ = _begin("disk full", cmd, reference)
+    """``cmd.out`` on a small tmpfs: once the sweep has stored a random number of shards (1
+    to two thirds of the shards it writes, drawn from ``rng``), fill the disk (a few KiB left,
+    so that the next shard's write starts and fails part way); the sweep must stop with exit
+    code 2 and one line saying so, no traceback, every shard intact, no temporary file left;
+    free the space, run again: it must end equal to the uninterrupted sweep. A sweep that ends
+    before the disk is full had no fault: the outcome is not ok, and a note says why."""
+    from uavplan.bench.runner import chunk_size
+
+    outcome, checker, _ = _begin("disk full", cmd, reference)
+    workers = 1 if cmd.executor == "serial" else cmd.workers
+    shards = math.ceil(cmd.runs / chunk_size(cmd.runs, workers))  # a shard per chunk
+    after = int(rng.integers(1, max(1, 2 * shards // 3) + 1))
+    leave = int(rng.integers(1, 3)) * 4096
     proc = cmd.start()
     try:
-        wait_for(lambda: n_shards(cmd.out) >= 2, 180.0, proc)
-        wait_for(lambda: False, float(rng.uniform(0.0, 1.0)), proc)
-        filler = fill(cmd.out, leave=int(rng.integers(1, 3)) * 4096)
-        before = check_folder(cmd.out, set(), reference).stored
+        if not wait_for(lambda: n_shards(cmd.out) >= after, 180.0, proc):
+            outcome.notes.append(f"the sweep ended or stalled before storing {after} shards")
+        filler = fill(cmd.out, leave=leave)
+        check = checker.check(set())  # while the sweep may still write
+        outcome.problems += check.problems
+        before = check.stored
         err = wait_end(proc, 300.0)
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+    check = checker.check(before)
+    outcome.problems += check.problems
+    if proc.returncode == 0 and check.stored == cmd.expected(reference):
+        outcome.notes.append(f"the sweep ended before the disk was full (after {after} shards)")
+        filler.unlink()
+        _finish(cmd, reference, outcome, check.stored)
+        outcome.seconds = time.monotonic() - outcome.t0
+        return outcome
     outcome.kills = 1
     lines = [x for x in err.splitlines() if x.strip()]
     message = next((x for x in lines if "No space left" in x), None)
@@ -416,12 +498,28 @@ def disk_full(
     tmp = list((cmd.out / "runs").glob(".part-*"))
     if tmp:
         outcome.problems.append(f"temporary files left on the full disk: {tmp}")
-    check = check_folder(cmd.out, before, reference)
-    outcome.problems += check.problems
+    log(f"  disk full after {after} shards ({leave // 1024} KiB left): {len(check.stored)} runs")
     filler.unlink()
     _finish(cmd, reference, outcome, check.stored)
     outcome.seconds = time.monotonic() - outcome.t0
     return outcome
+
+
+def die_while_sending(*_args: Any) -> None:
+    """Run in a pool worker in place of a chunk: die as a worker killed half way through
+    sending its result (a message header and a part of the bytes on the result pipe, then
+    SIGKILL)."""
+    import struct
+    import types
+
+    frame: types.FrameType | None = sys._getframe()
+    while frame is not None and "result_queue" not in frame.f_locals:
+        frame = frame.f_back
+    if frame is None:
+        raise RuntimeError("not in a concurrent.futures process worker")
+    fd = frame.f_locals["result_queue"]._writer.fileno()
+    os.write(fd, struct.pack("!i", 100_000) + b"x" * 1000)
+    os.kill(os.getpid(), signal.SIGKILL)
 
 
 def fresh(folder: Path) -> Path:

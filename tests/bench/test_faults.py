@@ -7,6 +7,9 @@ corrupt, no orphaned worker, and the resumed sweep equals an uninterrupted one
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
+import textwrap
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -127,6 +130,50 @@ def _lossy(losses: list[bool]) -> Any:
     return it
 
 
+def test_the_incremental_folder_check_sees_every_fault(tmp_path: Path) -> None:
+    """The harness's check reads only new or rewritten shards, and still sees a shard gone, a
+    run stored twice, a row unlike the reference's, a rewritten shard and one that is cut."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    run_sweep(PLAN, tmp_path / "ref", executor="serial")
+    reference = faults.stored_rows(tmp_path / "ref")
+    out = tmp_path / "out"
+    (out / "runs").mkdir(parents=True)
+    shards = sorted((tmp_path / "ref" / "runs").glob("part-*.parquet"))
+    assert len(shards) >= 3
+    checker = faults.FolderCheck(out, reference)
+    stored: set[str] = set()
+    for s in shards[:2]:
+        (out / "runs" / s.name).write_bytes(s.read_bytes())
+        c = checker.check(stored)
+        assert not c.problems and len(c.stored) > len(stored)
+        stored = c.stored
+    assert checker.equal
+    first = out / "runs" / shards[0].name
+    first.rename(first.with_name("gone.parquet"))  # a shard removed: its runs lost
+    c = checker.check(stored)
+    assert any("runs lost" in p for p in c.problems), c.problems
+    first.with_name("gone.parquet").rename(first)
+    assert not checker.check(stored).problems
+    twice = out / "runs" / "part-twice.parquet"  # the same runs in a second shard
+    twice.write_bytes(first.read_bytes())
+    c = checker.check(stored)
+    assert any("stored twice" in p for p in c.problems) and not checker.equal, c.problems
+    twice.unlink()
+    assert not checker.check(stored).problems and checker.equal
+    table = pq.read_table(first)  # a shard rewritten with a wrong cost
+    cost = table.column("best_cost").to_numpy().copy()
+    cost[0] += 1e-12
+    pq.write_table(table.set_column(table.schema.get_field_index("best_cost"), "best_cost",
+                                    pa.array(cost)), first)  # fmt: skip
+    c = checker.check(stored)
+    assert any("best_cost" in p for p in c.problems) and not checker.equal, c.problems
+    cut = out / "runs" / shards[2].name  # a new shard cut short
+    cut.write_bytes(shards[2].read_bytes()[:-100])
+    assert any("does not read" in p for p in checker.check(stored).problems)
+
+
 def test_workers_lost_now_and_then_never_stop_the_sweep(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -170,13 +217,41 @@ def test_a_dead_worker_the_pool_does_not_notice_is_lost_all_the_same(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """Once in the default test run a pool whose only worker was killed never failed its
-    futures (Python 3.11; not reproduced since): the runner counts a worker seen dead with no
-    chunk finishing for DEAD_WORKER_TIMEOUT as lost, and stops the pool's other workers."""
+    futures (Python 3.11; a worker killed while it sends its result does that, see the next
+    test): the runner counts a worker seen dead with no chunk finishing for
+    DEAD_WORKER_TIMEOUT as lost, and stops the pool's other workers."""
     monkeypatch.setattr(runner, "DEAD_WORKER_TIMEOUT", 2.0)
     monkeypatch.setattr(runner, "_dead_worker", lambda pool: True)  # as if the pool hung
     long = PLAN.runs("smoke", runs=1, iterations=10**7)  # a run that does not end by itself
     with pytest.raises(runner._WorkerLost, match="its pool hangs"):
         list(runner._iter_process([long], workers=1))
+
+
+def test_a_worker_killed_while_it_sends_its_rows_does_not_hang_the_runner() -> None:
+    """A worker killed half way through sending a chunk's rows leaves the pool's manager
+    thread reading the rest for ever: the runner counts the worker lost after
+    DEAD_WORKER_TIMEOUT and must end that thread, or the process never exits (the fault
+    campaign saw a sweep stopped by a full disk print its one line and hang: its workers were
+    terminated while one was sending). In a subprocess, so that a hang fails this test only."""
+    script = textwrap.dedent(
+        f"""
+        import sys
+        sys.path[:0] = {[str(Path(faults.__file__).parents[1])]!r}
+        from bench import faults
+        from uavplan.bench import runner
+        runner.execute_chunk = faults.die_while_sending
+        runner.DEAD_WORKER_TIMEOUT = 2.0
+        try:
+            list(runner._iter_process([[None]], workers=1))
+        except runner._WorkerLost as exc:
+            print("lost:", exc)
+        """
+    )
+    res = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=120
+    )
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert "lost: a worker died" in res.stdout, res.stdout + res.stderr[-2000:]
 
 
 def test_a_full_disk_stops_the_sweep_and_keeps_what_was_written(

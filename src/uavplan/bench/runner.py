@@ -184,7 +184,7 @@ def _iter_process(chunks: list[list[RunSpec]], workers: int) -> Iterator[list[di
                 except BrokenProcessPool as exc:  # a worker died since the last wait
                     raise _WorkerLost(str(exc)) from exc
             done, pending = wait(pending, timeout=2.0, return_when=FIRST_COMPLETED)
-            if not done:  # a dead worker the pool has not noticed (seen once in 3.11) is lost
+            if not done:  # a dead worker the pool has not noticed is lost (_end_manager_thread)
                 dead_for = dead_for + 2.0 if _dead_worker(pool) else 0.0
                 if dead_for >= DEAD_WORKER_TIMEOUT:
                     raise _WorkerLost(f"a worker died {dead_for:.0f} s ago, its pool hangs")
@@ -204,9 +204,15 @@ def _iter_process(chunks: list[list[RunSpec]], workers: int) -> Iterator[list[di
     finally:
         for fut in pending:
             fut.cancel()
+        # what shutdown() forgets: the workers, the pool's manager thread and its result pipe
+        procs = list((getattr(pool, "_processes", None) or {}).values())
+        manager = getattr(pool, "_executor_manager_thread", None)
+        results = getattr(pool, "_result_queue", None)
         if not complete:  # the sweep stops: the runs in flight would be stored by nobody
             _terminate_workers(pool)
         pool.shutdown(wait=False, cancel_futures=True)
+        if not complete:
+            _end_manager_thread(procs, manager, results)
 
 
 #: seconds a worker may be seen dead, with no chunk finishing, before the runner counts it lost
@@ -226,6 +232,30 @@ def _terminate_workers(pool: ProcessPoolExecutor) -> None:
     for proc in list((getattr(pool, "_processes", None) or {}).values()):
         with contextlib.suppress(Exception):
             proc.terminate()
+
+
+def _end_manager_thread(procs: list[Any], manager: Any, results: Any) -> None:
+    """Make sure a pool whose workers were lost or stopped ends its manager thread. A worker
+    killed while it sends a result (a kill -9, the OOM killer, or :func:`_terminate_workers`)
+    leaves that thread reading the rest of the message for ever: the pool never fails its
+    futures (the dead worker that :data:`DEAD_WORKER_TIMEOUT` catches) and the interpreter,
+    which joins the thread at exit, never exits (seen: a sweep stopped by a full disk printed
+    its one line and hung). Once the workers are gone, this process holds the last write end
+    of the result pipe: closing it ends the read (EOF), and the thread marks the pool broken
+    and ends as it does when a worker dies between two results."""
+    for proc in procs:
+        with contextlib.suppress(Exception):
+            proc.join(timeout=5.0)
+            if proc.is_alive():
+                proc.kill()
+                proc.join(timeout=5.0)
+    if manager is None or results is None:
+        return
+    manager.join(timeout=0.5)
+    if manager.is_alive():
+        with contextlib.suppress(Exception):
+            results._writer.close()
+        manager.join(timeout=5.0)
 
 
 def _iter_dask(
