@@ -1,6 +1,6 @@
 """The planner a user gets without -a (issue 17 item 1): by scenario kind, and what it gives on
 the built-in single-UAV scenes: feasible, no loop, no self-crossing (seeds 0-2 on two scenes in
-the default run; seeds 0-9 on every built-in single-UAV scenario with ``-m slow``)."""
+the default run; seeds 0-9 on every built-in scenario, fleets included, with ``-m slow``)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 from uavplan.cli import app
 from uavplan.planners import available_planners
 from uavplan.planners.defaults import DEFAULTS, default_planner
-from uavplan.scenarios import builtin_names, load_builtin, resolve
+from uavplan.scenarios import builtin_names, resolve
 from uavplan.world.geometry import track_crosses_itself
 
 
@@ -162,18 +162,18 @@ def test_fallbacks_scale_rrt_star_to_the_map() -> None:
 def test_every_builtin_default_plan_flies_without_loops_seeds_0_to_9(
     tmp_path: Path, scenario: str
 ) -> None:
-    """Issue 17's figure as a test (``-m slow``, minutes): ``uavplan plan NAME --seed S``,
-    seeds 0-9, on every built-in single-UAV scenario, is feasible as flown and its track never
-    crosses itself (``benchmarks/default_paths.py`` adds the lengths against rival planners)."""
-    if len(load_builtin(scenario).tasks) > 1:
-        pytest.skip("fleets: the default fleet planner is measured by the benchmark")
+    """Issue 17's figure as a test (``-m slow``; the fleets take about a minute a seed):
+    ``uavplan plan NAME --seed S``, seeds 0-9, on every built-in scenario, is feasible as flown
+    and no UAV's track crosses itself (``benchmarks/default_paths.py`` adds the lengths against
+    rival planners)."""
     for seed in range(10):
         out = tmp_path / str(seed)
         r = CliRunner().invoke(app, ["plan", scenario, "--seed", str(seed), "--out", str(out)])
         assert r.exit_code == 0, (seed, r.output)
         doc = json.loads((out / "plan.json").read_text())
         assert doc["feasible"] is True, seed
-        assert not track_crosses_itself(np.asarray(doc["uavs"][0]["waypoints"])), seed
+        for u in doc["uavs"]:
+            assert not track_crosses_itself(np.asarray(u["waypoints"])), (seed, u["id"])
 
 
 def test_run_seeds_start_with_the_root_and_are_reproducible() -> None:
