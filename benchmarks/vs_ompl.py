@@ -126,7 +126,7 @@ def segment_check(sc: Scenario) -> Callable[[float, float, float, float, float, 
         e = np.empty((1, 2, 3))
         e[0, 0, 0], e[0, 0, 1], e[0, 0, 2] = x0, y0, z0
         e[0, 1, 0], e[0, 1, 1], e[0, 1, 2] = x1, y1, z1
-        return bool(kernel(e, *kargs)[0])
+        return bool(kernel(e, kargs)[0])
 
     ok(0.0, 0.0, 0.0, 1.0, 1.0, 1.0)  # compile now
     return ok  # type: ignore[no-any-return]
