@@ -7,6 +7,7 @@ from __future__ import annotations
 import importlib.util
 import sys
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 
@@ -15,7 +16,7 @@ from uavplan.problems.validity import MotionValidator
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def _load(name: str):  # type: ignore[no-untyped-def]
+def _load(name: str) -> ModuleType:
     spec = importlib.util.spec_from_file_location(
         f"_bench_{name}", ROOT / "benchmarks" / f"{name}.py"
     )
