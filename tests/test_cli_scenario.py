@@ -123,7 +123,7 @@ BAD: list[tuple[str, Callable[[Path], Any], list[tuple[str, str]]]] = [
         lambda d: flat(terrain={"file": "missing.tif"}, bounds=None),
         [('terrain.file = "missing.tif"', "DEM file not found")],
     ),
-    ("baddem.yaml", _bad_dem, [("terrain.file", "cannot read DEM")]),
+    ("baddem.yaml", _bad_dem, [("terrain.file", "not a raster GDAL can read")]),
     ("garbage.yaml", lambda d: bytes(range(256)) * 4, [("", "not a YAML or JSON file")]),
     ("scalar.yaml", lambda d: "42\n", [("", "top level must be a mapping")]),
     ("syntax.json", lambda d: '{"name": ', [("", "not valid JSON")]),

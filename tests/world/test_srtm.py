@@ -14,7 +14,8 @@ from typer.testing import CliRunner
 from uavplan.cli import app
 from uavplan.io.scenario_file import ScenarioFileError, load_scenario
 from uavplan.world.geo import GeoOrigin
-from uavplan.world.srtm import VOID, mosaic, points_over_voids, read_hgt, terrain_from_srtm
+from uavplan.world.raster import points_over_voids
+from uavplan.world.srtm import VOID, mosaic, read_hgt, terrain_from_srtm
 from uavplan.world.terrain import TerrainError
 
 N = 1201  # 3 arc-seconds
@@ -180,21 +181,21 @@ def test_tasks_in_wgs84_and_geojson_no_fly_zones(tmp_path: Path) -> None:
 
 
 def _geotiff(path: Path, epsg: int, geographic: bool = False) -> None:
-    import tifffile
+    import rasterio
+    from rasterio.transform import Affine
 
     H = np.add.outer(np.arange(200.0), np.arange(300.0)).astype(np.float32)
-    key = 2048 if geographic else 3072
-    keys = (1, 1, 0, 1, key, 0, 1, epsg)
-    scale = (0.001, 0.001, 0.0) if geographic else (30.0, 30.0, 0.0)
-    tie = (0, 0, 0, -84.5, 36.6, 0) if geographic else (0, 0, 0, 500000.0, 4000000.0, 0)
-    tifffile.imwrite(path, H, extratags=[(33550, "d", 3, scale, False),
-                                         (33922, "d", 6, tie, False),
-                                         (34735, "H", len(keys), keys, False)])  # fmt: skip
+    tr = (Affine(0.001, 0, -84.5, 0, -0.001, 36.6) if geographic
+          else Affine(30.0, 0, 500000.0, 0, -30.0, 4000000.0))  # fmt: skip
+    with rasterio.open(path, "w", driver="GTiff", width=300, height=200, count=1,
+                       dtype="float32", crs=f"EPSG:{epsg}", transform=tr) as f:  # fmt: skip
+        f.write(H, 1)
 
 
 def test_a_projected_geotiff_places_itself_on_earth(tmp_path: Path) -> None:
-    """UTM 17N (EPSG:32617): the origin comes from the file; its error (the projection's scale
-    factor and grid convergence over a 9 km x 6 km DEM) is measured, metres, not kilometres."""
+    """UTM 17N (EPSG:32617): the origin comes from the file, and the local frame is the file's
+    CRS (shifted), so that exported positions convert exactly: a round trip through WGS84
+    lands on the same local point, and a corner node is where the raster puts it."""
     from pyproj import Transformer
 
     _geotiff(tmp_path / "dem.tif", 32617)
@@ -203,7 +204,13 @@ def test_a_projected_geotiff_places_itself_on_earth(tmp_path: Path) -> None:
     (tmp_path / "s.yaml").write_text(yaml.safe_dump(data))
     sc = load_scenario(tmp_path / "s.yaml")
     o = sc.origin
-    assert o is not None and "EPSG:32617" in o.note and 0 < o.accuracy < 10
+    assert o is not None and "EPSG:32617" in o.note and o.accuracy == 0 and o.crs == "EPSG:32617"
+    corner = Transformer.from_crs(32617, 4326, always_xy=True).transform(
+        500000 + 0.5 * 30.0, 4000000 - 199.5 * 30.0)  # fmt: skip
+    sw = o.to_geodetic(np.array([[0.0, 0.0]]))[0]  # node (0, 0): the south-west sample
+    assert (sw[1], sw[0]) == pytest.approx(corner, abs=1e-9)
+    back = o.to_local(o.to_geodetic(np.array([[123.4, 5678.9, 10.0]])))[0]
+    assert back == pytest.approx([123.4, 5678.9, 10.0], abs=1e-6)
     centre = Transformer.from_crs(32617, 4326, always_xy=True).transform(
         500000 + 150 * 30.0, 4000000 - 100 * 30.0)  # fmt: skip
     assert (o.lon, o.lat) == pytest.approx(centre, abs=1e-9)
@@ -211,7 +218,8 @@ def test_a_projected_geotiff_places_itself_on_earth(tmp_path: Path) -> None:
 
 def test_a_geographic_geotiff_is_resampled_onto_metres(tmp_path: Path) -> None:
     """EPSG:4326 pixels of 0.001 degrees from 36.6 N, 84.5 W: resampled like SRTM tiles onto
-    the largest local box inside the DEM, about 111 m cells, never below the DEM at a node."""
+    the largest local box inside the DEM, cells of its smaller pixel side (0.001 degrees of
+    longitude at 36.5 N: 89.5 m, rounded to 90), never below the DEM at a node."""
     _geotiff(tmp_path / "geo.tif", 4326, geographic=True)
     data = {"name": "geo", "terrain": {"file": "geo.tif"},
             "tasks": [{"start": [0, 0, 900], "goal": [5000, 3000, 900]}]}  # fmt: skip
@@ -219,7 +227,7 @@ def test_a_geographic_geotiff_is_resampled_onto_metres(tmp_path: Path) -> None:
     sc = load_scenario(tmp_path / "g.yaml")
     t, o = sc.terrain, sc.origin
     assert t is not None and o is not None and "EPSG:4326" in o.note
-    assert t.dx == 111.0 and o.lat == pytest.approx(36.6 - 0.1, abs=1e-3)
+    assert t.dx == 90.0 and o.lat == pytest.approx(36.6 - 0.1, abs=1e-3)
     xs = t.x0 + t.dx * np.arange(t.shape[1])
     ys = t.y0 + t.dy * np.arange(t.shape[0])
     X, Y = np.meshgrid(xs, ys)

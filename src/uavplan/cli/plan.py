@@ -340,14 +340,15 @@ def _summary(plan: Any, times: tuple[float, float, int], out_dir: Path) -> None:
     )
     terrain = plan.scenario.terrain
     if terrain is not None and terrain.georef.get("voids_filled"):
-        from uavplan.world.srtm import points_over_voids
+        from uavplan.world.raster import length_over_voids
 
         for r in plan.results:
-            k = points_over_voids(terrain, r.flown_trajectory()[0])
-            if k:
-                err.print(f"WARNING: {r.uav_id}: {k} points of its flown trajectory are over "
-                          "SRTM voids filled with the highest height nearby (the terrain there "
-                          "is a guess, not a measurement)")  # fmt: skip
+            metres = length_over_voids(terrain, r.flown_trajectory()[0])
+            if metres > 0:
+                err.print(f"WARNING: {r.uav_id} flies about {metres:,.0f} m over voids (no data) "
+                          f"of {terrain.name}; there the ground is unknown and the plan holds "
+                          "its band above the highest height on each void's rim, a guess, not "
+                          "a measurement", markup=False)  # fmt: skip
     evals = sum(int(r.evaluations) for r in plan.results)
     out.print(
         f"wrote {out_dir / 'plan.json'}, {out_dir / 'plan.png'} and {out_dir / 'plan.html'} "

@@ -19,7 +19,7 @@ from rich.text import Text
 
 if TYPE_CHECKING:
     from uavplan.io.scenario_file import ScenarioFileError
-    from uavplan.world import Scenario
+    from uavplan.world import Scenario, Terrain
 
 scenario_app = typer.Typer(help="Built-in scenarios and scenario files.", no_args_is_help=True)
 
@@ -61,6 +61,40 @@ def _plural(n: int, word: str) -> str:
     return f"{n} {word}" + ("" if n == 1 else "s")
 
 
+def raster_lines(ter: Terrain) -> list[str]:
+    """What ``scenario show`` says of a terrain read from a raster: the file as GDAL read it,
+    how it was placed, and how far the floor's and ceiling's grids stand from its ground."""
+    g = ter.georef
+    block = g.get("raster")
+    if not block:
+        return []
+    lines = [f"  raster: {g.get('raster_info', ter.name)}"]
+    frame = block.get("frame")
+    if frame == "reprojected":
+        how = ("reprojected onto the local grid through the origin (pyproj), the floor's grid "
+               "never below the raster's ground and the ceiling's never above it")  # fmt: skip
+    elif frame == "crs-offset":
+        how = "on its own projected grid (its metres are the local metres)"
+    else:
+        how = "a plain grid (no CRS), node (0, 0) the south-west sample"
+    lines.append(f"  placed: {how}")
+    lift = g.get("lift")
+    if lift:
+        lines.append(
+            f"  envelope: floor {_n(round(lift['floor_median'], 1))} m above the raster's ground "
+            f"at a node (median; max {_n(round(lift['floor_max'], 1))} m), ceiling "
+            f"{_n(round(lift['ceiling_median'], 1))} m below it (max "
+            f"{_n(round(lift['ceiling_max'], 1))} m); a smaller cell_size narrows both"
+        )
+    if g.get("voids_filled"):
+        lines.append(
+            f"  voids: {g['voids_filled']:,} nodes stand on no-data samples of {ter.name} "
+            "(filled with the highest height on each void's rim for the floor, the lowest for "
+            "the ceiling; the ground there is unknown)"
+        )
+    return lines
+
+
 def summary_lines(s: Scenario) -> list[str]:
     """The ``scenario show`` summary of a scenario, as plain text lines."""
     lines = [f"scenario: {s.name} ({s.dim}-D)"]
@@ -82,6 +116,7 @@ def summary_lines(s: Scenario) -> list[str]:
             f"extent x {_n(xmin)}..{_n(xmax)} m, y {_n(ymin)}..{_n(ymax)} m, "
             f"heights {_n(hmin)}..{_n(hmax)} m"
         )
+        lines += raster_lines(ter)
     if s.origin is None:
         lines.append("origin: none (not geo-referenced; mission export needs one)")
     else:

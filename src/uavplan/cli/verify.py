@@ -61,6 +61,9 @@ def summary_lines(report: VerifyReport, plan_name: str) -> list[str]:
         )
     elif n > 1:
         lines.append(f"min separation: more than {need} (no pair came close)")
+    if report.terrain_source is not None:
+        lines.append(f"terrain: checked against the raster {report.terrain_source} itself (read "
+                     "again through GDAL, not the planner's grid)")  # fmt: skip
     counts = {k: c for k, c in report.counts.items() if c}
     if counts:
         detail = ", ".join(f"{k} {c}" for k, c in counts.items())
@@ -126,14 +129,19 @@ def verify(
         trajs = pf.trajectories(kind)
     except PlanFormatError as exc:
         raise fail(exc.problems[0]) from None
-    report = verify_trajectories(
-        trajs,
-        world,
-        pf.scenario,
-        smoothed=smoothed,
-        kinematics=TRAJECTORIES[kind],
-        trajectory=kind,
-    )
+    from uavplan.verify.source_terrain import SourceError
+
+    try:
+        report = verify_trajectories(
+            trajs,
+            world,
+            pf.scenario,
+            smoothed=smoothed,
+            kinematics=TRAJECTORIES[kind],
+            trajectory=kind,
+        )
+    except SourceError as exc:
+        raise fail(f"{scenario}: {exc}") from None
 
     out = Console(highlight=False, soft_wrap=True)
     limit = max_show if max_show > 0 else len(report.violations)

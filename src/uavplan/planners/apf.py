@@ -532,6 +532,8 @@ def force_reference(
                 f, c = max(f, band.min), min(c, band.max)
             rel_f = band.min if band is not None and band.reference == "ground" else -np.inf
             rel_c = band.max if band is not None and band.reference == "ground" else np.inf
+            if ter is not None and ter.lower is not None:
+                rel_c -= float(np.max(ter.heights - ter.lower))  # as the kernel's
             if ter is not None:
                 rel_f = max(rel_f, 0.0)
             return max(f, ground + rel_f), min(c, ground + rel_c)
@@ -607,6 +609,8 @@ def _packed(
     elif band is not None:
         f_rel, c_rel = band.min, band.max
     t = sc.terrain
+    if t is not None and t.lower is not None and band is not None and band.reference == "ground":
+        c_rel -= float(np.max(t.heights - t.lower))  # the field reads the floor's grid only
     if t is not None:
         f_rel = max(f_rel, 0.0)  # never below the ground
         H = np.ascontiguousarray(t.heights, dtype=np.float64)

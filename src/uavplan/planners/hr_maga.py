@@ -460,12 +460,16 @@ class HRMAGA(Planner):
         x, y, z = out[:, 0], out[:, 1], out[:, 2].copy()
         band = sc.altitude
         if band is not None:
-            base = np.zeros(len(x))
+            base = top = np.zeros(len(x))
             if band.reference == "ground" and sc.terrain is not None:
                 base = np.asarray(sc.terrain.lookup(x, y, _lookup(sc)), dtype=np.float64)
+                top = base
+                if sc.terrain.lower is not None:  # the ceiling's own grid
+                    top = np.asarray(sc.terrain.lookup_low(x, y, _lookup(sc)), dtype=np.float64)
             if level is not None and math.isfinite(band.max):
-                z = base + band.min + level * (band.max - band.min)
-            z = np.minimum(np.maximum(z, base + band.min), base + band.max)
+                room = band.max - band.min if top is base else top + band.max - base - band.min
+                z = base + band.min + level * room
+            z = np.minimum(np.maximum(z, base + band.min), top + band.max)
         elif sc.terrain is not None:
             z = np.maximum(z, np.asarray(sc.terrain.height(x, y), dtype=np.float64))
         out[:, 2] = np.minimum(np.maximum(z, lo[2]), hi[2])

@@ -31,8 +31,9 @@ def static_path_ok(paths, p, args, waypoint_band=True):  # pragma: no cover - nu
     the tolerance), so the band is checked along the segments only.
 
     ``grid``: (x0, y0, dx, dy, nx - 1, ny - 1, tol_u, tol_v) of the terrain; ``H``/``flat``/
-    ``off``/``shp`` its heights and max-pyramid, ``nH``/... those of the negated heights (the
-    band's ceiling along segments); ``need``: the least clearance above the terrain; the band
+    ``off``/``shp`` its heights and max-pyramid, ``nH``/... those of its negated ceiling grid
+    (``Terrain.ceiling_heights``: the band's ceiling at the waypoints and along
+    segments); ``need``: the least clearance above the terrain; the band
     ``[bmin, bmax]`` above ground (``band_ground``; at the waypoints the ground is read at the
     ``nearest`` node, else bilinear) or absolute, within ``band_tol``, and along whole segments
     when ``strict`` (ground band over terrain only).
@@ -79,10 +80,12 @@ def static_path_ok(paths, p, args, waypoint_band=True):  # pragma: no cover - nu
         for k in range(N):
             z = paths[p, k, 2]
             h = z
+            hc = z
             if band_ground:
                 x, y = paths[p, k, 0], paths[p, k, 1]
                 h = z - ground_one(H, has_terrain, nearest, x0, y0, dx, dy, x, y)
-            if h < bmin - band_tol or h > bmax + band_tol:
+                hc = z + ground_one(nH, has_terrain, nearest, x0, y0, dx, dy, x, y)
+            if h < bmin - band_tol or hc > bmax + band_tol:
                 ok = False
                 break
     if ok:  # cylinders along the segments

@@ -240,6 +240,19 @@ class Batch:
         return z - self.ground if band is not None and band.reference == "ground" else z
 
     @cached_property
+    def band_heights_ceiling(self) -> FloatArray:
+        """(pop, n) :attr:`band_heights` over the terrain's ceiling grid
+        (``Terrain.ceiling_heights``), what the band's maximum is held against."""
+        sc = self.scenario
+        band = sc.altitude
+        if sc.terrain is None or sc.terrain.lower is None:
+            return self.band_heights
+        if band is None or band.reference != "ground":
+            return self.band_heights
+        low = sc.terrain.lookup_low(self.paths[..., 0], self.paths[..., 1], self.validator.lookup)
+        return np.asarray(self.paths[..., 2] - low)
+
+    @cached_property
     def times(self) -> FloatArray:
         """(pop, n) seconds: at the UAV's speed from the task's start time unless given."""
         return C.path_times(self.paths, self.scenario.uav.speed, self.validator.task.start_time)
@@ -511,8 +524,8 @@ class MotionValidator:
             return np.asarray(~np.all(sc.terrain.clears(p, need), axis=1))
         if name == "altitude":
             assert band is not None
-            h = b.band_heights
-            bad = np.any((h < band.min - BAND_TOL) | (h > band.max + BAND_TOL), axis=1)
+            h, hc = b.band_heights, b.band_heights_ceiling
+            bad = np.any((h < band.min - BAND_TOL) | (hc > band.max + BAND_TOL), axis=1)
             if self.strict_altitude and band.reference == "ground" and sc.terrain is not None:
                 bad |= ~np.all(sc.terrain.stays_within(p, band.max + BAND_TOL), axis=1)
             return np.asarray(bad)
@@ -544,8 +557,8 @@ class MotionValidator:
             V += b.cyl_hits[0]
         band = self.scenario.altitude
         if band is not None and self.dim == 3:
-            h = b.band_heights
-            V += np.sum(np.maximum(0.0, band.min - h) + np.maximum(0.0, h - band.max), axis=1)
+            h, hc = b.band_heights, b.band_heights_ceiling
+            V += np.sum(np.maximum(0.0, band.min - h) + np.maximum(0.0, hc - band.max), axis=1)
         return V
 
     # ------------------------------------------------------------------ questions
@@ -634,8 +647,8 @@ class MotionValidator:
             elif c == "altitude":
                 band = sc.altitude
                 assert band is not None
-                h = b.band_heights
-                out[c] = np.asarray(np.minimum(h - band.min, band.max - h).min(axis=1))
+                h, hc = b.band_heights, b.band_heights_ceiling
+                out[c] = np.asarray(np.minimum(h - band.min, band.max - hc).min(axis=1))
             elif c == "moving":
                 radii = np.array([o.radius for o in sc.moving_obstacles])
                 out[c] = np.asarray((b.moving_dist - radii).min(axis=(1, 2)))
@@ -775,6 +788,10 @@ def band_repair(
             g1 = sc.terrain.height(q[:, 0], q[:, 1])
             g2 = sc.terrain.lookup(q[:, 0], q[:, 1], validator.lookup)
             g_lo, g_hi = np.maximum(g1, g2), np.minimum(g1, g2)
+            if sc.terrain.lower is not None:  # the ceiling is held against its own grid
+                g3 = sc.terrain.height_low(q[:, 0], q[:, 1])
+                g4 = sc.terrain.lookup_low(q[:, 0], q[:, 1], validator.lookup)
+                g_hi = np.minimum(g3, g4)
         if band.reference == "ground":
             lo, hi = g_lo + band.min, g_hi + band.max
         else:

@@ -94,6 +94,8 @@ class VerifyReport:
             pairs (exact; inf if no two flights overlap in time).
         min_separation_pair, min_separation_time: where it happens (None if no pair checked).
         violations: every failed check; warnings: remarks that do not fail the plan.
+        terrain_source: the raster the terrain and the band were checked against (its files'
+            names), None when they were checked against the scenario's grid.
     """
 
     scenario: str
@@ -112,6 +114,7 @@ class VerifyReport:
     kinematics: bool = True
     violations: list[Violation] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    terrain_source: str | None = None
 
     @property
     def ok(self) -> bool:
@@ -149,6 +152,7 @@ class VerifyReport:
             "counts": self.counts,
             "violations": [v.to_dict() for v in self.violations],
             "warnings": list(self.warnings),
+            "terrain_source": self.terrain_source,
         }
 
 

@@ -44,7 +44,11 @@ Semantics (frame: metres, x east, y north, z up, absolute altitudes; seconds):
 * **Terrain** (``terrain``): ``z - h(x, y) >= 0`` along every segment against the bilinear DEM
   (outside the grid the height of the nearest edge point). Along a straight segment inside one
   grid cell the bilinear surface is a quadratic in the segment parameter, so each segment is split
-  at the grid lines it crosses and the exact minimum is taken per piece.
+  at the grid lines it crosses and the exact minimum is taken per piece. When the terrain was
+  read from a raster (GeoTIFF, SRTM tiles, ...), ``h`` is the raster's own ground, read again
+  from its files by :mod:`uavplan.verify.source_terrain` (not the planner's resampled grid),
+  and the planner's grid is compared with it (a disagreement beyond its stated bound is
+  warned).
 * **Altitude band** (``altitude``): with reference ``"ground"`` the height above ground stays in
   ``[min, max]`` along the whole segment (exact, with the same per-cell quadratic for the minimum
   and the maximum; ground is 0 without terrain); with ``"absolute"``, ``z`` stays in
@@ -90,6 +94,7 @@ from uavplan.verify.report import (
     fmt_points,
 )
 from uavplan.verify.separation import check_moving, check_separation
+from uavplan.verify.source_terrain import check_source_terrain, read_source
 from uavplan.verify.terrain import check_terrain
 from uavplan.verify.timing import check_bounds, check_speed, check_times
 from uavplan.world.scenario import Scenario
@@ -144,6 +149,8 @@ def verify_trajectories(
         report.warnings.append(
             f"the plan is for scenario {plan_scenario!r}, verifying against {sc.name!r}"
         )
+    source = read_source(sc.terrain)
+    report.terrain_source = source.name if source is not None else None
     tasks = {t.id: t for t in sc.tasks}
     per_uav: list[Violation] = []
     timed: list[Trajectory] = []
@@ -182,7 +189,14 @@ def verify_trajectories(
             vs += check_polygons(tr, polygons)
         if sc.moving_obstacles and times_ok:
             vs += check_moving(tr, sc.moving_obstacles)
-        vs += check_terrain(tr, sc.terrain, sc.altitude)
+        if source is not None and tr.dim == 3:  # the raster's own ground, read again
+            found, said = check_source_terrain(tr, source, sc.altitude, sc.terrain)
+            vs += found
+            report.warnings += said
+            if sc.altitude is not None and sc.altitude.reference != "ground":
+                vs += check_terrain(tr, None, sc.altitude)
+        else:
+            vs += check_terrain(tr, sc.terrain, sc.altitude)
         if tr.feasible and vs:
             report.warnings.append(
                 f"{tr.id}: the plan calls it feasible, the verifier found {len(vs)} violation(s)"

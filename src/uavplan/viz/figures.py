@@ -99,6 +99,9 @@ def _legend(ax: Axes, scenario: Scenario, results: Sequence[Any]) -> None:
               Line2D([], [], color="tab:gray", ls=":", marker="o", mfc="none",
                      label="moving obstacle (track)"))]  # fmt: skip
     handles += [h for objs, h in kinds if objs]
+    void = scenario.terrain.georef.get("void_mask") if scenario.terrain is not None else None
+    if void is not None and np.any(void):
+        handles.append(Patch(fc="none", ec="0.3", hatch="////", label="no data in the DEM"))
     ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=4,
               fontsize=7, frameon=False)  # fmt: skip
 
@@ -140,6 +143,10 @@ def draw_top(
                    linewidths=0.4, alpha=0.5)  # fmt: skip
         if colorbar:
             ax.figure.colorbar(im, ax=ax, fraction=0.04, pad=0.02, label="terrain height (m)")
+        void = scenario.terrain.georef.get("void_mask") if scenario.terrain is not None else None
+        if void is not None and np.any(void):  # no data in the raster: hatched, not a plateau
+            ax.contourf(xs, ys, np.asarray(void, dtype=float), levels=[0.5, 1.5], colors="none",
+                        hatches=["////"])  # fmt: skip
     for c in scenario.cylinders:
         ax.add_patch(CirclePatch(c.center, c.radius, color="tab:red", alpha=0.45, lw=0))
         if c.margin:

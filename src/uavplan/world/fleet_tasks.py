@@ -145,7 +145,7 @@ def _heights(
     ground = np.asarray(scenario.ground(xy[:, 0], xy[:, 1]), dtype=np.float64).reshape(n)
     band = scenario.altitude
     if band is not None and band.reference == "ground":
-        z = ground + band.mid
+        z = 0.5 * (ground + _ceiling_ground(scenario, xy, ground)) + band.mid
     elif band is not None:
         z = np.full(n, band.mid)
     else:
@@ -202,8 +202,17 @@ def _valid(
         band = scenario.altitude
         if band is not None:
             h = z - ground if band.reference == "ground" else z
-            ok &= (h >= band.min) & (h <= band.max)
+            hc = z - _ceiling_ground(scenario, xy, ground) if band.reference == "ground" else z
+            ok &= (h >= band.min) & (hc <= band.max)
     return np.asarray(ok)
+
+
+def _ceiling_ground(scenario: Scenario, xy: FloatArray, ground: FloatArray) -> FloatArray:
+    """The ground the band's ceiling is held against at ``xy`` (the terrain's ceiling grid)."""
+    t = scenario.terrain
+    if t is None or t.lower is None:
+        return ground
+    return np.asarray(t.height_low(xy[:, 0], xy[:, 1]), dtype=np.float64).reshape(len(ground))
 
 
 def _point(scenario: Scenario, xy: FloatArray, z: float) -> tuple[float, ...]:

@@ -10,7 +10,11 @@ The horizontal conversion is an azimuthal equidistant projection centred on the 
 WGS84 ellipsoid (``pyproj``, ``+proj=aeqd``): distances and bearings from the origin are exact,
 and a round trip local -> WGS84 -> local is exact to well under a millimetre over 50 km
 (tested). A flat-earth conversion (metres per degree at one latitude) is off by tens of metres
-at 15 km and is not used. ``pyproj`` is imported on first use.
+at 15 km and is not used. An origin with a ``crs`` (a projected CRS in metres, such as a UTM
+zone) makes the local frame that CRS's grid, shifted so that the local point ``(x, y)`` is at
+``(lat, lon)``: a projected DEM kept on its own grid, whose positions then convert exactly (its
+metres are the projection's: a UTM metre is 0.9996 to 1.001 true metres, and its y axis is grid
+north). ``pyproj`` is imported on first use.
 """
 
 from __future__ import annotations
@@ -29,6 +33,37 @@ FloatArray = NDArray[np.float64]
 
 class GeoError(ValueError):
     """An origin that is not a place on Earth."""
+
+
+@lru_cache(maxsize=16)
+def _crs_transformers(crs: str) -> tuple[Any, Any]:
+    """(CRS -> WGS84, WGS84 -> CRS), longitude first."""
+    from pyproj import CRS, Transformer
+
+    frame = CRS.from_user_input(crs)
+    wgs84 = CRS.from_epsg(4326)
+    return (
+        Transformer.from_crs(frame, wgs84, always_xy=True),
+        Transformer.from_crs(wgs84, frame, always_xy=True),
+    )
+
+
+def projected_crs_problem(crs: str) -> str | None:
+    """Why ``crs`` cannot be a local frame (not a CRS pyproj knows, not projected, not in
+    metres), or None."""
+    from pyproj import CRS
+    from pyproj.exceptions import CRSError
+
+    try:
+        c = CRS.from_user_input(crs)
+    except CRSError as exc:
+        return f"not a coordinate reference system pyproj knows ({exc})"
+    if not c.is_projected:
+        return f"{c.name} is not a projected CRS (a local frame is in metres)"
+    factors = {a.unit_conversion_factor for a in c.axis_info[:2]}
+    if factors != {1.0}:
+        return f"{c.name} is not in metres"
+    return None
 
 
 @lru_cache(maxsize=64)
@@ -59,6 +94,8 @@ class GeoOrigin:
             terrain data puts that local point, metres (0: exact, or no terrain data on
             Earth). A lat/lon DEM laid out flat at its mean latitude (the matplotlib DEMs)
             has a few tens of metres to kilometres; exports warn above 1 m.
+        crs: empty for the azimuthal equidistant frame about ``(lat, lon)``; else a projected
+            CRS in metres (``"EPSG:32616"``, or WKT) whose grid, shifted, is the local frame.
     """
 
     lat: float
@@ -68,6 +105,7 @@ class GeoOrigin:
     y: float = 0.0
     note: str = ""
     accuracy: float = 0.0
+    crs: str = ""
 
     def __post_init__(self) -> None:
         for name in ("lat", "lon", "alt", "x", "y", "accuracy"):
@@ -81,21 +119,40 @@ class GeoOrigin:
             raise GeoError(f"origin lon: {self.lon} is not in [-180, 180] degrees")
         if self.accuracy < 0:
             raise GeoError(f"origin accuracy: {self.accuracy} is negative")
+        if self.crs and (why := projected_crs_problem(self.crs)) is not None:
+            raise GeoError(f"origin crs: {why}")
+
+    def _crs_origin(self) -> tuple[float, float]:
+        """The origin's coordinates in :attr:`crs`."""
+        _, from_wgs = _crs_transformers(self.crs)
+        X, Y = from_wgs.transform(self.lon, self.lat)
+        return float(X), float(Y)
 
     def to_geodetic(self, points: ArrayLike) -> FloatArray:
         """Local points (n, 2) or (n, 3), metres -> (n, 3) ``[lat, lon, alt AMSL]`` (a 2-D
         point's altitude is the origin's)."""
         P = np.atleast_2d(np.asarray(points, dtype=np.float64))
-        fwd, _ = _transformers(self.lat, self.lon)
-        lon, lat = fwd.transform(P[:, 0] - self.x, P[:, 1] - self.y)
+        if self.crs:
+            to_wgs, _ = _crs_transformers(self.crs)
+            X0, Y0 = self._crs_origin()
+            lon, lat = to_wgs.transform(X0 + (P[:, 0] - self.x), Y0 + (P[:, 1] - self.y))
+        else:
+            fwd, _ = _transformers(self.lat, self.lon)
+            lon, lat = fwd.transform(P[:, 0] - self.x, P[:, 1] - self.y)
         z = P[:, 2] if P.shape[1] > 2 else np.zeros(len(P))
         return np.column_stack([lat, lon, self.alt + z])
 
     def to_local(self, geodetic: ArrayLike) -> FloatArray:
         """(n, 3) ``[lat, lon, alt AMSL]`` -> local (n, 3) metres."""
         G = np.atleast_2d(np.asarray(geodetic, dtype=np.float64))
-        _, inv = _transformers(self.lat, self.lon)
-        x, y = inv.transform(G[:, 1], G[:, 0])
+        if self.crs:
+            _, from_wgs = _crs_transformers(self.crs)
+            X0, Y0 = self._crs_origin()
+            X, Y = from_wgs.transform(G[:, 1], G[:, 0])
+            x, y = np.asarray(X) - X0, np.asarray(Y) - Y0
+        else:
+            _, inv = _transformers(self.lat, self.lon)
+            x, y = inv.transform(G[:, 1], G[:, 0])
         return np.column_stack([x + self.x, y + self.y, G[:, 2] - self.alt])
 
     def record(self) -> dict[str, Any]:
@@ -107,6 +164,8 @@ class GeoOrigin:
             out["note"] = self.note
         if self.accuracy:
             out["accuracy"] = self.accuracy
+        if self.crs:
+            out["crs"] = self.crs
         return out
 
     @classmethod
@@ -114,7 +173,7 @@ class GeoOrigin:
         """The inverse of :meth:`record`; GeoError naming the field on a bad block."""
         if not isinstance(rec, dict):
             raise GeoError(f"origin: {rec!r} is not a mapping with lat, lon, alt")
-        unknown = set(rec) - {"lat", "lon", "alt", "x", "y", "note", "accuracy"}
+        unknown = set(rec) - {"lat", "lon", "alt", "x", "y", "note", "accuracy", "crs"}
         if unknown:
             raise GeoError(f"origin: unknown fields {sorted(unknown)}")
         for key in ("lat", "lon"):
@@ -122,45 +181,5 @@ class GeoOrigin:
                 raise GeoError(f"origin {key}: missing")
         return cls(
             rec["lat"], rec["lon"], rec.get("alt", 0.0), rec.get("x", 0.0), rec.get("y", 0.0),
-            str(rec.get("note", "")), rec.get("accuracy", 0.0),
+            str(rec.get("note", "")), rec.get("accuracy", 0.0), str(rec.get("crs", "")),
         )  # fmt: skip
-
-
-def origin_for_projected_grid(
-    epsg: int,
-    tiepoint: list[float],
-    pixel_scale: list[float],
-    shape: tuple[int, int],
-    local_x0: float,
-    local_y0: float,
-    name: str,
-) -> GeoOrigin:
-    """The origin of a DEM in a projected CRS (a GeoTIFF's EPSG code, tie point and pixel
-    scale; ``shape`` its rows and columns, row 0 north), placed at its centre node, whose local
-    position is ``(local_x0 + c * sx, local_y0 + r * sy)`` with the rows flipped south first.
-    The DEM's metres are the projection's (a UTM metre is 0.9996 to 1.001 true metres) and its
-    axes follow the projection's grid north, so ``accuracy`` is the largest distance, over the
-    corners and edge midpoints, between where the DEM puts a node and where the origin does."""
-    from pyproj import CRS, Geod, Transformer
-
-    rows, cols = shape
-    sx, sy = float(pixel_scale[0]), float(pixel_scale[1])
-    ti, tj, _, X, Y = (float(v) for v in tiepoint[:5])
-
-    def crs_xy(c: np.ndarray, r_local: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        r = rows - 1 - r_local  # GeoTIFF row
-        return X + (c - ti + 0.5) * sx, Y - (r - tj + 0.5) * sy
-
-    to_wgs = Transformer.from_crs(CRS.from_epsg(epsg), CRS.from_epsg(4326), always_xy=True)
-    cc, rc = np.array([(cols - 1) / 2]), np.array([(rows - 1) / 2])
-    lon, lat = to_wgs.transform(*crs_xy(cc, rc))
-    base = GeoOrigin(float(lat[0]), float(lon[0]), 0.0, local_x0 + cc[0] * sx,
-                     local_y0 + rc[0] * sy)  # fmt: skip
-    c = np.array([0, cols - 1, 0, cols - 1, (cols - 1) / 2, (cols - 1) / 2, 0, cols - 1])
-    r = np.array([0, 0, rows - 1, rows - 1, 0, rows - 1, (rows - 1) / 2, (rows - 1) / 2])
-    tlon, tlat = to_wgs.transform(*crs_xy(c, r))
-    G = base.to_geodetic(np.column_stack([local_x0 + c * sx, local_y0 + r * sy]))
-    _, _, miss = Geod(ellps="WGS84").inv(tlon, tlat, G[:, 1], G[:, 0])
-    return GeoOrigin(base.lat, base.lon, 0.0, base.x, base.y,
-                     f"the DEM's centre ({name}, EPSG:{epsg}; heights AMSL)",
-                     float(np.ceil(np.max(miss) * 100) / 100))  # fmt: skip

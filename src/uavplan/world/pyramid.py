@@ -15,6 +15,10 @@ the same coarse grid (node spacing ``factor`` fine cells):
 * ``cost``: the fine map's bilinear heights at the coarse nodes (the map the paper's cost reads
   on that layer: a sampled DEM, not a conservative one).
 
+A terrain with a ceiling's grid (``Terrain.lower``, a reprojected raster) gives every level one
+too: the **minimum** of the fine ceiling nodes around each coarse node (so the coarse ceiling is
+never above the fine one), and on the cost map the fine ceiling's bilinear heights.
+
 Factors (our choice; the paper gives only the first layer's ~40 samples per side): the first
 (coarsest) level's factor makes its longer side about ``first_samples = 40`` cells,
 ``round((n - 1) / 40)`` for the longer side's ``n`` nodes; the last level is the DEM itself
@@ -68,11 +72,17 @@ def conservative_level(terrain: Terrain, factor: int) -> TerrainLevel:
     ii = np.minimum(np.arange(mx) * factor, nx - 1)
     jj = np.minimum(np.arange(my) * factor, ny - 1)
     dx, dy = terrain.dx * factor, terrain.dy * factor
+    low = None
+    if terrain.lower is not None:  # the ceiling's grid, conservative the other way
+        from scipy.ndimage import minimum_filter
+
+        low = minimum_filter(terrain.lower, size=2 * factor + 1, mode="nearest")[np.ix_(jj, ii)]
     feas = Terrain(window[np.ix_(jj, ii)], terrain.x0, terrain.y0, dx, dy,
-                   f"{terrain.name}/max{factor}", dict(terrain.georef))  # fmt: skip
+                   f"{terrain.name}/max{factor}", dict(terrain.georef), low)  # fmt: skip
     X, Y = np.meshgrid(terrain.x0 + np.arange(mx) * dx, terrain.y0 + np.arange(my) * dy)
     cost = Terrain(terrain.height(X, Y), terrain.x0, terrain.y0, dx, dy,
-                   f"{terrain.name}/{factor}", dict(terrain.georef))  # fmt: skip
+                   f"{terrain.name}/{factor}", dict(terrain.georef),
+                   None if terrain.lower is None else terrain.height_low(X, Y))  # fmt: skip
     return TerrainLevel(factor, feas, cost)
 
 
@@ -113,10 +123,13 @@ def relaxed_near(level: TerrainLevel, points: FloatArray, ring: int = 1) -> Terr
         return level.feasibility
     F, C = level.feasibility, level.cost
     H = np.array(F.heights)
+    Lo = None if F.lower is None or C.lower is None else np.array(F.lower)
     ny, nx = H.shape
     for p in np.asarray(points, dtype=np.float64).reshape(-1, np.shape(points)[-1]):
         i = int(np.clip(np.floor((p[0] - F.x0) / F.dx), 0, nx - 1))
         j = int(np.clip(np.floor((p[1] - F.y0) / F.dy), 0, ny - 1))
         sl = (slice(max(j - ring, 0), j + ring + 2), slice(max(i - ring, 0), i + ring + 2))
         H[sl] = C.heights[sl]
-    return Terrain(H, F.x0, F.y0, F.dx, F.dy, f"{F.name}~ends", dict(F.georef))
+        if Lo is not None and C.lower is not None:
+            Lo[sl] = C.lower[sl]
+    return Terrain(H, F.x0, F.y0, F.dx, F.dy, f"{F.name}~ends", dict(F.georef), Lo)

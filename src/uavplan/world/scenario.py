@@ -255,11 +255,25 @@ class Scenario:
             if self.terrain is not None and z < g:
                 out.append(f"under the terrain (z={z:g} m, ground {g:.1f} m)")
             if self.altitude is not None:
-                h = z - g if self.altitude.reference == "ground" else z
-                what = "above ground" if self.altitude.reference == "ground" else "altitude"
-                if not (self.altitude.min - BAND_TOL <= h <= self.altitude.max + BAND_TOL):
+                ground = self.altitude.reference == "ground"
+                h = z - g if ground else z
+                hc = h
+                if ground and self.terrain is not None and self.terrain.lower is not None:
+                    hc = z - float(self.terrain.height_low(p[0], p[1]))
+                what = "above ground" if ground else "altitude"
+                lo_ok = self.altitude.min - BAND_TOL <= h
+                hi_ok = hc <= self.altitude.max + BAND_TOL
+                if not (lo_ok and hi_ok):
+                    shown = h if not lo_ok or hc == h else hc
                     out.append(
-                        f"{what} {h:.1f} m outside the band [{self.altitude.min:g}, "
+                        f"{what} {shown:.1f} m outside the band [{self.altitude.min:g}, "
                         f"{self.altitude.max:g}]"
                     )
+                    if lo_ok and h <= self.altitude.max + BAND_TOL:  # the gap alone
+                        out.append(
+                            f"(the terrain's floor grid is at {g:.1f} m here and its ceiling "
+                            f"grid at {z - hc:.1f} m: the band is held above the highest and "
+                            "below the lowest ground the raster can have between the nodes; "
+                            "a smaller terrain cell_size narrows the gap)"
+                        )
         return out

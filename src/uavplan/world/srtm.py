@@ -6,19 +6,17 @@ arc-second) samples, row 0 the northern edge, the edge rows and columns shared w
 neighbouring tiles, voids -32768. Tiles of one resolution are put on one latitude/longitude
 grid (a missing tile is void), and the terrain is resampled onto a local metric grid through
 the scenario's :class:`~uavplan.world.geo.GeoOrigin` (pyproj's azimuthal equidistant
-projection): each local node takes the **highest** of the four source samples around its
-position, so a node is never below the source's bilinear surface there. A void among them is
-skipped; a node with only voids around it takes the highest valid height within growing
-neighbourhoods (conservative: a hole is filled high, not low), and :func:`terrain_from_srtm`
-reports how many nodes were filled.
+projection) as any geographic raster is (:func:`uavplan.world.raster.place_raster`): the
+floor's grid never below the tiles' bilinear ground and the ceiling's never above it, each void
+region filled with the highest (floor) and lowest (ceiling) valid height on its rim;
+:func:`terrain_from_srtm` reports how many local nodes a void touched.
 """
 
 from __future__ import annotations
 
 import math
 import re
-import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,7 +24,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.world.geo import GeoOrigin
-from uavplan.world.terrain import MAX_DEM_CELLS, Terrain, TerrainError, not_a_regular_file
+from uavplan.world.raster import place_raster, source_from_latlon
+from uavplan.world.terrain import Terrain, TerrainError, not_a_regular_file
 
 #: The most samples the SRTM tiles of one scenario may hold (four 1-arc-second tiles, 3601 x
 #: 3601 each, or 41 3-arc-second ones): the mosaic is held as float64, 415 MB at most.
@@ -99,86 +98,9 @@ def mosaic(tiles: list[HgtTile]) -> tuple[FloatArray, FloatArray, FloatArray]:
     return lats, lons, H
 
 
-def _fill_high(Z: FloatArray) -> int:
-    """Fill NaN nodes in place with the highest valid height in growing square neighbourhoods;
-    returns how many were filled."""
-    from scipy.ndimage import maximum_filter
-
-    holes = np.isnan(Z)
-    count = int(holes.sum())
-    if count == 0:
-        return 0
-    if holes.all():
-        raise TerrainError("the SRTM data under the map is void everywhere")
-    work = np.where(holes, -np.inf, Z)
-    while np.isnan(Z).any():
-        grown = maximum_filter(work, size=3, mode="nearest")
-        fill = np.isnan(Z) & np.isfinite(grown)
-        Z[fill] = grown[fill]
-        work = np.where(np.isnan(Z), -np.inf, Z)
-    return count
-
-
 def _srtm_tile_name(lat: float, lon: float) -> str:
     return (f"{'N' if lat >= 0 else 'S'}{abs(math.floor(lat)):02d}"
             f"{'E' if lon >= 0 else 'W'}{abs(math.floor(lon)):03d}.hgt")  # fmt: skip
-
-
-def resample_latlon(
-    lats: FloatArray,
-    lons: FloatArray,
-    H: FloatArray,
-    origin: GeoOrigin,
-    bounds: tuple[float, float, float, float],
-    cell: float,
-    name: str,
-    beyond: Callable[[float, float], str] = lambda la, lo: "",
-) -> tuple[Terrain, int]:
-    """A regular latitude/longitude grid of heights AMSL (``H`` (m, k), rows south first, NaN
-    = void) on the local grid over ``bounds = (xmin, xmax, ymin, ymax)`` with ``cell`` metres,
-    heights ``AMSL - origin.alt``: each node the highest of the four samples around it, voids
-    filled high; the number of filled nodes. ``beyond(lat, lon)`` says what to add when the map
-    reaches past the grid."""
-    dlat, dlon = float(lats[1] - lats[0]), float(lons[1] - lons[0])
-    xmin, xmax, ymin, ymax = bounds
-    nx = math.floor((xmax - xmin) / cell + 1e-9) + 1
-    ny = math.floor((ymax - ymin) / cell + 1e-9) + 1
-    if nx < 2 or ny < 2:
-        size = f"{xmax - xmin:g} x {ymax - ymin:g} m"
-        raise TerrainError(f"the map ({size}) is under 2 cells of {cell:g} m")
-    if nx * ny > MAX_DEM_CELLS:
-        raise TerrainError(
-            f"the map ({xmax - xmin:g} x {ymax - ymin:g} m) in cells of {cell:g} m has "
-            f"{nx:,} x {ny:,} nodes; a DEM has at most {MAX_DEM_CELLS:,} (give a larger "
-            "cell_size, or smaller bounds)"
-        )
-    X, Y = np.meshgrid(xmin + cell * np.arange(nx), ymin + cell * np.arange(ny))
-    G = origin.to_geodetic(np.column_stack([X.ravel(), Y.ravel()]))
-    la, lo = G[:, 0], G[:, 1]
-    fi = (la - lats[0]) / dlat
-    fj = (lo - lons[0]) / dlon
-    outside = (
-        (fi < -1e-9) | (fj < -1e-9) | (fi > len(lats) - 1 + 1e-9) | (fj > len(lons) - 1 + 1e-9)
-    )
-    if outside.any():
-        k = int(np.argmax(outside))
-        raise TerrainError(
-            f"the map reaches {la[k]:.5f}, {lo[k]:.5f} (local {X.ravel()[k]:g}, "
-            f"{Y.ravel()[k]:g} m), beyond the elevation data of {name}{beyond(la[k], lo[k])}"
-        )
-    i0 = np.clip(np.floor(fi).astype(int), 0, len(lats) - 2)
-    j0 = np.clip(np.floor(fj).astype(int), 0, len(lons) - 2)
-    corners = np.stack([H[i0, j0], H[i0 + 1, j0], H[i0, j0 + 1], H[i0 + 1, j0 + 1]])
-    with warnings.catch_warnings():  # all four corners void: NaN, filled below
-        warnings.simplefilter("ignore", RuntimeWarning)
-        Z = np.nanmax(corners, axis=0).reshape(ny, nx) - origin.alt
-    void = np.isnan(corners).any(axis=0).reshape(ny, nx)  # a node that used a void sample
-    filled = _fill_high(Z)
-    georef = {
-        "source": name, "origin": origin.record(), "voids_filled": filled, "void_mask": void,
-        "resampling": "max of the four samples around (conservative)",
-    }  # fmt: skip
-    return Terrain(Z, xmin, ymin, cell, cell, name, georef), filled
 
 
 def terrain_from_srtm(
@@ -205,53 +127,9 @@ def terrain_from_srtm(
     lats, lons, H = mosaic(tiles)
     d = float(cell_size) if cell_size else 30.0 * SIZES[tiles[0].n]  # 90 m or 30 m
     names = [Path(p).name for p in paths]
-    terrain, filled = resample_latlon(
-        lats, lons, H, origin, bounds, d, "+".join(names),
-        lambda la, lo: f" (the SRTM tiles given): add {_srtm_tile_name(la, lo)}",
+    src = source_from_latlon(lats, lons, H, "+".join(names), paths)
+    terrain, _ = place_raster(
+        src, origin=origin, bounds=bounds, cell_size=d,
+        beyond=lambda la, lo: f" (the SRTM tiles given): add {_srtm_tile_name(la, lo)}",
     )  # fmt: skip
-    terrain.georef["srtm"] = names
-    return terrain, filled
-
-
-def points_over_voids(terrain: Terrain, points: FloatArray) -> int:
-    """How many of ``points`` (n, >=2) lie in a terrain cell with a corner filled over an SRTM
-    void (0 for a terrain without voids)."""
-    mask = terrain.georef.get("void_mask")
-    if mask is None or not np.any(mask):
-        return 0
-    P = np.asarray(points, dtype=np.float64)
-    ny, nx = mask.shape
-    j = np.clip(np.floor((P[:, 0] - terrain.x0) / terrain.dx).astype(int), 0, nx - 2)
-    i = np.clip(np.floor((P[:, 1] - terrain.y0) / terrain.dy).astype(int), 0, ny - 2)
-    hit = mask[i, j] | mask[i + 1, j] | mask[i, j + 1] | mask[i + 1, j + 1]
-    return int(hit.sum())
-
-
-def geographic_grid(
-    tiepoint: list[float], pixel_scale: list[float], shape: tuple[int, int]
-) -> tuple[FloatArray, FloatArray]:
-    """The latitudes (ascending: rows flipped south first) and longitudes of a geographic
-    GeoTIFF's pixel centres (tie point at a pixel's corner, PixelIsArea)."""
-    rows, cols = shape
-    ti, tj, _, lon0, lat0 = (float(v) for v in tiepoint[:5])
-    dlon, dlat = float(pixel_scale[0]), float(pixel_scale[1])
-    lons = lon0 + (np.arange(cols) - ti + 0.5) * dlon
-    lats = lat0 - (np.arange(rows)[::-1] - tj + 0.5) * dlat
-    return lats.astype(np.float64), lons.astype(np.float64)
-
-
-def inner_box(
-    origin: GeoOrigin, lats: FloatArray, lons: FloatArray
-) -> tuple[float, float, float, float]:
-    """The largest local box ``(xmin, xmax, ymin, ymax)`` inside a lat/lon grid's edges."""
-
-    def local(la: FloatArray, lo: FloatArray) -> FloatArray:
-        return origin.to_local(np.column_stack([la, lo, np.full(len(la), origin.alt)]))
-
-    west = local(lats, np.full(len(lats), lons[0]))
-    east = local(lats, np.full(len(lats), lons[-1]))
-    south = local(np.full(len(lons), lats[0]), lons)
-    north = local(np.full(len(lons), lats[-1]), lons)
-    eps = 1e-6
-    return (float(west[:, 0].max()) + eps, float(east[:, 0].min()) - eps,
-            float(south[:, 1].max()) + eps, float(north[:, 1].min()) - eps)  # fmt: skip
+    return terrain, int(terrain.georef.get("voids_filled", 0))

@@ -47,7 +47,15 @@ class Terrain:
         dx, dy: grid spacing, metres (> 0).
         name: a label (the built-in name or the file it came from).
         georef: optional metadata on where the grid sits on Earth (CRS name, origin), kept for
-            mission export; the planner works in the local metric frame only.
+            mission export; the planner works in the local metric frame only. A terrain read
+            from a raster keeps ``georef["raster"]``: the files and how the local frame maps
+            into them (:mod:`uavplan.world.raster`), which the verifier reads on its own.
+        lower: the ceiling's grid, (ny, nx) at most ``heights`` node for node, or None (the
+            same as ``heights``). A raster resampled onto the local grid has two surfaces: the
+            floor's (``heights``, never below the source's ground) and the ceiling's
+            (``lower``, never above it); every check of the altitude band's ceiling reads
+            ``lower`` (:meth:`height_low`, :meth:`max_clearance`, :meth:`stays_within`), every
+            other use ``heights``.
     """
 
     heights: FloatArray
@@ -57,6 +65,7 @@ class Terrain:
     dy: float = 1.0
     name: str = "terrain"
     georef: dict[str, Any] = field(default_factory=dict)
+    lower: FloatArray | None = None
 
     def __post_init__(self) -> None:
         h = np.ascontiguousarray(self.heights, dtype=np.float64)
@@ -75,6 +84,23 @@ class Terrain:
             )
         h.setflags(write=False)
         object.__setattr__(self, "heights", h)
+        if self.lower is not None:
+            lo = np.ascontiguousarray(self.lower, dtype=np.float64)
+            if lo.shape != h.shape:
+                raise TerrainError(f"lower has shape {lo.shape}, heights {h.shape}")
+            if not np.all(np.isfinite(lo)):
+                raise TerrainError(f"lower contains {int((~np.isfinite(lo)).sum())} non-finite "
+                                   "values")  # fmt: skip
+            if np.any(lo > h):
+                raise TerrainError("lower is above heights at some node (the ceiling's grid "
+                                   "must be at most the floor's)")  # fmt: skip
+            lo.setflags(write=False)
+            object.__setattr__(self, "lower", lo)
+
+    @property
+    def ceiling_heights(self) -> FloatArray:
+        """The grid the altitude band's ceiling is held against: ``lower``, else ``heights``."""
+        return self.heights if self.lower is None else self.lower
 
     # ------------------------------------------------------------------ geometry
     @property
@@ -122,6 +148,29 @@ class Terrain:
         )  # fmt: skip
         return np.asarray(out).reshape(xa.shape)
 
+    def height_low(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
+        """:meth:`height` of the ceiling's grid (:attr:`ceiling_heights`)."""
+        if self.lower is None:
+            return self.height(x, y)
+        xa, ya = np.broadcast_arrays(
+            np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+        )
+        out = tk.bilinear_heights(
+            self.lower, float(self.x0), float(self.y0), float(self.dx), float(self.dy),
+            np.ascontiguousarray(xa).reshape(-1), np.ascontiguousarray(ya).reshape(-1),
+        )  # fmt: skip
+        return np.asarray(out).reshape(xa.shape)
+
+    def lookup_low(self, x: ArrayLike, y: ArrayLike, method: str = "bilinear") -> FloatArray:
+        """:meth:`lookup` of the ceiling's grid."""
+        if self.lower is None:
+            return self.lookup(x, y, method)
+        if method == "nearest":
+            return self._nearest(self.lower, x, y)
+        if method == "bilinear":
+            return self.height_low(x, y)
+        raise ValueError(f"unknown terrain lookup method {method!r}")
+
     def height_reference(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
         """:meth:`height` in NumPy (the reference the kernel is tested against)."""
         u, v = self._uv(x, y)
@@ -143,12 +192,15 @@ class Terrain:
     def height_nearest(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
         """Height of the nearest grid node, rounding halves up as MATLAB's ``round`` does for
         positive indices (SPSO's ``H(round(y), round(x))``)."""
+        return self._nearest(self.heights, x, y)
+
+    def _nearest(self, grid: FloatArray, x: ArrayLike, y: ArrayLike) -> FloatArray:
         u, v = self._uv(x, y)
         u, v = np.broadcast_arrays(u, v)
-        ny, nx = self.heights.shape
+        ny, nx = grid.shape
         i = np.clip(_round_half_up(u), 0, nx - 1)
         j = np.clip(_round_half_up(v), 0, ny - 1)
-        return np.asarray(self.heights[j, i])
+        return np.asarray(grid[j, i])
 
     def lookup(self, x: ArrayLike, y: ArrayLike, method: str = "bilinear") -> FloatArray:
         """Height by ``method``: ``"bilinear"`` (default) or ``"nearest"``."""
@@ -165,7 +217,7 @@ class Terrain:
 
     @cached_property
     def _neg(self) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]:
-        neg = np.ascontiguousarray(-self.heights)
+        neg = np.ascontiguousarray(-self.ceiling_heights)
         neg.setflags(write=False)  # as the heights: one kernel signature, compiled once
         return neg, tk.build_max_pyramid(neg)
 
@@ -221,7 +273,8 @@ class Terrain:
         )
 
     def max_clearance(self, paths: ArrayLike) -> FloatArray:
-        """Exact maximum of ``z - h(x, y)`` along every segment, (pop, n_points - 1) metres."""
+        """Exact maximum of ``z - h(x, y)`` along every segment over the ceiling's grid
+        (:attr:`ceiling_heights`), (pop, n_points - 1) metres."""
         p = np.asarray(paths, dtype=np.float64)
         u, v = self._uv_snapped(p[..., 0], p[..., 1])
         neg, (flat, off, shp) = self._neg
@@ -239,9 +292,10 @@ class Terrain:
         return np.asarray(-out)
 
     def stays_within(self, paths: ArrayLike, clearance: float) -> NDArray[np.bool_]:
-        """Whether every point of every segment is at most ``clearance`` above the terrain:
-        the yes/no form of :meth:`max_clearance` (the search prunes every block of cells that
-        is clearly below the ceiling). Returns (pop, n_points - 1) bool."""
+        """Whether every point of every segment is at most ``clearance`` above the terrain's
+        ceiling grid (:attr:`ceiling_heights`): the yes/no form of :meth:`max_clearance` (the
+        search prunes every block of cells that is clearly below the ceiling). Returns
+        (pop, n_points - 1) bool."""
         p = np.asarray(paths, dtype=np.float64)
         u, v = self._uv_fast(p)
         neg, (flat, off, shp) = self._neg
@@ -279,6 +333,7 @@ class Terrain:
             self.dy * factor,
             f"{self.name}/{factor}",
             dict(self.georef),
+            None if self.lower is None else self.lower[::factor, ::factor],
         )
 
     # ------------------------------------------------------------------ loading
@@ -304,11 +359,14 @@ class Terrain:
         origin: tuple[float, float] = (0.0, 0.0),
         key: str | None = None,
     ) -> Terrain:
-        """Load a DEM from a GeoTIFF (``.tif``/``.tiff``), ``.npy`` or ``.npz`` file.
+        """Load a DEM file: ``.npy`` or ``.npz``, or any raster GDAL reads (GeoTIFF, ``.hgt``,
+        ASCII grid, ...).
 
-        GeoTIFF: the pixel size comes from the file's ModelPixelScale tag unless ``cell_size`` is
-        given; rows are flipped so that +y is north; the grid is placed at ``origin`` (the local
-        frame), and the file's tie point and CRS name are kept in ``georef``.
+        A raster is read and placed by :mod:`uavplan.world.raster` (its NoData, masks,
+        pixel-is-point, CRS) with no scenario origin: a plain grid at ``origin`` with
+        ``cell_size``, a projected one on its own grid, anything else reprojected about its
+        centre; a scenario file places it with the scenario's origin and bounds
+        (:mod:`uavplan.io.scenario_file.build`).
         ``.npy``: a 2-D array, rows south to north. ``.npz``: the array under ``key`` (or
         ``heights``/``elevation``/``topo``), with optional scalars ``dx``, ``dy``, ``x0``, ``y0``.
         """
@@ -317,36 +375,35 @@ class Terrain:
         if why is not None:
             raise TerrainError(f"DEM file {str(p)!r}: {why}")
         suffix = p.suffix.lower()
+        if suffix not in (".npy", ".npz"):
+            from uavplan.world.raster import place_raster, read_raster
+
+            terrain, _ = place_raster(read_raster(p), cell_size=cell_size, grid_origin=origin)
+            return terrain
         try:
-            if suffix in (".tif", ".tiff"):
-                return _load_geotiff(p, cell_size, origin)
             if suffix == ".npy":
                 with p.open("rb") as f:
                     _check_grid(_npy_shape(f), _npy_dtype(f), p)
                 arr = np.load(p, allow_pickle=False)
                 d = cell_size or 1.0
                 return cls(arr, origin[0], origin[1], d, d, p.name)
-            if suffix == ".npz":
-                with np.load(p, allow_pickle=False) as z:
-                    names = [key] if key else ["heights", "elevation", "topo"]
-                    found = next((n for n in names if n in z.files), None)
-                    if found is None:
-                        raise TerrainError(
-                            f"{p}: no array named {' or '.join(names)} (has {z.files})"
-                        )
-                    with z.zip.open(f"{found}.npy") as f:
-                        _check_grid(_npy_shape(f), _npy_dtype(f), p)
-                    arr = z[found]
-                    dx = float(z["dx"]) if "dx" in z.files else (cell_size or 1.0)
-                    dy = float(z["dy"]) if "dy" in z.files else dx
-                    x0 = float(z["x0"]) if "x0" in z.files else origin[0]
-                    y0 = float(z["y0"]) if "y0" in z.files else origin[1]
-                return cls(arr, x0, y0, dx, dy, p.name)
+            with np.load(p, allow_pickle=False) as z:
+                names = [key] if key else ["heights", "elevation", "topo"]
+                found = next((n for n in names if n in z.files), None)
+                if found is None:
+                    raise TerrainError(f"{p}: no array named {' or '.join(names)} (has {z.files})")
+                with z.zip.open(f"{found}.npy") as f:
+                    _check_grid(_npy_shape(f), _npy_dtype(f), p)
+                arr = z[found]
+                dx = float(z["dx"]) if "dx" in z.files else (cell_size or 1.0)
+                dy = float(z["dy"]) if "dy" in z.files else dx
+                x0 = float(z["x0"]) if "x0" in z.files else origin[0]
+                y0 = float(z["y0"]) if "y0" in z.files else origin[1]
+            return cls(arr, x0, y0, dx, dy, p.name)
         except TerrainError:
             raise
         except Exception as exc:  # a corrupt or foreign file: say which and why
             raise TerrainError(f"cannot read DEM file {str(p)!r}: {exc}") from exc
-        raise TerrainError(f"DEM file {str(p)!r}: unsupported type {suffix!r} (.tif, .npy, .npz)")
 
 
 def not_a_regular_file(path: str | Path) -> str | None:
@@ -428,61 +485,6 @@ def _npy_dtype(f: Any) -> np.dtype[Any]:
         f.seek(pos)
 
 
-def _read_tiff(path: Path) -> tuple[np.ndarray, dict[int, Any]]:
-    import logging
-
-    import tifffile
-
-    logging.getLogger("tifffile").setLevel(logging.ERROR)  # GDAL_NODATA float32 tag: harmless
-    with tifffile.TiffFile(path) as tif:
-        page = tif.pages[0]
-        _check_grid(tuple(page.shape), np.dtype(page.dtype) if page.dtype else None, path)
-        arr = page.asarray()
-        tags = {t.code: t.value for t in page.tags.values()}  # type: ignore[union-attr]
-    if arr.ndim == 3:
-        arr = arr[..., 0]
-    return np.asarray(arr, dtype=np.float64), tags
-
-
-def _geokey_epsg(keys: Any) -> tuple[int, bool] | None:
-    """The EPSG code in a GeoKeyDirectory (tag 34735) and whether it is geographic: the
-    ProjectedCSTypeGeoKey (3072) or else the GeographicTypeGeoKey (2048); None without one
-    (or a user-defined 32767)."""
-    if keys is None:
-        return None
-    k = [int(v) for v in keys]
-    found: dict[int, int] = {}
-    for i in range(4, 4 + 4 * k[3] if len(k) >= 4 else 4, 4):
-        if i + 3 < len(k) and k[i + 1] == 0:  # the value is in the directory itself
-            found[k[i]] = k[i + 3]
-    for key, geographic in ((3072, False), (2048, True)):
-        if key in found and 0 < found[key] < 32767:
-            return found[key], geographic
-    return None
-
-
-def _load_geotiff(path: Path, cell_size: float | None, origin: tuple[float, float]) -> Terrain:
-    arr, tags = _read_tiff(path)
-    scale = tags.get(33550)
-    tie = tags.get(33922)
-    dx = dy = cell_size or 1.0
-    if cell_size is None and scale is not None:
-        dx, dy = float(scale[0]), float(scale[1])
-    georef: dict[str, Any] = {"file": path.name}
-    if tie is not None:
-        georef["tiepoint"] = [float(t) for t in tie]
-    if 34737 in tags:
-        georef["crs"] = str(tags[34737]).split("|")[0]
-    epsg = _geokey_epsg(tags.get(34735))
-    if epsg is not None:
-        georef["epsg"], georef["geographic"] = epsg
-    if scale is not None:
-        georef["pixel_scale"] = [float(v) for v in scale[:2]]
-    georef["shape"] = list(arr.shape)
-    arr = arr[::-1].copy()  # GeoTIFF row 0 is north
-    return Terrain(arr, origin[0], origin[1], dx, dy, path.name, georef)
-
-
 def _data_path(name: str) -> Path:
     return Path(str(resources.files("uavplan") / "data" / name))
 
@@ -493,7 +495,10 @@ def _spso_terrain() -> Terrain:
     Taken exactly as the authors' MATLAB code reads it: one cell per metre, node (1, 1) of the
     file at x = y = 1, row index = y (so no north flip), negative heights clipped to 0.
     """
-    arr, _ = _read_tiff(_data_path("ChrismasTerrain.tif"))
+    import rasterio
+
+    with rasterio.open(_data_path("ChrismasTerrain.tif")) as ds:  # its samples, as they are
+        arr = np.asarray(ds.read(1), dtype=np.float64)
     arr = np.maximum(arr, 0.0)
     return Terrain(arr, 1.0, 1.0, 1.0, 1.0, "spso", {"source": "ChrismasTerrain.tif (SPSO)"})
 

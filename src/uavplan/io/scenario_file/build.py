@@ -26,7 +26,6 @@ from uavplan.io.scenario_file.schema import (
     FleetSpec,
     PlanningSpec,
     ScenarioSpec,
-    TerrainSpec,
     dump_spec,
 )
 from uavplan.world import (
@@ -44,8 +43,9 @@ from uavplan.world import (
     UncertainArea,
 )
 from uavplan.world.fleet_tasks import fleet_layout, layer_record
-from uavplan.world.geo import GeoOrigin, origin_for_projected_grid
-from uavplan.world.srtm import geographic_grid, inner_box, resample_latlon, terrain_from_srtm
+from uavplan.world.geo import GeoOrigin
+from uavplan.world.raster import place_raster, read_raster
+from uavplan.world.srtm import terrain_from_srtm
 from uavplan.world.terrain import TerrainError, not_a_regular_file
 
 #: Headroom above the highest terrain for the default z bound when there is no altitude band, m.
@@ -150,72 +150,58 @@ def _no_fly_polygons(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> 
     return out
 
 
-def _placed_dem(
-    spec: ScenarioSpec, terrain: Terrain, problems: Problems
+def _load_terrain(
+    spec: ScenarioSpec, problems: Problems, base_dir: Path
 ) -> tuple[Terrain | None, GeoOrigin | None]:
-    """A georeferenced GeoTIFF placed on Earth: a projected one keeps its grid and gives the
-    origin (its centre) when the scenario names none, with the layout's error as
-    ``accuracy``; a geographic one (degrees) is resampled onto the local grid like SRTM tiles
-    (origin: the scenario's, else the DEM's centre; extent: the scenario's bounds, else the
-    largest box inside the DEM; cell: ``cell_size``, else its north-south spacing)."""
-    g = terrain.georef
-    if "epsg" not in g or "tiepoint" not in g or "pixel_scale" not in g:
-        return terrain, None
-    shape = (int(g["shape"][0]), int(g["shape"][1]))
-    name = str(g.get("file"))
-    try:
-        if not g.get("geographic"):
-            if spec.origin is not None or (spec.terrain and spec.terrain.cell_size is not None):
-                return terrain, None  # the user's own placement or spacing
-            origin = origin_for_projected_grid(int(g["epsg"]), g["tiepoint"], g["pixel_scale"],
-                                               shape, terrain.x0, terrain.y0, name)  # fmt: skip
-            return terrain, origin
-        lats, lons = geographic_grid(g["tiepoint"], g["pixel_scale"], shape)
-        if spec.origin is not None:
-            origin = GeoOrigin(**spec.origin.model_dump())
-        else:
-            note = f"the DEM's centre ({name}, EPSG:{g['epsg']}; heights AMSL)"
-            origin = GeoOrigin(float(lats.mean()), float(lons.mean()), 0.0, note=note)
-        if spec.bounds is not None:
-            lo, hi = spec.bounds.lower, spec.bounds.upper
-            box = (lo[0], hi[0], lo[1], hi[1])
-        else:
-            box = inner_box(origin, lats, lons)
-        cell = (spec.terrain.cell_size if spec.terrain and spec.terrain.cell_size
-                else max(1.0, round(abs(float(g["pixel_scale"][1])) * 111_320.0)))  # fmt: skip
-        H = np.where(np.asarray(terrain.heights) <= -32767, np.nan, np.asarray(terrain.heights))
-        placed, _ = resample_latlon(lats, lons, H, origin, box, float(cell), name)
-        placed.georef.update(epsg=g["epsg"], file=name)
-        return placed, (origin if spec.origin is None else None)
-    except TerrainError as exc:
-        problems.add(("terrain", "file"), str(exc))
-    except Exception as exc:  # an EPSG code pyproj does not know, say
-        problems.add(("terrain", "file"), f"cannot place the DEM on Earth: {exc}")
-    return None, None
-
-
-def _load_terrain(ts: TerrainSpec, problems: Problems, base_dir: Path) -> Terrain | None:
+    """The scenario's terrain and, for a georeferenced raster placed by itself, the origin it
+    gives the scenario. A raster (any file but ``.npy``/``.npz``) is read through GDAL and
+    placed by :func:`uavplan.world.raster.place_raster`: through the scenario's origin and over
+    its bounds where it gives them."""
+    ts = spec.terrain
+    assert ts is not None
     if ts.builtin is not None:
         try:
-            return builtin_terrain(ts.builtin)
+            return builtin_terrain(ts.builtin), None
         except Exception as exc:
             problems.add(("terrain", "builtin"), f"cannot load the built-in terrain: {exc}")
-            return None
+            return None, None
     assert ts.file is not None
     resolved = _resolve(ts.file, base_dir)
     why = not_a_regular_file(resolved)
     if why is not None:
         problems.add(("terrain", "file"), f"DEM file {why}: {resolved}")
-        return None
-    origin = (float(ts.origin[0]), float(ts.origin[1]))
+        return None, None
+    grid_origin = (float(ts.origin[0]), float(ts.origin[1]))
     try:
-        return Terrain.from_file(resolved, cell_size=ts.cell_size, origin=origin, key=ts.key)
+        if resolved.suffix.lower() in (".npy", ".npz"):
+            terrain = Terrain.from_file(
+                resolved, cell_size=ts.cell_size, origin=grid_origin, key=ts.key
+            )
+            return terrain, None
+        src = read_raster(resolved, ts.band)
+        origin = GeoOrigin(**spec.origin.model_dump()) if spec.origin is not None else None
+        box = None
+        if spec.bounds is not None:
+            lo, hi = spec.bounds.lower, spec.bounds.upper
+            box = (lo[0], hi[0], lo[1], hi[1])
+        terrain, dem_origin = place_raster(
+            src, origin=origin, bounds=box, cell_size=ts.cell_size, grid_origin=grid_origin
+        )
     except TerrainError as exc:
         problems.add(("terrain", "file"), str(exc))
-        return None
-    except Exception as exc:
-        problems.add(("terrain", "file"), f"cannot read the DEM {resolved}: {exc}")
-        return None
+        return None, None
+    except Exception as exc:  # an EPSG code pyproj does not know, say
+        problems.add(("terrain", "file"), f"cannot read or place the DEM {resolved}: {exc}")
+        return None, None
+    frame = terrain.georef.get("raster", {}).get("frame")
+    if frame == "reprojected" and "origin" in ts.model_fields_set and any(ts.origin):
+        problems.add(
+            ("terrain", "origin"),
+            f"places a grid that has no georeference; {src.name} has one and is placed through "
+            "the scenario's origin (lat, lon): drop terrain.origin",
+        )
+        return None, None
+    return terrain, dem_origin
 
 
 def _terrain_range(terrain: Terrain) -> str | None:
@@ -235,7 +221,7 @@ def _terrain_range(terrain: Terrain) -> str | None:
 
 
 def _default_z(terrain: Terrain, altitude: AltitudeSpec | None) -> tuple[float, float]:
-    hmin = float(np.min(terrain.heights))
+    hmin = float(np.min(terrain.ceiling_heights))
     hmax = float(np.max(terrain.heights))
     if altitude is None:
         top = hmax + DEFAULT_Z_HEADROOM
@@ -260,11 +246,8 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
         if spec.terrain.srtm is not None:
             terrain = _load_srtm(spec, problems, base_dir)
         else:
-            terrain = _load_terrain(spec.terrain, problems, base_dir)
+            terrain, dem_origin = _load_terrain(spec, problems, base_dir)
         terrain_failed = terrain is None
-        if terrain is not None and spec.terrain.file is not None:
-            terrain, dem_origin = _placed_dem(spec, terrain, problems)
-            terrain_failed = terrain is None
         if terrain is not None and (why := _terrain_range(terrain)) is not None:
             problems.add(("terrain",), why, NO_VALUE)
             terrain, terrain_failed = None, True

@@ -21,6 +21,8 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
+from uavplan.world.geo import projected_crs_problem
+
 
 def _no_bool(value: Any) -> Any:
     if isinstance(value, bool):
@@ -123,8 +125,8 @@ class TerrainSpec(_Spec):
     file: str | None = Field(
         None,
         min_length=1,
-        description="DEM file (.tif/.tiff GeoTIFF, .npy, .npz); a relative path is relative to "
-        "the scenario file's directory.",
+        description="DEM file: any raster GDAL reads (GeoTIFF, .hgt, ASCII grid, ...), or "
+        ".npy/.npz; a relative path is relative to the scenario file's directory.",
     )
     srtm: Annotated[list[Annotated[str, Field(min_length=1)]], Field(min_length=1)] | None = Field(
         None,
@@ -134,8 +136,9 @@ class TerrainSpec(_Spec):
     )
     cell_size: Cell | None = Field(
         None,
-        description="Grid spacing in metres (file or srtm). Default: the GeoTIFF pixel scale, "
-        "the .npz dx/dy, else 1; SRTM: 90 m (3 arc-seconds) or 30 m (1 arc-second).",
+        description="Grid spacing in metres (file or srtm). Default: a projected raster's own "
+        "grid, a reprojected one's smaller pixel side, the .npz dx/dy, else 1; SRTM: 90 m (3 "
+        "arc-seconds) or 30 m (1 arc-second).",
     )
     origin: XY = Field(
         default_factory=lambda: [0.0, 0.0],
@@ -147,6 +150,9 @@ class TerrainSpec(_Spec):
         description="Array name inside an .npz file (file only). Default: heights, elevation "
         "or topo.",
     )
+    band: int = Field(
+        1, ge=1, le=65535, description="The raster's band holding the heights (file only)."
+    )
 
     @model_validator(mode="after")
     def _one_source(self) -> TerrainSpec:
@@ -154,11 +160,11 @@ class TerrainSpec(_Spec):
         if len(given) != 1:
             raise ValueError("give exactly one of 'builtin', 'file' or 'srtm'")
         if self.builtin is not None:
-            extra = sorted({"cell_size", "origin", "key"} & self.model_fields_set)
+            extra = sorted({"cell_size", "origin", "key", "band"} & self.model_fields_set)
             if extra:
                 raise ValueError(f"{', '.join(extra)} only apply to a terrain 'file'")
         if self.srtm is not None:
-            extra = sorted({"origin", "key"} & self.model_fields_set)
+            extra = sorted({"origin", "key", "band"} & self.model_fields_set)
             if extra:
                 raise ValueError(
                     f"{', '.join(extra)}: not for SRTM tiles (they are placed by the "
@@ -324,6 +330,21 @@ class OriginSpec(_Spec):
         "terrain data puts the local point (a lat/lon DEM laid out flat); exports warn "
         "above 1 m.",
     )
+    crs: str = Field(
+        "",
+        max_length=100_000,
+        description="Empty: the local frame is the azimuthal equidistant projection about "
+        "(lat, lon). Else a projected CRS in metres (EPSG:32616, or WKT) whose grid, shifted "
+        "so that the local (x, y) is at (lat, lon), is the local frame (a projected DEM's own "
+        "grid).",
+    )
+
+    @field_validator("crs")
+    @classmethod
+    def _projected(cls, v: str) -> str:
+        if v and (why := projected_crs_problem(v)) is not None:
+            raise ValueError(why)
+        return v
 
 
 class TaskSpec(_Spec):

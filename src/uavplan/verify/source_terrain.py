@@ -1,0 +1,361 @@
+"""The terrain and the altitude band checked against the elevation raster itself.
+
+When the scenario's terrain was read from a raster (``terrain.georef["raster"]``: the files, the
+band, and how the local frame maps into them), the verifier reads the raster again through GDAL
+with its own code, not the planner's grid, and checks every flown segment against the raster's
+own ground: the bilinear surface through its samples (``S``).
+
+* **Reading** (:func:`read_source`): the band's NoData value (any, NaN), the dataset's masks and
+  non-finite samples are voids; a band with neither a NoData value nor a mask also has
+  -9999, -32767, -32768, -99999, float32's lowest and anything below -12,000 m as voids (the
+  convention of ``docs/scenario-format.md``); scale and offset applied, feet converted. Several
+  files (SRTM tiles) are merged by rasterio. Each connected void region stands at the highest
+  valid sample on its rim for the floor and the lowest for the ceiling (no ground is known
+  there: a flight over one is warned about).
+* **Mapping** local ``(x, y)`` into the raster's sample coordinates: ``grid`` (a plain grid at
+  ``x0, y0, dx, dy``, row 0 the file's first, i.e. northern, row) and ``crs-offset`` (the
+  raster's CRS is the local frame shifted) are affine, so a segment stays straight there; the
+  ``reprojected`` frame (the scenario's azimuthal equidistant projection about its origin, or
+  its origin's projected CRS, to the raster's CRS) goes through pyproj, and each segment is
+  cut into pieces of at most a quarter of the raster's smaller pixel side, whose ends are
+  mapped exactly (a piece's image bends from the straight line between its ends by under a
+  micrometre).
+* **Checking**: on each straight piece in sample space the clearance ``z - S`` is a quadratic
+  per raster cell (the same closed form as :mod:`uavplan.verify.terrain`), so its minimum
+  (the floor: ``terrain`` at 0, a ground band's ``min``) and maximum (the band's ``max``) are
+  exact. A point beyond the raster's outermost samples is a ``terrain`` violation (no data).
+* **The planner's terrain** is compared with ``S`` at every point checked: its floor's grid
+  below ``S`` or its ceiling's above it by more than the bound the terrain states is reported
+  as a warning (the raster was misread): the flight's verdict comes from ``S`` either way.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from uavplan.io.plan_file import Trajectory
+from uavplan.verify.report import TOL, Violation, fmt_num, fmt_points, point_at
+from uavplan.verify.terrain import bilinear_height, terrain_clearance_extrema
+from uavplan.world.obstacles import AltitudeBand
+from uavplan.world.terrain import Terrain
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+_SENTINELS = np.array([-9999.0, -32767.0, -32768.0, -99999.0, float(np.finfo(np.float32).min)])
+_BELOW_EARTH = -12_000.0
+_US_FOOT = 1200.0 / 3937.0
+_FEET = {"ft": 0.3048, "foot": 0.3048, "feet": 0.3048, "international foot": 0.3048,
+         "us-ft": _US_FOOT, "us survey foot": _US_FOOT, "ftus": _US_FOOT}  # fmt: skip
+
+
+class SourceError(ValueError):
+    """The raster a terrain names cannot be read again."""
+
+
+@dataclass(frozen=True, eq=False)
+class SourceGround:
+    """A raster's ground as the verifier reads it.
+
+    Attributes:
+        name: the files' names.
+        hi, lo: (rows, cols) samples in the local frame's heights (``AMSL - z_offset``), voids
+            at the highest (``hi``) and lowest (``lo``) valid sample on their region's rim.
+        void: (rows, cols) the voids.
+        to_samples: local ``(x, y)`` arrays -> sample coordinates ``(u, v)`` (column, row).
+        piece: the longest piece of a segment mapped as straight, local metres (inf: the
+            mapping is affine).
+        bound: how far the planner's terrain may stand from ``S`` (metres) as its placement
+            states.
+    """
+
+    name: str
+    hi: FloatArray
+    lo: FloatArray
+    void: BoolArray
+    to_samples: Callable[[FloatArray, FloatArray], tuple[FloatArray, FloatArray]]
+    piece: float
+    bound: float
+
+
+def _read_band(paths: tuple[str, ...], band: int) -> tuple[FloatArray, Any, Any]:
+    """(values with voids NaN, geotransform, crs) of the files, merged when several."""
+    import rasterio
+    from rasterio.enums import MaskFlags
+    from rasterio.errors import NotGeoreferencedWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NotGeoreferencedWarning)
+        if len(paths) > 1:
+            from rasterio.merge import merge
+
+            sets = [rasterio.open(p) for p in paths]
+            try:
+                arr, transform = merge(sets, indexes=[band], dtype="float64", nodata=np.nan)
+                crs = sets[0].crs
+            finally:
+                for d in sets:
+                    d.close()
+            return np.asarray(arr[0], dtype=np.float64), transform, crs
+        with rasterio.open(paths[0]) as ds:
+            raw = ds.read(band, masked=True)
+            flags = ds.mask_flag_enums[band - 1]
+            scale, offset = ds.scales[band - 1], ds.offsets[band - 1]
+            unit = (ds.units[band - 1] or "").strip().lower() if ds.units else ""
+            transform, crs = ds.transform, ds.crs
+    vals = np.asarray(raw.data, dtype=np.float64)
+    bad = np.asarray(np.ma.getmaskarray(raw)) | ~np.isfinite(vals)
+    factor = _FEET.get(unit, 1.0)
+    metres = (vals * (scale if scale is not None else 1.0) + (offset or 0.0)) * factor
+    if MaskFlags.all_valid in flags:
+        bad |= np.isin(vals, _SENTINELS) | (metres < _BELOW_EARTH)
+    metres[bad] = np.nan
+    return metres, transform, crs
+
+
+def _rim_fill(values: FloatArray, high: bool) -> FloatArray:
+    """Each connected region of NaN at the highest (``high``) or lowest valid value next to it."""
+    from scipy import ndimage
+
+    out = values.copy()
+    holes = np.isnan(out)
+    if not holes.any():
+        return out
+    if holes.all():
+        raise SourceError("every sample is a void")
+    labels, count = ndimage.label(holes, structure=np.ones((3, 3), dtype=bool))
+    # a rim sample takes the labels of the holes around it: look at the 8 neighbours in turn
+    rows, cols = out.shape
+    best = np.full(count + 1, -np.inf if high else np.inf)
+    padded = np.pad(labels, 1)
+    valid = ~holes
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            if dr == 0 and dc == 0:
+                continue
+            near = padded[1 + dr : 1 + dr + rows, 1 + dc : 1 + dc + cols]
+            hit = valid & (near > 0)
+            if high:
+                np.maximum.at(best, near[hit], out[hit])
+            else:
+                np.minimum.at(best, near[hit], out[hit])
+    out[holes] = best[labels[holes]]
+    return out
+
+
+def _inverse(transform: Any) -> Callable[[FloatArray, FloatArray], tuple[FloatArray, FloatArray]]:
+    a, b, c, d, e, f = (float(v) for v in tuple(transform)[:6])
+    det = a * e - b * d
+
+    def inv(X: FloatArray, Y: FloatArray) -> tuple[FloatArray, FloatArray]:
+        dX, dY = np.asarray(X) - c, np.asarray(Y) - f
+        return (e * dX - b * dY) / det - 0.5, (-d * dX + a * dY) / det - 0.5
+
+    return inv
+
+
+@lru_cache(maxsize=8)
+def _load(key: tuple[Any, ...], stamp: tuple[int, ...]) -> SourceGround:
+    """The raster of ``key``, read once per process while its files' times (``stamp``) stay."""
+    paths, band, frame, params, z_offset, bound = key
+    values, transform, crs = _read_band(paths, band)
+    rows, cols = values.shape
+    name = "+".join(os.path.basename(p) for p in paths)
+    hi, lo = _rim_fill(values, True) - z_offset, _rim_fill(values, False) - z_offset
+    to_pix = _inverse(transform)
+    piece = math.inf
+    if frame == "grid":
+        x0, y0, dx, dy = params
+
+        def to_samples(x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
+            return (np.asarray(x) - x0) / dx, (rows - 1) - (np.asarray(y) - y0) / dy
+
+    elif frame == "crs-offset":
+        ox, oy = params
+
+        def to_samples(x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
+            return to_pix(np.asarray(x) + ox, np.asarray(y) + oy)
+
+    elif frame == "reprojected":
+        from pyproj import CRS, Transformer
+
+        frame_crs, ox, oy = params
+        local = CRS.from_user_input(frame_crs)
+        fwd = Transformer.from_crs(local, CRS.from_user_input(crs), always_xy=True)
+
+        def to_samples(x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
+            X, Y = fwd.transform(np.asarray(x, dtype=np.float64) - ox,
+                                 np.asarray(y, dtype=np.float64) - oy)  # fmt: skip
+            return to_pix(X, Y)
+
+        # a quarter of the smaller pixel side, measured in local metres at the centre
+        back = Transformer.from_crs(CRS.from_user_input(crs), local, always_xy=True)
+        a, b, c, d, e, f = (float(v) for v in tuple(transform)[:6])
+        cu, cv = cols / 2.0, rows / 2.0
+        px = np.array([a * cu + b * cv + c, a * (cu + 1) + b * cv + c, a * cu + b * (cv + 1) + c])
+        py = np.array([d * cu + e * cv + f, d * (cu + 1) + e * cv + f, d * cu + e * (cv + 1) + f])
+        lx, ly = back.transform(px, py)
+        side = min(math.hypot(lx[1] - lx[0], ly[1] - ly[0]),
+                   math.hypot(lx[2] - lx[0], ly[2] - ly[0]))  # fmt: skip
+        piece = 0.25 * side
+    else:
+        raise SourceError(f"unknown raster frame {frame!r}")
+    return SourceGround(name, np.ascontiguousarray(hi), np.ascontiguousarray(lo),
+                        np.isnan(values), to_samples, piece, float(bound))  # fmt: skip
+
+
+def read_source(terrain: Terrain | None) -> SourceGround | None:
+    """The raster behind ``terrain`` as the verifier reads it (None: the terrain names none)."""
+    if terrain is None:
+        return None
+    block = terrain.georef.get("raster")
+    if not block:
+        return None
+    frame = str(block["frame"])
+    params: tuple[Any, ...]
+    if frame == "grid":
+        params = tuple(float(v) for v in block["grid"])
+    elif frame == "crs-offset":
+        params = tuple(float(v) for v in block["offset"])
+    else:
+        sx, sy = (float(v) for v in block["shift"])
+        params = (str(block["frame_crs"]), sx, sy)
+    paths = tuple(str(p) for p in block["paths"])
+    stamp = tuple(os.stat(p).st_mtime_ns for p in paths)
+    key = (paths, int(block.get("band", 1)), frame, params, float(block.get("z_offset", 0.0)),
+           float(block.get("bound_m", 0.0)))  # fmt: skip
+    try:
+        return _load(key, stamp)
+    except SourceError:
+        raise
+    except Exception as exc:
+        raise SourceError(f"cannot read the terrain's raster {', '.join(paths)}: {exc}") from exc
+
+
+Pieces = tuple[FloatArray, FloatArray, NDArray[np.int64], FloatArray]
+
+
+def _pieces(a: FloatArray, b: FloatArray, piece: float) -> Pieces:
+    """The segments ``a -> b`` cut into pieces of at most ``piece`` metres horizontally:
+    (piece starts, piece ends, segment index, (parameter of the piece's start, its span))."""
+    m = len(a)
+    if not math.isfinite(piece):
+        k = np.ones(m, dtype=np.int64)
+    else:
+        k = np.maximum(1, np.ceil(np.hypot(*(b[:, :2] - a[:, :2]).T) / piece)).astype(np.int64)
+    seg = np.repeat(np.arange(m), k)
+    first = np.repeat(np.cumsum(k) - k, k)
+    idx = np.arange(int(k.sum())) - first
+    K = k[seg].astype(np.float64)
+    s0, s1 = idx / K, (idx + 1) / K
+    d = b[seg] - a[seg]
+    return a[seg] + s0[:, None] * d, a[seg] + s1[:, None] * d, seg, np.column_stack([s0, s1 - s0])
+
+
+def check_source_terrain(
+    traj: Trajectory, source: SourceGround, band: AltitudeBand | None, terrain: Terrain | None
+) -> tuple[list[Violation], list[str]]:
+    """The terrain (``z - S >= 0``) and a ground band (``min <= z - S <= max``) along every
+    segment against the raster's own ground, and the planner's terrain compared with it.
+    Returns the violations and the warnings."""
+    if traj.dim != 3 or len(traj.points) < 2:
+        return [], []
+    a, b = traj.points[:-1], traj.points[1:]
+    pa, pb, seg, span = _pieces(a, b, source.piece)
+    ua, va = source.to_samples(pa[:, 0], pa[:, 1])
+    ub, vb = source.to_samples(pb[:, 0], pb[:, 1])
+    A = np.column_stack([ua, va, pa[:, 2]])
+    B = np.column_stack([ub, vb, pb[:, 2]])
+    rows, cols = source.hi.shape
+    grid = Terrain(source.hi, 0.0, 0.0, 1.0, 1.0, source.name)
+    low = Terrain(source.lo, 0.0, 0.0, 1.0, 1.0, source.name)
+    lo_ext = terrain_clearance_extrema(A, B, grid)
+    hi_ext = terrain_clearance_extrema(A, B, low)
+    out: list[Violation] = []
+    said: list[str] = []
+    ground = band is not None and band.reference == "ground"
+    uu, vv = np.concatenate([ua, ub[-1:]]), np.concatenate([va, vb[-1:]])
+    beyond = (uu < -TOL) | (vv < -TOL) | (uu > cols - 1 + TOL) | (vv > rows - 1 + TOL)
+    if beyond.any():
+        q = int(np.argmax(beyond))
+        k = int(seg[min(q, len(seg) - 1)])
+        p, t = point_at(traj, k, 0.0 if q < len(seg) else 1.0)
+        out.append(Violation("terrain", (traj.id,), t, (p,), math.nan, 0.0,
+                             f"{traj.id}: flies beyond the elevation data of {source.name} at "
+                             f"{fmt_points(p)}, t={t:.3f} s (no ground known there)"))  # fmt: skip
+
+    checks: list[tuple[FloatArray, int, float, str, str]] = [(lo_ext[:, 0], 1, 0.0, "terrain", "")]
+    if ground:
+        assert band is not None
+        checks.append((lo_ext[:, 0], 1, band.min, "altitude", "below"))
+        checks.append((hi_ext[:, 2], 3, band.max, "altitude", "above"))
+    for col_vals, col_s, bound, kind, word in checks:
+        bad = col_vals > bound + TOL if word == "above" else col_vals < bound - TOL
+        if not bad.any():
+            continue
+        # one violation per segment, at its worst piece
+        for k in np.unique(seg[bad]):
+            rows_k = np.flatnonzero(bad & (seg == k))
+            pick = rows_k[np.argmax(col_vals[rows_k]) if word == "above"
+                          else np.argmin(col_vals[rows_k])]  # fmt: skip
+            ext = lo_ext if col_s == 1 else hi_ext
+            s = float(span[pick, 0] + ext[pick, col_s] * span[pick, 1])
+            p, t = point_at(traj, int(k), s)
+            v = float(col_vals[pick])
+            if kind == "terrain":
+                msg = (f"{traj.id}: segment {int(k)} goes {fmt_num(-v)} m under the ground of "
+                       f"{source.name} at {fmt_points(p)}, t={t:.3f} s")  # fmt: skip
+            else:
+                assert band is not None
+                msg = (f"{traj.id}: segment {int(k)} at {fmt_num(v)} m above the ground of "
+                       f"{source.name}, {word} the band [{band.min:g}, {band.max:g}] m, at "
+                       f"{fmt_points(p)}, t={t:.3f} s")  # fmt: skip
+            out.append(Violation(kind, (traj.id,), t, (p,), v, bound, msg))
+    # voids under the flight
+    ui = np.clip(np.floor(uu).astype(np.int64), 0, cols - 2)
+    vi = np.clip(np.floor(vv).astype(np.int64), 0, rows - 2)
+    over = (source.void[vi, ui] | source.void[vi + 1, ui] | source.void[vi, ui + 1]
+            | source.void[vi + 1, ui + 1])  # fmt: skip
+    if over.any():
+        said.append(f"{traj.id}: {int(over.sum())} of the {len(over)} points checked are over "
+                    f"voids (no data) of {source.name}: checked against the highest (floor) and "
+                    "lowest (ceiling) valid height on each void's rim; the ground there is "
+                    "unknown")  # fmt: skip
+    # the planner's terrain against the source surface at the points checked
+    if terrain is not None:
+        P = np.concatenate([pa, pb[-1:]])
+        s_hi = bilinear_height(grid, uu, vv)
+        s_lo = bilinear_height(low, uu, vv)
+        floor = bilinear_height(terrain, P[:, 0], P[:, 1])
+        ceil_grid = (
+            terrain
+            if terrain.lower is None
+            else Terrain(
+                terrain.lower, terrain.x0, terrain.y0, terrain.dx, terrain.dy, terrain.name
+            )
+        )
+        ceiling = bilinear_height(ceil_grid, P[:, 0], P[:, 1])
+        xmin, xmax, ymin, ymax = terrain.extent
+        inside = ((P[:, 0] >= xmin) & (P[:, 0] <= xmax) & (P[:, 1] >= ymin)
+                  & (P[:, 1] <= ymax) & ~beyond)  # fmt: skip
+        under = np.where(inside, s_hi - floor, -np.inf)
+        over_c = np.where(inside, ceiling - s_lo, -np.inf)
+        lim = source.bound + 1e-6
+        pairs = ((under, "floor's grid is {} m below"), (over_c, "ceiling's grid is {} m above"))
+        for gap, what in pairs:
+            q = int(np.argmax(gap))
+            if gap[q] > lim:
+                said.append(f"{traj.id}: the scenario's terrain disagrees with {source.name}: "
+                            f"its {what.format(fmt_num(gap[q]))} the raster's ground at "
+                            f"{fmt_points(P[q])} (its stated bound {source.bound:g} m): the "
+                            "raster was misread")  # fmt: skip
+    return out, said
