@@ -107,14 +107,15 @@ def collect_plan(name: str) -> dict[str, Any]:
 
 
 def collect_demo() -> dict[str, Any]:
-    """What ``uavplan demo`` writes, as compared."""
+    """What ``uavplan demo --nominal`` writes, as compared (the record is the planner's
+    numbers; the default execution model's widening is tested with the model)."""
     from typer.testing import CliRunner
 
     from uavplan.cli import app
 
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "demo"
-        res = CliRunner().invoke(app, ["demo", "--out", str(out)])
+        res = CliRunner().invoke(app, ["demo", "--nominal", "--out", str(out)])
         if res.exit_code not in (0, 1):
             raise SystemExit(f"uavplan demo failed: {res.output}")
         return demo_record(json.loads((out / "plan.json").read_text()))

@@ -246,10 +246,13 @@ def test_export_command_writes_every_format(plan_json: Path, tmp_path: Path) -> 
         r = runner.invoke(app, ["export", str(plan_json), "--format", fmt])
         assert r.exit_code == 0, r.output
     assert sorted(p.name for p in (tmp_path / "qgc").iterdir()) == [
-        "uav0.plan", "uav1.plan", "uav2.plan"]  # fmt: skip
+        "launch.csv", "uav0.plan", "uav1.plan", "uav2.plan"]  # fmt: skip
+    launch = (tmp_path / "qgc" / "launch.csv").read_text().splitlines()
+    assert launch[0].split(",")[0] == "uav" and len(launch) == 4
     assert (tmp_path / "plan.geojson").exists() and (tmp_path / "plan.kml").exists()
     r = runner.invoke(app, ["export", str(plan_json), "--format", "qgc"])
-    assert "take-off climb" in r.output and "planned time" in r.output
+    assert "take-off climb" in r.output and "take-off times are in" in r.output
+    assert "must take off at its planned second" in r.output  # a nominal plan tolerates nothing
 
 
 def test_export_without_origin_says_how_to_add_one(tmp_path: Path) -> None:

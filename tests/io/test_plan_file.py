@@ -140,7 +140,7 @@ def test_an_infeasible_plan_is_strict_json_with_null_for_infinity(tmp_path: Path
     path = write_plan_file(plan, tmp_path / "plan.json")
     text = path.read_text()
     doc = _strict(text)
-    assert isinstance(doc, dict) and doc["format"] == "uavplan.plan/3"
+    assert isinstance(doc, dict) and doc["format"] == "uavplan.plan/4"
     u = doc["uavs"][0]
     numbers = [u["cost"], *u["terms"].values(), *u["history"]]
     assert not any(isinstance(v, str) for v in numbers)  # format 2 wrote "inf" strings
@@ -274,8 +274,11 @@ def test_plan_exits_1_when_the_verifier_rejects_its_plan(tmp_path: Path, monkeyp
     r = runner.invoke(app, ["plan", "simple2d", "--iterations", "20", "--out", str(tmp_path / "a")])
     assert r.exit_code == 0 and "independent verifier: every flown trajectory passes" in r.output
 
-    bad = SimpleNamespace(kind="circles", message="uav0 enters circle 2 at t=1.000 s")
-    fake = SimpleNamespace(ok=False, violations=[bad], n_segments=3)
+    bad = SimpleNamespace(
+        kind="circles", message="uav0 enters circle 2 at t=1.000 s", uavs=("uav0",)
+    )
+    fake = SimpleNamespace(ok=False, violations=[bad], n_segments=3, model=None, uav_margins=[],
+                           pair_margins=[])  # fmt: skip
     monkeypatch.setattr(uavplan.verify, "verify_trajectories", lambda *a, **k: fake)
     r = runner.invoke(app, ["plan", "simple2d", "--iterations", "20", "--out", str(tmp_path / "b")])
     assert r.exit_code == 1

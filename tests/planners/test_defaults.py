@@ -92,11 +92,11 @@ def test_polish_follows_the_terrain_where_the_flight_leaves_the_band() -> None:
 
 
 def test_plan_raw_keeps_the_optimizers_path(tmp_path: Path) -> None:
-    r = CliRunner().invoke(app, ["plan", "simple2d", "--raw", "--out", str(tmp_path)])
+    r = CliRunner().invoke(app, ["plan", "simple2d", "--raw", "--nominal", "--out", str(tmp_path)])
     assert r.exit_code == 0, r.output
     doc = json.loads((tmp_path / "plan.json").read_text())
     assert "polished" not in doc["uavs"][0]["info"]
-    r = CliRunner().invoke(app, ["plan", "simple2d", "--out", str(tmp_path / "p")])
+    r = CliRunner().invoke(app, ["plan", "simple2d", "--nominal", "--out", str(tmp_path / "p")])
     doc2 = json.loads((tmp_path / "p" / "plan.json").read_text())
     assert (
         doc2["uavs"][0]["info"]["polished"]["points"][1]

@@ -116,3 +116,42 @@ def test_a_fleet_that_needs_nothing_is_left_as_it_is(planned) -> None:  # type: 
     sc, fr, cfg = planned
     out = polish_fleet(sc, fr, 7, cfg)
     assert out.info["repair"] == {} and out.results == fr.results and out.cost == fr.cost
+
+
+def test_the_last_resort_takes_off_after_every_other_uav_has_landed() -> None:
+    """Under a drifting schedule: the latest landing of the flights reserved, plus the
+    take-off error; the nominal table: the last landing."""
+    from uavplan.planners.fleet_polish import _after_all
+    from uavplan.world.execution import DEFAULT, widened
+    from uavplan.world.reservations import ReservationTable
+
+    given = with_fleet(resolve("ppswarm1"), 3, seed=0)
+    timed = ReservationTable.for_scenario(widened(given, DEFAULT))
+    plain = ReservationTable.for_scenario(given)
+    assert _after_all(timed) == 1.0 + 2.0  # nothing reserved: right away (at 0 s at the latest)
+    for k, (t0, t1) in enumerate(((0.0, 50.0), (10.0, 110.0), (5.0, 60.0))):
+        P = np.array([[0.0, 0, 100], [100, 0, 100]]) + 100 * k
+        for table in (timed, plain):
+            table.add(f"u{k}", P, np.array([t0, t1]))
+    late = 10.0 + 2.0 + 100.0 / (1 - 0.03)  # u1 at its latest, landing
+    assert timed.clear_time() == pytest.approx(late)
+    assert _after_all(timed) == np.floor(late + 2.0) + 1
+    assert plain.clear_time() == 110.0 and _after_all(plain) == 111.0
+
+
+def test_a_single_uav_planner_run_as_a_fleet_is_repaired_too() -> None:
+    """The prioritized frame around a single-UAV planner (here the potential field) gets the
+    same repair as a fleet planner, and what it keeps passes the verifier under the model."""
+    from uavplan.planners.fleet_plan import plan_all
+    from uavplan.world.execution import DEFAULT, widened
+
+    given = with_fleet(resolve("ppswarm1"), 6, seed=0)
+    world = widened(given, DEFAULT)
+    plan = plan_all(world, get_planner("apf"), None, 0, polish=True)
+    assert plan.fleet is not None and "repair" in plan.fleet.info
+    from uavplan.io.plan_file import parse_plan
+    from uavplan.verify import verify_trajectories
+
+    pf = parse_plan(plan_document(plan), world.dim)
+    report = verify_trajectories(pf.trajectories("flown"), given, pf.scenario, model=DEFAULT)
+    assert plan.feasible and report.ok, report.violations[:3]

@@ -14,7 +14,8 @@ from uavplan.cli import app
 def test_fly_repairs_and_verifies(tmp_path: Path) -> None:
     out = tmp_path / "mission.json"
     res = CliRunner().invoke(
-        app, ["fly", "hrmaga-popup", "--iterations", "100", "--seed", "0", "-o", str(out)]
+        app,
+        ["fly", "hrmaga-popup", "--iterations", "100", "--seed", "0", "--nominal", "-o", str(out)],
     )
     assert res.exit_code == 0, res.output
     assert "1 area(s) unknown at take-off" in res.output
@@ -37,14 +38,16 @@ def test_fly_a_plan_file(tmp_path: Path) -> None:
     ``-a`` another planner; a wrong UAV or a file that is not a plan exits 2 with one line."""
     runner = CliRunner()
     res = runner.invoke(
-        app, ["plan", "hrmaga-popup", "-a", "hr-maga", "--iterations", "60", "--out", str(tmp_path)]
-    )
+        app, ["plan", "hrmaga-popup", "-a", "hr-maga", "--iterations", "60", "--nominal",
+              "--out", str(tmp_path)]
+    )  # fmt: skip
     assert res.exit_code in (0, 1), res.output
     plan = tmp_path / "plan.json"
     out = tmp_path / "mission.json"
     res = runner.invoke(app, ["fly", str(plan), "-o", str(out)])
     assert res.exit_code in (0, 1), res.output
     assert "hrmaga-popup: hr-maga" in res.output and "area 0 seen at t=" in res.output
+    assert "execution model: nominal" in res.output  # the plan's own model
     first = json.loads(plan.read_text())["uavs"][0]["waypoints"]
     m = json.loads(out.read_text())
     assert m["waypoints"][0] == first[0] and m["events"][0]["action"] == "repair"
@@ -61,3 +64,12 @@ def test_fly_a_plan_file(tmp_path: Path) -> None:
     bad.write_text('{"uavs": 3}')
     r = runner.invoke(app, ["fly", str(bad)])
     assert r.exit_code == 2 and "uavs: expected a non-empty list, got 3" in r.output
+
+
+def test_fly_repairs_and_verifies_under_the_execution_model(tmp_path: Path) -> None:
+    """Without --nominal the mission is planned and repaired in the world widened by the
+    default model and verified against the world as given under that model."""
+    res = CliRunner().invoke(app, ["fly", "hrmaga-popup", "--iterations", "30"])
+    assert res.exit_code == 0, res.output
+    assert "execution model: take-off ±2 s" in res.output
+    assert "verified under the execution model" in res.output

@@ -72,10 +72,25 @@ def export(
         str, typer.Option(help="UTC time of the plan's t = 0 (KML times), ISO 8601.")
     ] = "2000-01-01T00:00:00Z",
     list_formats: Annotated[bool, typer.Option("--list", help="List the formats.")] = False,
+    max_items: Annotated[
+        int,
+        typer.Option(
+            help="Most MAVLink items of a per-vehicle mission (qgc, wpl): the flown trajectory "
+            "is thinned to fit (PX4 holds 500, ArduPilot about 700 without SD storage)."
+        ),
+    ] = 500,
 ) -> None:
     """Write PLAN_FILE's trajectories in a mission format: each UAV's flown trajectory (the
     one the plan declares and guarantees) unless --polylines or --smoothed."""
-    from uavplan.io.missions import ExportError, ExportOptions, Mission, exporters, get_exporter
+    from uavplan.io.missions import (
+        ExportError,
+        ExportOptions,
+        Mission,
+        exporters,
+        get_exporter,
+        tolerances,
+        write_launch_schedule,
+    )
     from uavplan.io.plan_file import PlanFormatError, plan_path, read_plan_file
 
     if list_formats:
@@ -95,6 +110,8 @@ def export(
         if value not in allowed:
             raise fail(f"--{name} {value!r}: choose from {', '.join(allowed)}")
     kind: TrajectoryKind = "smoothed" if smoothed else ("planned" if polylines else "flown")
+    if not 3 <= max_items <= 100_000:
+        raise fail(f"--max-items {max_items}: from 3 to 100,000")
     geo_origin = _origin(origin) if origin is not None else None
     notes: list[str] = []
     try:
@@ -116,7 +133,8 @@ def export(
         elif plan.origin is None and world is not None and world.origin is not None:
             plan = dataclasses.replace(plan, origin=world.origin)
         options = ExportOptions(kind=kind, frame=frame, end=end, firmware=firmware,  # type: ignore[arg-type]
-                                vehicle=vehicle, epoch=epoch)  # type: ignore[arg-type]  # fmt: skip
+                                vehicle=vehicle, epoch=epoch,  # type: ignore[arg-type]
+                                max_items=max_items)  # fmt: skip
         mission = Mission(plan, world, options)
         shown = plan_path(plan_file)
         default = shown.parent / fmt if exporter.per_uav else shown.with_suffix(exporter.suffix)
@@ -124,6 +142,8 @@ def export(
         if exporter.per_uav:
             target.mkdir(parents=True, exist_ok=True)
         written = exporter.write(mission, target)
+        if exporter.per_uav:  # what a per-vehicle mission cannot carry
+            written.append(write_launch_schedule(mission, target))
     except (ExportError, PlanFormatError) as exc:
         raise fail(str(exc).splitlines()[0]) from None
     except OSError as exc:
@@ -132,11 +152,15 @@ def export(
         out.print(f"wrote {p}")
     for note in (*notes, *mission.warnings):
         err.print(f"WARNING: {plan.source}: {note}")
-    if len(plan.uavs) > 1 and exporter.name in ("qgc", "wpl"):
-        err.print(
-            f"WARNING: {plan.source}: the fleet's separation holds only if every UAV "
-            "starts its mission at its planned time and holds the planned speeds"
-        )
+    for line in tolerances(mission):
+        err.print(f"WARNING: {plan.source}: {line}")
+    thin = 0.0
+    if exporter.per_uav:
+        thin = max((r["thinning_m"] for r in mission.report.values()), default=0.0)
+        most = max((int(r["items"]) for r in mission.report.values()), default=0)
+        err.print(f"WARNING: {plan.source}: take-off times are in {target / 'launch.csv'} (the "
+                  f"missions carry none); missions thinned to at most {most} items, up to "
+                  f"{thin:.3g} m from the verified trajectories")  # fmt: skip
     if kind != "flown":
         what = "smoothed paths" if smoothed else "planned polylines"
         err.print(f"WARNING: {plan.source}: exported the {what}, not the flown trajectories "
@@ -144,4 +168,12 @@ def export(
     if plan.feasible is not True:
         state = "not feasible" if plan.feasible is False else "of unknown feasibility"
         err.print(f"WARNING: {plan.source}: the plan is {state}; do not fly it as it is")
+        raise typer.Exit(1)
+    rec = dict(plan.execution or {})
+    track = min(float(rec.get("track_h", 0.0)), float(rec.get("track_v", 0.0)))
+    if track > 0 and thin > track:
+        err.print(f"UNSAFE: {plan.source}: the missions depart up to {thin:.3g} m from the "
+                  f"verified trajectories, more than the {track:g} m of tracking error the "
+                  "plan tolerates; raise --max-items or re-plan with a larger tracking "
+                  "error")  # fmt: skip
         raise typer.Exit(1)

@@ -40,9 +40,10 @@ def _is_plan(arg: str) -> bool:
 
 def _from_plan(
     path: str, scenario: str | None, algorithm: str | None, uav: str | None
-) -> tuple[Any, Any, str, dict[str, Any], Any, int | None]:
-    """(scenario, task, planner name, its options, the initial PlanResult, the plan's seed) of
-    a plan file; ``fail`` naming the file and field otherwise."""
+) -> tuple[Any, Any, str, dict[str, Any], Any, int | None, Any]:
+    """(scenario, task, planner name, its options, the initial PlanResult, the plan's seed,
+    the execution model it was made for) of a plan file; ``fail`` naming the file and field
+    otherwise."""
     import numpy as np
 
     from uavplan.io.plan_file import PlanFormatError, read_plan_file
@@ -91,7 +92,13 @@ def _from_plan(
         rec.id, P, T, float(rec.cost) if rec.cost is not None else float("nan"), {},
         bool(rec.feasible), 0, 0, 0.0, np.zeros(0), planner,
     )  # fmt: skip
-    return sc, task, planner, opts, first, pf.seed
+    from uavplan.world.execution import NOMINAL, ExecutionModel
+
+    try:
+        model = ExecutionModel.from_record(pf.execution) if pf.execution else NOMINAL
+    except ValueError as exc:
+        raise fail(f"{path}: execution: {exc}") from None
+    return sc, task, planner, opts, first, pf.seed, model
 
 
 def fly(
@@ -120,6 +127,14 @@ def fly(
     strict_deadline: Annotated[
         bool, typer.Option(help="Exit 1 when a repair missed its deadline.")
     ] = False,
+    nominal: Annotated[
+        bool,
+        typer.Option(
+            "--nominal",
+            help="Plan and repair for an exact execution (no take-off, speed or tracking "
+            "error) instead of the plan's or scenario's execution model [uavplan's default].",
+        ),
+    ] = False,
     out_file: Annotated[
         Path | None, typer.Option("--out", "-o", help="Write the mission as JSON here.")
     ] = None,
@@ -127,6 +142,7 @@ def fly(
 ) -> None:
     """Plan SCENARIO's first task (or take PLAN.json's) and fly it, revealing unknown areas in
     flight and repairing the rest of the path when one is seen."""
+    from uavplan.cli.plan import planning_world
     from uavplan.io.atomic import write_json_atomic
     from uavplan.io.plan_file import Trajectory
     from uavplan.io.scenario_file import ScenarioFileError
@@ -135,9 +151,9 @@ def fly(
     from uavplan.scenarios import resolve
     from uavplan.verify import verify_trajectories
 
-    initial = task = None
+    initial = task = model = None
     if _is_plan(scenario):
-        sc, task, algorithm, options, initial, plan_seed = _from_plan(
+        sc, task, algorithm, options, initial, plan_seed, model = _from_plan(
             scenario, plan_scenario, algorithm, uav
         )
         if seed is None:
@@ -155,6 +171,10 @@ def fly(
         algorithm, options = algorithm or "hr-maga", {}
     seed = 0 if seed is None else seed
     options = {**options, **parse_params(param or [])}
+    given = sc
+    sc = planning_world(given, scenario, nominal, model)  # planned and repaired in it
+    if task is not None:  # the plan's task, its clearances widened as the world's are
+        task = next(t for t in sc.tasks if t.id == task.id)
     try:
         planner = get_planner(algorithm, **options)
         m = fly_mission(
@@ -183,11 +203,14 @@ def fly(
             markup=False,
             highlight=False,
         )
-    world = revealed_world(sc)
+    world = revealed_world(given)  # the world as given, under the model planned for
     rep = verify_trajectories(
-        [Trajectory(task.id, m.waypoints, m.times, m.feasible)], world, kinematics=False
-    )
+        [Trajectory(task.id, m.waypoints, m.times, m.feasible)], world, kinematics=False,
+        model=sc.execution,
+    )  # fmt: skip
     verdict = "verified" if rep.ok else f"NOT SAFE: {len(rep.violations)} violation(s)"
+    if rep.ok and sc.execution is not None and not sc.execution.nominal:
+        verdict += " under the execution model"
     out.print(
         f"flown: {m.length:,.0f} m in {m.times[-1] - m.times[0]:,.1f} s, {verdict} (first plan "
         f"{m.initial.length:,.0f} m)",

@@ -49,6 +49,7 @@ def _run_plan(
     figure: bool = True,
     raw: bool = False,
     max_time: float | None = None,
+    nominal: bool = False,
 ) -> Any:
     from uavplan.compile_clock import Stopwatch  # here: it imports Numba
     from uavplan.io.scenario_file import ScenarioFileError
@@ -68,9 +69,10 @@ def _run_plan(
         raise fail(f"--time {max_time}: must be a positive number of seconds")
     compile_notice()
     try:
-        scenario = resolve(scenario_ref)
+        given_world = resolve(scenario_ref)
     except ScenarioFileError as exc:
         raise fail(getattr(exc, "problems", None) or [str(exc)]) from None
+    scenario = planning_world(given_world, scenario_ref, nominal)
     # the scenario's planning block gives what the command line does not (checked at load)
     block = (scenario.metadata.get("spec") or {}).get("planning") or {}
     from_file = algorithm is None and "planner" in block
@@ -199,7 +201,41 @@ def _run_plan(
         write_plan(plan, out_dir, figure=figure)
     except OSError as exc:
         raise fail(f"--out {out_dir}: cannot write: {exc}") from None
+    plan.scenario.metadata["given"] = given_world  # what the verifier checks against
     return plan, (planning, clock.compile, n_runs)
+
+
+def planning_world(scenario: Any, ref: str, nominal: bool, model: Any = None) -> Any:
+    """The world a plan is made in: ``scenario`` under its execution model (``model`` when
+    given, e.g. a plan file's; else the scenario's own, else uavplan's default; the nominal one
+    with ``--nominal``), every static clearance widened by the model's tracking error
+    (:func:`uavplan.world.execution.widened`). Says the model on the console; exit 2 when a
+    task does not fit in the widened world."""
+    import numpy as np
+
+    from uavplan.world.execution import DEFAULT, NOMINAL, widened
+
+    model = NOMINAL if nominal else (model or scenario.execution or DEFAULT)
+    where = "--nominal" if nominal else model.source
+    hint = "" if nominal or model.nominal else "; --nominal plans for an exact execution"
+    out.print(f"execution model: {model.describe()} ({where}){hint}", markup=False)
+    try:
+        world = widened(scenario, model)
+    except ValueError as exc:
+        raise fail(f"{ref}: the execution model ({model.describe()}): {exc}") from None
+    if model.track_h or model.track_v:
+        bad = []
+        for t in world.tasks:
+            for what, p in (("start", t.start), ("goal", t.goal)):
+                why = world.point_problems(np.asarray(p, dtype=np.float64))
+                if why:
+                    bad.append(f"{ref}: task {t.id}: its {what} {list(p)} is {why[0]} once every "
+                               f"clearance is widened by the tracking error ({model.track_h:g} m "
+                               f"horizontal, {model.track_v:g} m vertical); move it, or plan "
+                               "with --nominal")  # fmt: skip
+        if bad:
+            raise fail(bad)
+    return world
 
 
 def _option_problem(
@@ -225,20 +261,32 @@ def _option_problem(
 def verified_by_the_verifier(plan: Any, out_dir: Path) -> bool:
     """The gate before a feasible plan leaves with exit 0: the independent verifier (which
     imports no planning code) reads the plan.json just written and checks every UAV's flown
-    trajectory, kinematic limits included. Prints one line; False (and a loud line on stderr
-    naming the first violations) if it rejects a plan the planner called feasible."""
-    from uavplan.io.plan_file import read_plan_file
+    trajectory, kinematic limits included, against the scenario as given (not the widened
+    world it was planned in) under the execution model the plan states, and writes the
+    margins it measures into plan.json. Prints its findings; False (and loud lines on stderr
+    naming the first violations and the UAVs) if it rejects a plan the planner called
+    feasible, or the plan does not meet its model."""
+    from uavplan.cli.verify import margin_lines, margins_record
+    from uavplan.io.plan_file import read_plan_file, with_margins
     from uavplan.verify import verify_trajectories
 
     pf = read_plan_file(out_dir / "plan.json", plan.scenario.dim)
-    report = verify_trajectories(pf.trajectories("flown"), plan.scenario, pf.scenario)
+    world = plan.scenario.metadata.get("given", plan.scenario)
+    report = verify_trajectories(pf.trajectories("flown"), world, pf.scenario, model=pf.execution)
+    if report.model is not None:
+        with_margins(out_dir / "plan.json", margins_record(report))
+        for line in margin_lines(report):
+            out.print(line, markup=False)
     if report.ok:
-        out.print(f"independent verifier: every flown trajectory passes ({report.n_segments} "
-                  "segments, kinematic limits included)")  # fmt: skip
+        under = " under the execution model" if report.model is not None else ""
+        out.print(f"independent verifier: every flown trajectory passes{under} "
+                  f"({report.n_segments} segments, kinematic limits included)")  # fmt: skip
         return True
+    uavs = sorted({u for v in report.violations for u in v.uavs})
     err.print(
         "[bold red]UNSAFE[/]: the planner called this plan feasible, and the independent "
-        f"verifier rejects it ({len(report.violations)} violations); do not fly it; "
+        f"verifier rejects it ({len(report.violations)} violations, UAVs "
+        f"{', '.join(uavs[:12])}{' ...' if len(uavs) > 12 else ''}); do not fly it; "
         f"`uavplan verify {out_dir / 'plan.json'}` lists them"
     )
     for v in report.violations[:5]:
@@ -416,6 +464,14 @@ def plan(
             "line-of-sight shortcut, no repair of a fleet's looping or failing UAVs)."
         ),
     ] = False,
+    nominal: Annotated[
+        bool,
+        typer.Option(
+            help="Plan for an exact execution (no take-off, speed or tracking error) instead "
+            "of the scenario's execution model or uavplan's default (take-off ±2 s, speed "
+            "±3 %, tracking 3 m horizontal and 2 m vertical)."
+        ),
+    ] = False,
 ) -> None:
     """Plan every task of SCENARIO; write OUT/plan.json, OUT/plan.png and OUT/plan.html. A
     single UAV's path is polished unless --raw (the experiments use the raw paths): where its
@@ -426,7 +482,7 @@ def plan(
     take-off), unless --raw."""
     result, times = _run_plan(
         scenario, algorithm, seed, out_dir, iterations, pop_size, waypoints, cost, param or [],
-        raw=raw, max_time=max_time,
+        raw=raw, max_time=max_time, nominal=nominal,
     )  # fmt: skip
     _summary(result, times, out_dir)
     if not result.feasible or not verified_by_the_verifier(result, out_dir):
@@ -438,11 +494,15 @@ def demo(
         "uavplan-demo"
     ),
     seed: Annotated[int, typer.Option(help="Root random seed.")] = 0,
+    nominal: Annotated[
+        bool, typer.Option(help="Plan for an exact execution (see `uavplan plan --help`).")
+    ] = False,
 ) -> None:
     """Plan the built-in SPSO benchmark with the default planner for it (SPSO) at SPSO's budget
     (500 x 200); write OUT/plan.json,
     OUT/plan.png (the figure) and OUT/plan.html (open it in a browser), and print a summary."""
-    result, times = _run_plan("spso", None, seed, out_dir, 200, 500, None, None, [])
+    result, times = _run_plan("spso", None, seed, out_dir, 200, 500, None, None, [],
+                              nominal=nominal)  # fmt: skip
     _summary(result, times, out_dir)
     if not result.feasible or not verified_by_the_verifier(result, out_dir):
         raise typer.Exit(1)

@@ -154,8 +154,8 @@ def summary_lines(s: Scenario) -> list[str]:
         else "separation per axis " + "/".join(_n(a) for a in u.s2_axes) + " m"
     )
     lines.append(
-        f"uav: speed {_n(u.speed)} m/s, turn radius {_n(u.turn_radius)} m, s1 {_n(u.s1)} m, "
-        f"{s2}, size {_n(u.size)} m"
+        f"uav: speed {_n(u.speed)} m/s, turn radius {_n(u.turn_radius)} m, "
+        f"s1 (threat cost) {_n(u.s1)} m, {s2}, size {_n(u.size)} m"
     )
     climb = (
         "climb/descent unlimited"

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.console import Console
@@ -61,6 +61,12 @@ def summary_lines(report: VerifyReport, plan_name: str) -> list[str]:
         )
     elif n > 1:
         lines.append(f"min separation: more than {need} (no pair came close)")
+    if report.model is not None:
+        from uavplan.world.execution import ExecutionModel
+
+        m = ExecutionModel.from_record(report.model)
+        lines.append(f"execution model: {m.describe()} ({m.source}); --nominal checks the plan "
+                     "as flown exactly")  # fmt: skip
     if report.terrain_source is not None:
         lines.append(f"terrain: checked against the raster {report.terrain_source} itself (read "
                      "again through GDAL, not the planner's grid)")  # fmt: skip
@@ -70,6 +76,56 @@ def summary_lines(report: VerifyReport, plan_name: str) -> list[str]:
         lines.append(f"violations: {len(report.violations)} ({detail})")
     else:
         lines.append("violations: none")
+    return lines
+
+
+def margins_record(report: Any, pairs: int = 20) -> dict[str, Any]:
+    """plan.json's ``margins``: every UAV's, and the ``pairs`` tightest pairs with every
+    failing one."""
+    tight = report.pair_margins[:pairs]
+    failing = [p for p in report.pair_margins[pairs:] if not p.ok]
+    return {"uavs": [m.to_dict() for m in report.uav_margins],
+            "pairs": [p.to_dict() for p in tight + failing]}  # fmt: skip
+
+
+def margin_lines(report: Any, k: int = 5) -> list[str]:
+    """What the console says of the margins: the fleet's least, and the tightest pairs."""
+    import math
+
+    rec = report.model or {}
+
+    def show(v: float, unit: str, scale: float = 1.0) -> str:
+        return "any" if not math.isfinite(v) else f"{v * scale:.3g} {unit}".strip()
+
+    ms = report.uav_margins
+    if not ms:
+        return []
+    lines = []
+    for what, unit, scale, need in (("takeoff_s", "s", 1.0, rec.get("takeoff_s", 0.0)),
+                                    ("speed", "%", 100.0, rec.get("speed", 0.0)),
+                                    ("track_h", "m", 1.0, rec.get("track_h", 0.0)),
+                                    ("track_v", "m", 1.0, rec.get("track_v", 0.0))):  # fmt: skip
+        worst = min(ms, key=lambda m: getattr(m, what))
+        v = getattr(worst, what)
+        label = {"takeoff_s": "take-off error", "speed": "speed error",
+                 "track_h": "horizontal tracking error",
+                 "track_v": "vertical tracking error"}[what]  # fmt: skip
+        by = worst.limited_by.get(what, "")
+        verdict = "meets" if v >= need - 1e-6 else "BELOW"
+        who = "the fleet" if len(ms) > 1 else worst.uav
+        amount = "any" if not math.isfinite(v) else f"up to {show(v, unit, scale)} of"
+        lines.append(f"margin: {who} tolerates {amount} {label} "
+                     f"(model: {show(need, unit, scale)}: {verdict}; tightest: {worst.uav}"
+                     + (f" with {by}" if by else "") + ")")  # fmt: skip
+    for p in report.pair_margins[:k]:
+        if not math.isfinite(p.takeoff_s) and not math.isfinite(p.speed):
+            continue
+        where = (f"{p.distance:.1f} m apart at worst about t={p.time:.0f} s"
+                 if math.isfinite(p.distance) and math.isfinite(p.time)
+                 else "never close under the model's errors")  # fmt: skip
+        lines.append(f"  tight pair: {p.uav} and {p.other}: take-off ±{show(p.takeoff_s, 's')}, "
+                     f"speed ±{show(p.speed, '%', 100.0)}, tracking {show(p.track_h, 'm')} "
+                     f"horizontal and {show(p.track_v, 'm')} vertical, {where}")  # fmt: skip
     return lines
 
 
@@ -103,6 +159,13 @@ def verify(
     json_out: Annotated[
         Path | None, typer.Option("--json", help="Also write the report to this JSON file.")
     ] = None,
+    nominal: Annotated[
+        bool,
+        typer.Option(
+            help="Check the plan as flown exactly, not under the execution model it states "
+            "(plan.json's execution, else the scenario's)."
+        ),
+    ] = False,
 ) -> None:
     """Check PLAN_FILE against SCENARIO independently of the planner: UAV-UAV separation over
     continuous time, obstacles, terrain and altitude band along every segment, bounds, times and
@@ -131,6 +194,9 @@ def verify(
         raise fail(exc.problems[0]) from None
     from uavplan.verify.source_terrain import SourceError
 
+    model = None
+    if not nominal:
+        model = pf.execution or (world.execution.record() if world.execution else None)
     try:
         report = verify_trajectories(
             trajs,
@@ -139,6 +205,7 @@ def verify(
             smoothed=smoothed,
             kinematics=TRAJECTORIES[kind],
             trajectory=kind,
+            model=model,
         )
     except SourceError as exc:
         raise fail(f"{scenario}: {exc}") from None
@@ -152,6 +219,8 @@ def verify(
     for w in report.warnings:
         out.print(f"warning: {w}", markup=False)
     for line in summary_lines(report, str(shown)):
+        out.print(line, markup=False)
+    for line in margin_lines(report):
         out.print(line, markup=False)
     out.print("[bold green]OK[/]" if report.ok else "[bold red]FAILED[/]")
     if json_out is not None:

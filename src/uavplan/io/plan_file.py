@@ -1,12 +1,15 @@
 """Plan files (``plan.json``): the one module that writes and reads them.
 
-**Format 3** (``"format": "uavplan.plan/3"``), a JSON object (its JSON Schema:
+**Format 4** (``"format": "uavplan.plan/4"``), a JSON object (its JSON Schema:
 :func:`plan_schema`, ``uavplan schema plan``; described in ``docs/plan-format.md``):
 
 * ``scenario``, ``algorithm``, ``config`` (the planner's options), ``seed``, ``version``,
   ``python``, ``frame`` (local ENU metres: x east, y north, z up, absolute altitudes; seconds);
 * ``feasible``: the plan's verdict (with a fleet planner, separation between UAVs included);
   ``separation_checked``: whether separation between UAVs was part of planning;
+* ``execution``: the execution model the plan was made for (take-off, speed and tracking
+  errors; :mod:`uavplan.world.execution`), and ``margins`` (``null`` until the verifier has
+  measured them): what each UAV and the tightest pairs tolerate (:mod:`uavplan.verify.robust`);
 * ``fleet`` (fleet planners only): priority order, fleet cost, verdict, history, restart
   costs, wall time, the planner's figures;
 * ``uavs``: one record per UAV: ``id``, ``waypoints`` ``[[x, y(, z)], ...]`` and ``times``
@@ -21,7 +24,8 @@
 Every file is strict JSON (RFC 8259): a number that is not finite (the infinite cost of a path
 that fails a check under the ``inf`` rule, a history entry before the first candidate) is
 ``null``, and every field that can be ``null`` says what it means in ``docs/plan-format.md``.
-Format 2 was format 3 with such numbers as the strings ``"inf"``/``"-inf"``; it still loads.
+Format 2 was format 3 with such numbers as the strings ``"inf"``/``"-inf"``; format 3 had no
+``execution`` and ``margins`` (its plans are read as made for the nominal model); both load.
 Coordinates and times are rounded to 6 decimals (micrometres, microseconds).
 
 **Reading** (:func:`read_plan_file`, :func:`parse_plan`) returns a typed :class:`PlanFile` whose
@@ -50,7 +54,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from uavplan import __version__
 from uavplan.io.atomic import write_json_atomic
-from uavplan.io.scenario_file.schema import MAX_COORD, MAX_TIME, OriginSpec
+from uavplan.io.scenario_file.schema import MAX_COORD, MAX_TIME, ExecutionSpec, OriginSpec
 from uavplan.world.geo import GeoError, GeoOrigin
 from uavplan.world.terrain import not_a_regular_file
 
@@ -63,12 +67,12 @@ if TYPE_CHECKING:
 
 FloatArray = NDArray[np.float64]
 
-PLAN_FORMAT = "uavplan.plan/3"
+PLAN_FORMAT = "uavplan.plan/4"
 #: Which trajectory of a UAV: the one it is to fly (declared), its planned polyline, or the
 #: informative smoothed version.
 TrajectoryKind = Literal["flown", "planned", "smoothed"]
 #: Every format this module reads.
-READABLE_FORMATS = ("uavplan.plan/1", "uavplan.plan/2", PLAN_FORMAT)
+READABLE_FORMATS = ("uavplan.plan/1", "uavplan.plan/2", "uavplan.plan/3", PLAN_FORMAT)
 FRAME = "local ENU metres: x east, y north, z up (absolute altitude)"
 
 
@@ -160,7 +164,8 @@ def fleet_record(f: FleetResult) -> dict[str, Any]:
 
 
 def plan_document(plan: FleetPlan) -> dict[str, Any]:
-    """The JSON-ready ``plan.json`` of a plan (format 3)."""
+    """The JSON-ready ``plan.json`` of a plan (format 4; ``margins`` null: the verifier fills
+    them in, :func:`with_margins`)."""
     return {
         "format": PLAN_FORMAT,
         "scenario": plan.scenario.name,
@@ -173,9 +178,23 @@ def plan_document(plan: FleetPlan) -> dict[str, Any]:
         **({"origin": plan.scenario.origin.record()} if plan.scenario.origin else {}),
         "feasible": bool(plan.feasible),
         "separation_checked": plan.fleet is not None,
+        "execution": _execution_record(plan),
+        "margins": None,
         **({"fleet": fleet_record(plan.fleet)} if plan.fleet is not None else {}),
         "uavs": [uav_record(r) for r in plan.results],
     }
+
+
+def _execution_record(plan: FleetPlan) -> dict[str, Any] | None:
+    model = plan.scenario.execution
+    return model.record() if model is not None else None
+
+
+def with_margins(path: str | Path, margins: dict[str, Any]) -> Path:
+    """Rewrite the plan file at ``path`` with the verifier's ``margins`` (atomically)."""
+    doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    doc["margins"] = margins
+    return write_json_atomic(Path(path), doc)
 
 
 def write_plan_file(plan: FleetPlan, path: str | Path) -> Path:
@@ -271,6 +290,10 @@ class PlanFile:
     source: str = "plan"
     #: the scenario's geodetic origin as the plan recorded it (None: not geo-referenced)
     origin: GeoOrigin | None = None
+    #: the execution model the plan was made for (its record; None: nominal, or not said)
+    execution: Mapping[str, Any] | None = None
+    #: what the verifier measured the plan to tolerate (None: not measured)
+    margins: Mapping[str, Any] | None = None
 
     def trajectories(self, kind: TrajectoryKind = "flown") -> list[Trajectory]:
         """Every UAV's trajectory of ``kind``; PlanFormatError naming the first UAV without a
@@ -509,6 +532,15 @@ def parse_plan(data: Any, dim: int | None = None, source: str = "plan") -> PlanF
         except GeoError as exc:
             raise PlanFormatError([f"{source}: {exc}"]) from None
     config = data.get("config")
+    execution = data.get("execution")
+    if execution is not None:
+        from uavplan.world.execution import ExecutionModel
+
+        try:
+            ExecutionModel.from_record(execution)
+        except (ValueError, TypeError) as exc:
+            raise PlanFormatError([f"{source}: {exc}"]) from None
+    margins = data.get("margins")
     return PlanFile(
         format=fmt,
         scenario=name,
@@ -522,6 +554,8 @@ def parse_plan(data: Any, dim: int | None = None, source: str = "plan") -> PlanF
         dim=d,
         source=source,
         origin=origin,
+        execution=execution,
+        margins=margins if isinstance(margins, Mapping) else None,
     )
 
 
@@ -631,7 +665,9 @@ class FleetSpec(_Spec):
 class PlanSpec(_Spec):
     """A uavplan plan file (``plan.json``)."""
 
-    format: Literal["uavplan.plan/1", "uavplan.plan/2", "uavplan.plan/3"] | None = "uavplan.plan/3"
+    format: (
+        Literal["uavplan.plan/1", "uavplan.plan/2", "uavplan.plan/3", "uavplan.plan/4"] | None
+    ) = "uavplan.plan/4"
     scenario: str | None = None
     algorithm: str | None = None
     config: dict[str, Any] = Field(default_factory=dict)
@@ -642,6 +678,16 @@ class PlanSpec(_Spec):
     origin: OriginSpec | None = None
     feasible: bool | None = None
     separation_checked: bool | None = None
+    execution: ExecutionSpec | None = Field(
+        None, description="the execution model the plan was made for (null: nominal)"
+    )
+    margins: dict[str, Any] | None = Field(
+        None,
+        description="what the verifier measured the plan to tolerate: 'uavs' (per UAV: "
+        "takeoff_s, speed, track_h, track_v, limited_by) and 'pairs' (the tightest pairs and "
+        "every failing one: uav, other, time, distance, required, takeoff_s, speed, track, "
+        "ok); null: not measured",
+    )
     fleet: FleetSpec | None = None
     uavs: list[UAVSpec] = Field(min_length=1)
 

@@ -60,8 +60,9 @@ def plan_all(
     single-UAV planner in the prioritized frame (refused, naming the planners that can, for a
     planner whose search cannot keep clear of other UAVs). Never several UAVs planned alone.
     ``polish``: a single UAV's path is shortened by line of sight where that keeps it feasible
-    and costs no more (:meth:`Planner.plan`); a fleet planner's looping or failing UAVs are
-    repaired one by one against all the others' flights
+    and costs no more (:meth:`Planner.plan`); a fleet's looping or failing UAVs (a fleet
+    planner's, or a single-UAV planner's in the prioritized frame) are repaired one by one
+    against all the others' flights
     (:func:`~uavplan.planners.fleet_polish.polish_fleet`)."""
     if isinstance(planner, FleetPlanner):
         cb = progress("fleet") if progress else None
@@ -80,4 +81,9 @@ def plan_all(
         return FleetPlan(scenario, planner.name, planner.describe(), seed, (r,))
     sc = dataclasses.replace(scenario, tasks=chosen)
     fr = plan_sequentially(planner, sc, budget, seed, progress)
+    if polish:  # the same repair as a fleet planner's: a failing UAV re-planned against all
+        from uavplan.planners.fleet_polish import polish_fleet
+
+        # the table's buckets as plan_sequentially's (a planner's own dt is its time step)
+        fr = polish_fleet(sc, fr, seed, {**planner.describe(), "dt": 1.0})
     return FleetPlan(sc, planner.name, planner.describe(), seed, fr.results, fr)

@@ -2,9 +2,10 @@
 ``polish=True`` and a fleet planner; the experiments never polish, so the papers' numbers are
 the planners' own). Not from any paper: the single UAV's polish and fallback
 (:mod:`uavplan.planners.polish`, :func:`~uavplan.planners.defaults.fallback_planners`) carried
-over to a fleet, one UAV at a time, each against the declared flights of **all** the others as
-they stand (so whatever is kept stays clear of every other UAV, before and after it in the
-priority order), in the plan's priority order:
+over to a fleet, one UAV at a time, each against the declared flights of all the others that
+pass every check as they stand (so whatever is kept stays clear of every other UAV that is
+flown, before and after it in the priority order; a UAV whose flight fails and is not repaired
+fails the fleet), in the plan's priority order:
 
 1. **A UAV whose track crosses itself** (a loop on the map; in the default runs of
    ``benchmarks/default_paths.py`` one UAV of 40 in some seeds of ``dense`` and ``ppswarm2``):
@@ -12,11 +13,14 @@ priority order), in the plan's priority order:
    (:func:`~uavplan.problems.validity.greedy_shortcut`), and the result flown against the
    others (:func:`~uavplan.planners.flight.fly`).
 2. **A UAV whose flight fails a check, or whose loop no cut removes** (``dense``: a UAV of 40
-   boxed in by the flights of those before it in a narrow passage): re-planned alone with RRT*
+   boxed in by the flights of those before it in a narrow passage): first its own path taking
+   off later (as below), then re-planned alone with RRT*
    as the single-UAV fallback runs it (informed, tightened, its step scaled to the map,
    polished), shortened, and flown against the others at its planned take-off or, where the
    UAV may wait on the ground (it is not a constant-speed UAV), up to ``max_delays`` steps of
-   ``delay_step`` seconds later; up to :data:`RRT_TRIES` RRT* runs.
+   ``delay_step`` seconds later and, last, after every other UAV has landed (whatever the
+   execution model lets the schedules drift: no other flight is left to meet); up to
+   :data:`RRT_TRIES` RRT* runs.
 
 A new flight is kept only when it passes every check (world, the others, the kinematic limits)
 and its track does not cross itself; the UAV's result then says so (``info["repaired"]``) and
@@ -27,17 +31,26 @@ the fleet stays infeasible: the CLI says so and exits 1.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.planners.base import separated_problem
-from uavplan.planners.flight import declare, flight_validator, fly
+from uavplan.planners.flight import (
+    Flight,
+    candidate_flights,
+    check_flights,
+    declare,
+    flight_validator,
+    fly,
+)
 from uavplan.planners.results import FleetResult, PlanResult, make_result
-from uavplan.problems.validity import greedy_shortcut
+from uavplan.problems.validity import TIME_CHECKS, greedy_shortcut
 from uavplan.world.geometry import track_crosses_itself
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
@@ -88,20 +101,37 @@ def cut_loops(points: FloatArray) -> FloatArray:
 
 
 def _others_table(
-    scenario: Scenario, results: list[PlanResult], skip: int, margin: float, dt: float
+    scenario: Scenario,
+    results: list[PlanResult],
+    skip: int,
+    margin: float,
+    dt: float,
+    passing_only: bool = False,
 ) -> ReservationTable:
-    """The reservation table of every UAV's declared flight but ``results[skip]``'s."""
-    table = ReservationTable.for_uav(scenario.bounds.lo, scenario.bounds.hi, scenario.uav,
-                                     margin, dt=dt)  # fmt: skip
+    """The reservation table of every UAV's declared flight but ``results[skip]``'s (only
+    the flights that pass every check, with ``passing_only``)."""
+    table = ReservationTable.for_scenario(scenario, margin, dt=dt)
     for k, r in enumerate(results):
-        if k == skip:
+        if k == skip or (passing_only and not r.flown_feasible):
             continue
-        pts, ts = r.flown_trajectory()
-        p = np.asarray(pts, dtype=np.float64)
-        if p.shape[1] == 2:
-            p = np.column_stack([p, np.zeros(len(p))])
-        table.add(r.uav_id, p, np.asarray(ts, dtype=np.float64), RESERVE_TOL)
+        _reserve(table, r)
     return table
+
+
+def _reserve(table: ReservationTable, r: PlanResult) -> None:
+    pts, ts = r.flown_trajectory()
+    p = np.asarray(pts, dtype=np.float64)
+    if p.shape[1] == 2:
+        p = np.column_stack([p, np.zeros(len(p))])
+    table.add(r.uav_id, p, np.asarray(ts, dtype=np.float64), RESERVE_TOL)
+
+
+def _after_all(table: ReservationTable) -> float:
+    """The first whole second at which a UAV can take off and meet none of the flights in
+    ``table`` whatever its own and their schedules drift within the table's execution model:
+    when all of them have landed at the latest, plus the take-off error. The last resort of a
+    UAV that may wait on the ground; its flight is checked like any other."""
+    return float(math.floor(max(table.clear_time(), 0.0) + table.delta0) + 1.0)
 
 
 def _try(
@@ -118,22 +148,93 @@ def _try(
     if track_crosses_itself(path):
         return None
     problem = separated_problem(scenario, task, table, opts.get("cost"), opts.get("weights"))
+    r0 = make_result(problem, path, algorithm=old.algorithm, history=old.history,
+                     evaluations=old.evaluations, evaluations_history=old.evaluations_history,
+                     wall_time=old.wall_time)  # fmt: skip
+    f = fly(scenario, task, r0.waypoints, r0.times, table, opts.get("timing", "planned"),
+            float(opts.get("step", 5.0)))  # fmt: skip
+    return _declared(scenario, task, old, path, table, opts, f, how) if f.ok else None
+
+
+def _declared(
+    scenario: Scenario,
+    task: Task,
+    old: PlanResult,
+    path: FloatArray,
+    table: ReservationTable,
+    opts: dict[str, Any],
+    flight: Flight,
+    how: str,
+) -> PlanResult:
+    """``path`` as ``task``'s result against ``table``, ``flight`` declared as what it flies
+    (a flight that passed every check), saying it was repaired (``how``)."""
+    problem = separated_problem(scenario, task, table, opts.get("cost"), opts.get("weights"))
     r = make_result(
         problem, path, algorithm=old.algorithm, history=old.history,
         evaluations=old.evaluations, evaluations_history=old.evaluations_history,
         wall_time=old.wall_time, config=old.config, seed=old.seed,
         info={**old.info, "repaired": how},
     )  # fmt: skip
-    f = fly(scenario, task, r.waypoints, r.times, table, opts.get("timing", "planned"),
-            float(opts.get("step", 5.0)))  # fmt: skip
-    if not f.ok:
-        return None
-    d = declare(r, f)
+    d = declare(r, flight)
     cost = d.cost
     if not math.isfinite(cost) and set(r.violations) == {"separation"}:
         # the polyline comes closer than S2 where its flight (a curve) does not: F without F5
         cost = float(problem.evaluate_cv(r.waypoints[None])[0][0])
     return dataclasses.replace(d, cost=cost)
+
+
+def _first_slot(
+    scenario: Scenario,
+    task: Task,
+    old: PlanResult,
+    path: FloatArray,
+    table: ReservationTable,
+    opts: dict[str, Any],
+    starts: list[float],
+    how: Callable[[float], str],
+    flights: list[Flight] | None = None,
+) -> PlanResult | None:
+    """``path`` flown by ``task`` taking off at the first of ``starts`` (s, ascending) where its
+    flight passes every check, declared; None if at none. The flights are made and checked
+    against the world and the kinematic limits once (a take-off time moves the schedule, not
+    the curves); per take-off only the checks that read time run, and a flight that passes
+    them is checked in full. ``how(wait)``: what the result says was done. ``flights``: the
+    flights to try (at the task's take-off time; made from ``path`` when None)."""
+    if track_crosses_itself(path) or not starts:
+        return None
+    first = dataclasses.replace(task, start_time=starts[0])
+    world = flight_validator(scenario, first, None)
+    short = flight_validator(scenario, first, None, kinematics=False)
+    r0 = make_result(
+        separated_problem(scenario, first, None, opts.get("cost"), opts.get("weights")), path,
+        algorithm=old.algorithm, history=old.history, evaluations=old.evaluations,
+        evaluations_history=old.evaluations_history, wall_time=old.wall_time,
+    )  # fmt: skip
+    if flights is None:
+        timing = "constant" if scenario.moving_obstacles else str(opts.get("timing", "planned"))
+        made = candidate_flights(scenario, r0.waypoints, r0.times, timing,
+                                 float(opts.get("step", 5.0)), shortcut=short)  # fmt: skip
+        if not made:
+            made = [Flight(r0.waypoints, r0.times, "polyline", "polyline", ())]
+    else:  # flights given at the task's take-off: at the first of starts
+        made = [dataclasses.replace(f, times=f.times + starts[0] - task.start_time)
+                for f in flights]  # fmt: skip
+    flights = sorted((f for f in check_flights(world, made) if f.ok), key=lambda f: f.length)
+    for start in starts:
+        wait = start - starts[0]
+        later = dataclasses.replace(task, start_time=start)
+        v = flight_validator(scenario, later, table)
+        skip = [n for n in v.checks() if n not in TIME_CHECKS]
+        for f in flights:
+            ts = f.times + wait
+            if not len(v.passing(v.batch(f.points[None], ts[None]), skip=skip)):
+                continue
+            flight = check_flights(v, [dataclasses.replace(f, times=ts)])[0]
+            if not flight.ok:  # the full check disagrees: keep searching
+                continue
+            return _declared(scenario, later, old, path, table, opts, flight,
+                             how(start - task.start_time))  # fmt: skip
+    return None
 
 
 def _rrt_path(scenario: Scenario, task: Task, seed: int) -> FloatArray | None:
@@ -162,7 +263,8 @@ def polish_fleet(
     results = list(fleet.results)
     if not results or any(r.flown is None for r in results):
         return fleet  # nothing declared to fly: nothing this pass can check
-    margin, dt = float(cfg.get("separation_margin", 0.0)), float(cfg.get("dt", 1.0))
+    margin = float(cfg.get("separation_margin") or 0.0)
+    dt = float(cfg.get("dt") or 1.0)
     uav = scenario.uav
     may_wait = not (uav.min_speed > 0 and uav.min_speed >= uav.v_max)
     delays = int(cfg.get("max_delays", 24)) if may_wait else 0
@@ -175,38 +277,61 @@ def polish_fleet(
     order = [u for u in fleet.priority if u in index] or list(index)
     rngs = np.random.SeedSequence(seed).spawn(len(results))
     repaired: dict[str, str] = {}
+    # a failing UAV is repaired against the flights that pass (a failing one is replaced, or
+    # the fleet fails anyway): one table for all of them, each repaired flight added to it
+    passing: ReservationTable | None = None
     for uid in order:
         k = index[uid]
         r = results[k]
         loops = track_crosses_itself(r.waypoints)
         if r.flown_feasible and not loops:
             continue
-        table = _others_table(scenario, results, k, margin, dt)
+        if r.flown_feasible:  # a looping UAV that passes: every other flight but its own
+            table = _others_table(scenario, results, k, margin, dt)
+        else:
+            if passing is None:
+                passing = _others_table(scenario, results, k, margin, dt, passing_only=True)
+            table = passing
         static = flight_validator(scenario, tasks[uid], None, kinematics=False)
         task = dataclasses.replace(tasks[uid], start_time=float(r.times[0]))
+        base = tasks[uid].start_time
+        starts = [base + w * delay_step for w in range(delays + 1)]
+        last = _after_all(table)
+        if delays and last > starts[-1]:
+            starts.append(last)
+
+        def how(what: str, wait: float, last: float = last - base) -> str:
+            later = f", taking off {wait:g} s later" if wait else ""
+            after = ", after every other UAV has landed" if wait == last else ""
+            return f"{what}{later}{after}"
+
         new: PlanResult | None = None
         if loops:
             cut, _, _ = greedy_shortcut(static, cut_loops(r.waypoints))
             new = _try(scenario, task, r, cut, table, opts, "loop cut")
+        elif not r.flown_feasible and len(starts) > 1:  # its own flight, later (no search)
+            own = None
+            if r.flown is not None and set(r.flown_violations) <= TIME_CHECKS:
+                own = [Flight(np.asarray(r.flown), np.asarray(r.flown_times) - r.times[0]
+                              + tasks[uid].start_time, r.flown_kind, "declared", ())]  # fmt: skip
+            new = _first_slot(scenario, tasks[uid], r, r.waypoints, table, opts, starts[1:],
+                              functools.partial(how, "its own path"), own)  # fmt: skip
         for a, ss in enumerate(rngs[k].spawn(RRT_TRIES) if new is None else ()):
             path = _rrt_path(scenario, tasks[uid], int(ss.generate_state(1)[0]))
             if path is None:
                 continue
             path, _, _ = greedy_shortcut(static, path)
-            base = tasks[uid].start_time
-            for w in range(delays + 1):
-                later = dataclasses.replace(tasks[uid], start_time=base + w * delay_step)
-                how = f"RRT* (try {a + 1})" + (
-                    f", taking off {w * delay_step:g} s later" if w else ""
-                )
-                new = _try(scenario, later, r, path, table, opts, how)
-                if new is not None:
-                    break
+            new = _first_slot(scenario, tasks[uid], r, path, table, opts, starts,
+                              functools.partial(how, f"RRT* (try {a + 1})"))  # fmt: skip
             if new is not None:
                 break
         if new is not None:
             results[k] = new
             repaired[uid] = str(new.info["repaired"])
+            if table is passing:
+                _reserve(passing, new)
+            else:  # a passing flight changed: the shared table is rebuilt when next needed
+                passing = None
     spent = time.perf_counter() - t0  # the user waits for it: it is planning time
     info = {**fleet.info, "repair": repaired, "repair_time": spent}
     if not repaired:

@@ -54,7 +54,11 @@ Choices where the paper is silent or vague (all parameters of :class:`Prioritize
   up to ``max_delays`` times (first its best candidates re-timed, then a fresh low-level run
   from the later start); the delays are reported. 24 rather than 12: on ``ppswarm4@500``
   (N_restart 1) 12 left 2 UAVs blocked in 1 of 2 seeds, 24 none in both (``fleet-scale``
-  ran with 12, docs/results.md).
+  ran with 12, docs/results.md). Under an execution model whose schedule drifts
+  (:mod:`uavplan.world.execution`) the reservations are tubes that grow along each flight and
+  can fill every slot within ``max_delays``: a UAV whose flight clears everything but time is
+  then re-timed on, step by step, at worst to the second after every UAV before it has
+  landed (docs/decisions.md, "Execution model").
 * Iterations: ``N_iter`` counts iterations as every optimizer here does, the first one being the
   evaluation of the first population (Alg. 4 line 3), so a restart evaluates ``N_iter`` swarms
   per UAV (Alg. 4 read literally moves ``N_iter`` times after that: one swarm more).
@@ -84,6 +88,8 @@ from uavplan.planners.results import PlanResult, make_result
 from uavplan.planners.run import ProgressCallback
 from uavplan.problems.encoding import ENCODINGS, CartesianEncoding
 from uavplan.problems.path_problem import PRESETS, PathProblem
+from uavplan.problems.validity import TIME_CHECKS
+from uavplan.world.geometry import track_crosses_itself
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 from uavplan.world.tolerances import RESERVE_TOL
@@ -249,6 +255,7 @@ class PrioritizedPlanner(FleetPlanner):
         order_rng = np.random.default_rng(s_order)
         n_free = int(cfg.n_waypoints if cfg.n_waypoints is not None else scenario.n_waypoints)
         in_loop = cfg.flight == "in-loop"
+        drift = scenario.execution is not None and scenario.execution.timed
 
         def ok(res: PlanResult) -> bool:
             """What the mode guarantees: the flight (in-loop) or the polyline (paper)."""
@@ -267,8 +274,6 @@ class PrioritizedPlanner(FleetPlanner):
         else:
             priority = list(order_rng.permutation(M))
 
-        lower = np.asarray(scenario.bounds.lo, dtype=np.float64)
-        upper = np.asarray(scenario.bounds.hi, dtype=np.float64)
         opt_seeds = s_opt.spawn(cfg.n_restart * M)
         current = [p.copy() for p in init_paths]  # P^m, as full paths
         last_pop: list[FloatArray | None] = [None] * M
@@ -279,9 +284,7 @@ class PrioritizedPlanner(FleetPlanner):
         evaluations = 0
         stop = False
         for r in range(cfg.n_restart):
-            table = ReservationTable.for_uav(
-                lower, upper, scenario.uav, cfg.separation_margin, dt=cfg.dt
-            )
+            table = ReservationTable.for_scenario(scenario, cfg.separation_margin, dt=cfg.dt)
             results: list[PlanResult | None] = [None] * M
             delayed: dict[str, float] = {}
             histories: list[FloatArray] = []
@@ -295,12 +298,27 @@ class PrioritizedPlanner(FleetPlanner):
                 if in_loop:
                     res = self._in_loop_flight(scenario, table, cands)
                 # not in the paper: a UAV that finds no conflict-free path may wait on the
-                # ground at its start and take off later (the same swarm seeding again)
-                for k in range(1, cfg.max_delays + 1):
+                # ground at its start and take off later (the same swarm seeding again).
+                # Under an execution model whose schedule drifts, the candidates are first
+                # tried at every later take-off before any is re-planned (cheap, and what a
+                # drifting schedule most needs: a later slot), then re-planned at delays of
+                # 1, 2, 4, 8, ... steps
+                retimed = False
+                if in_loop and drift and not ok(res):
+                    found = self._retimed_flight(scenario, table, task, cands, res)
+                    if found is not None:
+                        res, wait = found
+                        delayed[task.id] = wait
+                    retimed = True
+                steps: Sequence[int] = range(1, cfg.max_delays + 1)
+                if retimed:  # re-planned at doubling delays only: every one was tried above
+                    steps = sorted({min(2**i, cfg.max_delays) for i in range(8)} - {0})
+                    steps = [k for k in steps if k <= cfg.max_delays]
+                for k in steps:
                     if ok(res):
                         break
                     later = replace(task, start_time=task.start_time + k * cfg.delay_step)
-                    if in_loop:  # first the same candidates, taking off later (cheap)
+                    if in_loop and not retimed:  # first the same candidates, later (cheap)
                         res2 = self._in_loop_flight(
                             scenario, table, self._waited(scenario, later, table, cands)
                         )
@@ -509,7 +527,27 @@ class PrioritizedPlanner(FleetPlanner):
                 others.append(paths[i])
                 if len(others) >= cfg.flight_candidates - 1:
                     break
-        return best, np.asarray(X_last), Candidates(best, others, result)
+        waitable: list[FloatArray] = []
+        if cfg.flight == "in-loop" and scenario.execution is not None and scenario.execution.timed:
+            # under a drifting schedule most blocked UAVs are blocked by time alone: the
+            # polylines of the last swarm that pass every check that does not read time, best
+            # first by cost, are what a later take-off can clear (the swarm's best, whose
+            # cost is infinite when no particle keeps S2, may cross an obstacle instead), and
+            # the path the swarm was seeded from (RRT*'s, or the last restart's)
+            paths = np.concatenate([enc.decode(np.asarray(X_last)), np.asarray(P_m)[None]])
+            b = problem.validator.batch(paths)
+            ok = problem.validator.passing(b, skip=TIME_CHECKS)
+            if ok.size:
+                seen = set()
+                for i in ok[np.argsort(problem.cost(b.paths[ok]), kind="stable")]:
+                    k = paths[i].round(6).tobytes()
+                    # a track that crosses itself is flyable but no plan to hand out
+                    if k not in seen and not track_crosses_itself(paths[i]):
+                        seen.add(k)
+                        waitable.append(paths[i])
+                    if len(waitable) >= 3:
+                        break
+        return best, np.asarray(X_last), Candidates(best, others, result, waitable)
 
     def _swarm_evaluator(
         self, problem: PathProblem, enc: Any, objective: Constrained, opt: Any
@@ -537,7 +575,11 @@ class PrioritizedPlanner(FleetPlanner):
         return below
 
     def _waited(
-        self, scenario: Scenario, later: Task, table: ReservationTable, cands: Candidates
+        self,
+        scenario: Scenario,
+        later: Task,
+        table: ReservationTable,
+        cands: Sequence[PlanResult],
     ) -> list[PlanResult]:
         """The candidates' polylines re-timed to take off at ``later.start_time``, evaluated
         there (the same path, waiting on the ground at its start)."""
@@ -557,6 +599,104 @@ class PrioritizedPlanner(FleetPlanner):
             for c in (cands[i] for i in range(min(3, len(cands))))
         ]
 
+    def _retimed_flight(
+        self,
+        scenario: Scenario,
+        table: ReservationTable,
+        task: Task,
+        cands: Candidates,
+        tried: PlanResult | None = None,
+    ) -> tuple[PlanResult, float] | None:
+        """The first of a UAV's candidates whose flight passes taking off ``k`` delay steps
+        later, ``k = 1 .. max_delays`` (fewest steps first), and the wait: each candidate's
+        flights are made and checked against the world and the kinematic limits once (a
+        take-off delay moves the schedule, not the curves), and only the checks that read time
+        (separation, moving obstacles) are run again per delay. The candidates: ``tried``'s
+        flight (the one just flown) when it fails only checks that read time; the polylines of
+        the last swarm that pass every check that does not read time, and the path the swarm
+        was seeded from, then the best three feasible ones (four at most). Under a
+        drifting schedule the steps go on past ``max_delays`` to the first free slot, at worst
+        one after every UAV in the table has landed (:meth:`ReservationTable.clear_time`)."""
+        from uavplan.planners.flight import candidate_flights, check_flights, flight_validator
+
+        cfg = self.config
+        timing = "constant" if scenario.moving_obstacles else cfg.smooth_timing
+        world = flight_validator(scenario, task, None)
+        short = flight_validator(scenario, task, None, kinematics=False)
+        per_cand: list[tuple[PlanResult, list[Flight]]] = []
+        if tried is not None and tried.flown is not None and tried.flown_violations and set(
+            tried.flown_violations
+        ) <= TIME_CHECKS:  # the flight just tried fails by time alone: it first
+            own = Flight(np.asarray(tried.flown), np.asarray(tried.flown_times),
+                         tried.flown_kind, "declared", ())  # fmt: skip
+            per_cand.append((tried, [own]))
+        firsts = [cands[i] for i in range(min(3, len(cands)))]
+        pool: list[PlanResult] = []
+        seen: set[bytes] = set()
+        # the polylines clear of everything but time first (a later take-off is all they
+        # need), then the feasible ones among the best three; four at most
+        waitable = cands.waitable() if isinstance(cands, Candidates) else []
+        for c in [*waitable, *(c for c in firsts if c.feasible or not waitable)]:
+            key = np.asarray(c.waypoints).round(6).tobytes()
+            if key not in seen and len(pool) < 4:
+                seen.add(key)
+                pool.append(c)
+        for c in pool:
+            flights = candidate_flights(scenario, c.waypoints, c.times, timing, cfg.smooth_step,
+                                        shortcut=short)  # fmt: skip
+            good = [f for f in check_flights(world, flights) if f.ok]
+            good.sort(key=lambda f: f.length)
+            per_cand.append((c, good))
+        time_checks = [n for n in TIME_CHECKS if n in flight_validator(
+            scenario, task, table).checks()]  # fmt: skip
+        waits = [k * cfg.delay_step for k in range(1, cfg.max_delays + 1)]
+        if table.timed and cfg.max_delays and len(table) and any(g for _, g in per_cand):
+            # under a drifting schedule the tubes of the UAVs before it may fill every slot
+            # within max_delays; a UAV clear of everything but them takes the first free
+            # slot after that, at worst when all of them have landed (whatever they drift)
+            clear = table.clear_time() + table.delta0 - task.start_time
+            if clear > waits[-1]:
+                more = np.arange(waits[-1] + cfg.delay_step, clear, cfg.delay_step)
+                waits += [float(w) for w in more] + [float(math.floor(clear) + 1.0)]
+        W = np.asarray(waits, dtype=np.float64)
+        free: dict[tuple[int, int], NDArray[np.bool_]] = {}
+        batched = time_checks == ["separation"] and len(table) > 0
+        CHUNK = 8  # waits per table query: most UAVs find their slot in the first few
+
+        def clear_at(f: Flight, w_i: int, v: Any, skip: list[str]) -> bool:
+            if not batched:
+                ts = f.times + W[w_i]
+                return bool(len(v.passing(v.batch(f.points[None], ts[None]), skip=skip)))
+            # separation alone reads time: the flight at a chunk of waits in one table query
+            key = (id(f), w_i // CHUNK)
+            if key not in free:
+                ws = W[key[1] * CHUNK : (key[1] + 1) * CHUNK]
+                P = as3(f.points)
+                free[key] = ~table.conflicts(
+                    np.broadcast_to(P[None], (len(ws), *P.shape)), f.times[None] + ws[:, None]
+                )
+            return bool(free[key][w_i % CHUNK])
+
+        for w_i, wait in enumerate(waits):
+            later = replace(task, start_time=task.start_time + wait)
+            v = flight_validator(scenario, later, table)
+            skip = [n for n in v.checks() if n not in time_checks]
+            for c, good in per_cand:
+                for f in good:
+                    ts = f.times + wait
+                    clear = clear_at(f, w_i, v, skip)
+                    if clear:
+                        flight = check_flights(v, [replace(f, times=ts)])[0]
+                        if not flight.ok:  # the full check disagrees: keep searching
+                            continue
+                        waited = self._waited(scenario, later, table, _One(c))[0]
+                        d = declare(waited, flight)
+                        cost = d.cost
+                        if not math.isfinite(cost) and "cost_unchecked" in waited.info:
+                            cost = float(waited.info["cost_unchecked"])
+                        return replace(d, cost=cost, info={**d.info, "rescue": "wait"}), wait
+        return None
+
     def _in_loop_flight(
         self,
         scenario: Scenario,
@@ -568,9 +708,10 @@ class PrioritizedPlanner(FleetPlanner):
         (its flight, not the polyline, is what must keep S2: a curve can pass where a corner
         could not); then, if none passes, the same candidates flown at slower constant speeds
         (``speed_steps``). If none passes, the best feasible candidate (else the best) with its
-        best, failing, flight. A declared flight that passes where its polyline conflicts costs
-        F without F5 (``cost_without_separation``). ``info["rescue"]`` says what found the
-        flight: ``first`` (the best candidate's), ``candidate`` (a later one's), ``slower``."""
+        best, failing, flight. A declared flight that passes where its polyline fails costs F
+        without the terms that mirror a check (``cost_unchecked``). ``info["rescue"]`` says
+        what found the flight: ``first`` (the best candidate's), ``candidate`` (a later
+        one's), ``slower``."""
         cfg = self.config
         task_of = {t.id: t for t in scenario.tasks}
         first: tuple[PlanResult, Flight] | None = None
@@ -596,13 +737,30 @@ class PrioritizedPlanner(FleetPlanner):
                         "first" if i == 0 else "candidate")  # fmt: skip
                     d = declare(r, f)
                     cost = d.cost
-                    if not math.isfinite(cost) and "cost_without_separation" in r.info:
-                        cost = float(r.info["cost_without_separation"])
+                    if not math.isfinite(cost) and "cost_unchecked" in r.info:
+                        cost = float(r.info["cost_unchecked"])
                     return replace(d, cost=cost, info={**d.info, "rescue": how})
                 if first is None:
                     first = (r, f)
         assert first is not None
         return declare(*first)
+
+
+class _One(Sequence[PlanResult]):
+    """One candidate as a :class:`Candidates`-like sequence."""
+
+    def __init__(self, r: PlanResult) -> None:
+        self._r = r
+
+    def __len__(self) -> int:
+        return 1
+
+    @overload
+    def __getitem__(self, i: int) -> PlanResult: ...
+    @overload
+    def __getitem__(self, i: slice) -> list[PlanResult]: ...
+    def __getitem__(self, i: int | slice) -> PlanResult | list[PlanResult]:
+        return [self._r][i]
 
 
 class Candidates(Sequence[PlanResult]):
@@ -611,11 +769,21 @@ class Candidates(Sequence[PlanResult]):
     evaluation) only when asked for: most UAVs fly their best."""
 
     def __init__(
-        self, best: PlanResult, paths: list[FloatArray], make: Callable[[FloatArray], PlanResult]
+        self,
+        best: PlanResult,
+        paths: list[FloatArray],
+        make: Callable[[FloatArray], PlanResult],
+        waitable: list[FloatArray] | None = None,
     ) -> None:
         self._items: list[PlanResult | None] = [best, *([None] * len(paths))]
         self._paths = [best.waypoints, *paths]
         self._make = make
+        self._waitable = list(waitable or [])
+
+    def waitable(self) -> list[PlanResult]:
+        """The polylines that pass every check that does not read time, best first (made
+        into results when asked for); empty unless the low level was asked for them."""
+        return [self._make(p) for p in self._waitable]
 
     def __len__(self) -> int:
         return len(self._items)
@@ -634,12 +802,14 @@ class Candidates(Sequence[PlanResult]):
 
 
 def _candidate(problem: PathProblem, path: FloatArray, in_loop: bool, **kw: Any) -> PlanResult:
-    """A low-level candidate's result; in-loop, a polyline that fails only separation also
-    carries F without F5 (``cost_without_separation``: its cost if its flight keeps S2)."""
+    """A low-level candidate's result; in-loop, a polyline that fails a check also carries
+    F without the terms that mirror a check (``cost_unchecked``): its cost if its flight, which
+    is what is flown and checked, passes where the polyline does not (a curve can keep S2 or
+    clear an obstacle where a corner could not)."""
     r = make_result(problem, path, **kw)
-    if in_loop and not r.feasible and set(r.violations) == {"separation"}:
+    if in_loop and not r.feasible:
         f = float(problem.evaluate_cv(r.waypoints[None])[0][0])
-        r = replace(r, info={**r.info, "cost_without_separation": f})
+        r = replace(r, info={**r.info, "cost_unchecked": f})
     return r
 
 
@@ -681,8 +851,7 @@ def declare_polylines(
 
     by_id = {r.uav_id: r for r in results}
     tasks = {t.id: t for t in scenario.tasks}
-    table = ReservationTable.for_uav(scenario.bounds.lo, scenario.bounds.hi, scenario.uav,
-                                     cfg.separation_margin, dt=cfg.dt)  # fmt: skip
+    table = ReservationTable.for_scenario(scenario, cfg.separation_margin, dt=cfg.dt)
     out: dict[str, PlanResult] = {}
     for uid in priority:
         r = by_id[uid]
@@ -733,9 +902,7 @@ def smooth_fleet(
     )
 
     by_id = {r.uav_id: r for r in results}
-    table = ReservationTable.for_uav(
-        scenario.bounds.lo, scenario.bounds.hi, scenario.uav, dt=cfg.dt
-    )
+    table = ReservationTable.for_scenario(scenario, dt=cfg.dt)
     out: dict[str, PlanResult] = {}
     not_clear: list[str] = []
     failed: list[str] = []

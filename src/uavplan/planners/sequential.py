@@ -63,7 +63,7 @@ def plan_sequentially(
     seeds = task_seeds(seed, len(tasks))
     straight = [float(np.linalg.norm(np.subtract(t.goal, t.start))) for t in tasks]
     order = [int(i) for i in np.argsort(-np.asarray(straight), kind="stable")]
-    table = ReservationTable.for_uav(scenario.bounds.lo, scenario.bounds.hi, scenario.uav, dt=dt)
+    table = ReservationTable.for_scenario(scenario, dt=dt)
     results: dict[int, PlanResult] = {}
     for m in order:
         task = tasks[m]

@@ -56,7 +56,7 @@ from uavplan.problems import _validity_kernels as VK
 from uavplan.problems import costs as C
 from uavplan.world import _terrain_kernels as tk
 from uavplan.world import geometry as G
-from uavplan.world.dynamic import min_distances
+from uavplan.world.dynamic import min_distances, robust_min_distances
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 from uavplan.world.terrain import Terrain
@@ -93,6 +93,8 @@ CASCADE = ("bounds", "cylinders", "circles", "polygons", "altitude", "speed", "c
            "terrain", "moving", "separation")  # fmt: skip
 #: The checks the fused kernel answers together in a 3-D world.
 STATIC = frozenset(("bounds", "cylinders", "terrain", "altitude"))
+#: The checks that read time: a take-off delay changes their verdicts and no other.
+TIME_CHECKS = frozenset(("moving", "separation"))
 #: Segments checked per kernel call by :meth:`MotionValidator.segments_valid` (bounds memory).
 SEGMENT_CHUNK = 65536
 #: :meth:`MotionValidator.graded_violation`: what one failed check adds to the violation.
@@ -259,8 +261,15 @@ class Batch:
 
     @cached_property
     def moving_dist(self) -> FloatArray:
-        """(pop, n - 1, K): exact minimum distance over time to each moving obstacle."""
-        return min_distances(self.scenario.moving_obstacles, self.paths, self.times)
+        """(pop, n - 1, K): exact minimum distance over time to each moving obstacle; under a
+        scenario's execution model whose schedule may drift, over the times the UAV can be at
+        each point (:func:`uavplan.world.dynamic.robust_min_distances`)."""
+        sc = self.scenario
+        model = sc.execution
+        if model is not None and model.timed:
+            delta0, rho = model.timing(sc.uav.speed)
+            return robust_min_distances(sc.moving_obstacles, self.paths, self.times, delta0, rho)
+        return min_distances(sc.moving_obstacles, self.paths, self.times)
 
     @cached_property
     def scene2d(self) -> tuple[FloatArray, FloatArray, BoolArray, BoolArray, BoolArray]:

@@ -96,6 +96,11 @@ class VerifyReport:
         violations: every failed check; warnings: remarks that do not fail the plan.
         terrain_source: the raster the terrain and the band were checked against (its files'
             names), None when they were checked against the scenario's grid.
+        model: the execution model the plan was checked under (its record), None: nominal
+            only (:mod:`uavplan.verify.robust`).
+        uav_margins, pair_margins: what each UAV, and each pair of UAVs (or a UAV and a moving
+            obstacle) that can come close, tolerates (empty without a model); pairs tightest
+            first.
     """
 
     scenario: str
@@ -115,6 +120,13 @@ class VerifyReport:
     violations: list[Violation] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     terrain_source: str | None = None
+    model: dict[str, Any] | None = None
+    uav_margins: list[Any] = field(default_factory=list)
+    pair_margins: list[Any] = field(default_factory=list)
+
+    def tightest_pairs(self, k: int = 10) -> list[Any]:
+        """The ``k`` pairs with the smallest take-off margin (then speed, then tracking)."""
+        return self.pair_margins[:k]
 
     @property
     def ok(self) -> bool:
@@ -131,7 +143,7 @@ class VerifyReport:
 
     def to_dict(self) -> dict[str, Any]:
         return {
-            "format": "uavplan.verify/2",
+            "format": "uavplan.verify/3",
             "scenario": self.scenario,
             "plan_scenario": self.plan_scenario,
             "smoothed": self.smoothed,
@@ -153,6 +165,9 @@ class VerifyReport:
             "violations": [v.to_dict() for v in self.violations],
             "warnings": list(self.warnings),
             "terrain_source": self.terrain_source,
+            "model": self.model,
+            "uav_margins": [m.to_dict() for m in self.uav_margins],
+            "pair_margins": [m.to_dict() for m in self.pair_margins],
         }
 
 

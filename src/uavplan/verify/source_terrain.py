@@ -261,6 +261,30 @@ def _pieces(a: FloatArray, b: FloatArray, piece: float) -> Pieces:
     return a[seg] + s0[:, None] * d, a[seg] + s1[:, None] * d, seg, np.column_stack([s0, s1 - s0])
 
 
+def _source_extrema(traj: Trajectory, source: SourceGround) -> tuple[Any, ...]:
+    """The flight's pieces in the raster and the exact clearance extrema on each: ``(pa, pb,
+    seg, span, ua, va, ub, vb, lo_ext, hi_ext)``, ``lo_ext`` over the floor's samples (its
+    column 0 the least ``z - S``), ``hi_ext`` over the ceiling's (column 2 the largest)."""
+    a, b = traj.points[:-1], traj.points[1:]
+    pa, pb, seg, span = _pieces(a, b, source.piece)
+    ua, va = source.to_samples(pa[:, 0], pa[:, 1])
+    ub, vb = source.to_samples(pb[:, 0], pb[:, 1])
+    A = np.column_stack([ua, va, pa[:, 2]])
+    B = np.column_stack([ub, vb, pb[:, 2]])
+    lo_ext = terrain_clearance_extrema(A, B, Terrain(source.hi, 0.0, 0.0, 1.0, 1.0, source.name))
+    hi_ext = terrain_clearance_extrema(A, B, Terrain(source.lo, 0.0, 0.0, 1.0, 1.0, source.name))
+    return pa, pb, seg, span, ua, va, ub, vb, lo_ext, hi_ext
+
+
+def source_clearance(traj: Trajectory, source: SourceGround) -> tuple[float, float]:
+    """The least and the largest height above the raster's own ground along the flight (over
+    the floor's and the ceiling's void fills), metres."""
+    if traj.dim != 3 or len(traj.points) < 2:
+        return math.inf, -math.inf
+    ext = _source_extrema(traj, source)
+    return float(np.min(ext[8][:, 0])), float(np.max(ext[9][:, 2]))
+
+
 def check_source_terrain(
     traj: Trajectory, source: SourceGround, band: AltitudeBand | None, terrain: Terrain | None
 ) -> tuple[list[Violation], list[str]]:
@@ -269,17 +293,10 @@ def check_source_terrain(
     Returns the violations and the warnings."""
     if traj.dim != 3 or len(traj.points) < 2:
         return [], []
-    a, b = traj.points[:-1], traj.points[1:]
-    pa, pb, seg, span = _pieces(a, b, source.piece)
-    ua, va = source.to_samples(pa[:, 0], pa[:, 1])
-    ub, vb = source.to_samples(pb[:, 0], pb[:, 1])
-    A = np.column_stack([ua, va, pa[:, 2]])
-    B = np.column_stack([ub, vb, pb[:, 2]])
+    pa, pb, seg, span, ua, va, ub, vb, lo_ext, hi_ext = _source_extrema(traj, source)
     rows, cols = source.hi.shape
     grid = Terrain(source.hi, 0.0, 0.0, 1.0, 1.0, source.name)
     low = Terrain(source.lo, 0.0, 0.0, 1.0, 1.0, source.name)
-    lo_ext = terrain_clearance_extrema(A, B, grid)
-    hi_ext = terrain_clearance_extrema(A, B, low)
     out: list[Violation] = []
     said: list[str] = []
     ground = band is not None and band.reference == "ground"

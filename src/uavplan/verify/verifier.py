@@ -85,17 +85,19 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.io.plan_file import Trajectory, TrajectoryKind, parse_plan
+from uavplan.verify import robust as R
 from uavplan.verify.kinematics import check_climb, check_turn
 from uavplan.verify.obstacles import check_circles, check_cylinders, check_polygons
 from uavplan.verify.report import (
     KINDS,
+    TOL,
     VerifyReport,
     Violation,
     fmt_points,
 )
 from uavplan.verify.separation import check_moving, check_separation
-from uavplan.verify.source_terrain import check_source_terrain, read_source
-from uavplan.verify.terrain import check_terrain
+from uavplan.verify.source_terrain import check_source_terrain, read_source, source_clearance
+from uavplan.verify.terrain import check_terrain, terrain_clearance_extrema
 from uavplan.verify.timing import check_bounds, check_speed, check_times
 from uavplan.world.scenario import Scenario
 
@@ -116,6 +118,7 @@ def verify_trajectories(
     kinematics: bool = True,
     *,
     trajectory: str | None = None,
+    model: Any = None,
 ) -> VerifyReport:
     """Run every check on parsed trajectories (see the module docstring).
 
@@ -129,6 +132,9 @@ def verify_trajectories(
         trajectory: what the trajectories are, for the report (``"flown"``, ``"planned"`` or
             ``"smoothed"``); default ``"smoothed"`` with ``smoothed``, else ``"flown"`` with
             ``kinematics`` and ``"planned"`` without.
+        model: the execution model the plan must tolerate (an ``ExecutionModel`` or its
+            record); None or nominal: the plan as flown exactly. Under a model the checks of
+            :mod:`uavplan.verify.robust` run too and the report carries the margins.
     """
     sc = scenario
     u = sc.uav
@@ -209,9 +215,88 @@ def verify_trajectories(
     report.min_separation = sep.min_distance
     report.min_separation_pair = sep.min_pair
     report.min_separation_time = sep.min_time
+    under: list[Violation] = []
+    if model is not None and not _nominal(model):
+        nominal_bad = {v.uavs for v in sep.violations} | {(v.uavs[1], v.uavs[0])
+                                                          for v in sep.violations}  # fmt: skip
+        under = _under_model(trajs, timed, sc, report, model, source, nominal_bad)
     order = {k: i for i, k in enumerate(KINDS)}
-    report.violations = sorted(per_uav + sep.violations, key=lambda v: order.get(v.kind, 99))
+    report.violations = sorted(per_uav + sep.violations + under,
+                               key=lambda v: order.get(v.kind, 99))  # fmt: skip
     return report
+
+
+def _nominal(model: Any) -> bool:
+    rec = model.record() if hasattr(model, "record") else dict(model)
+    return not any(float(rec.get(k, 0.0)) for k in ("takeoff_s", "speed", "track_h", "track_v",
+                                                    "wind"))  # fmt: skip
+
+
+#: The kind of violation a static clearance under the model is reported as.
+_STATIC_KIND = {"cylinders": "cylinder", "circles": "circle", "polygons": "polygon",
+                "bounds": "bounds", "terrain": "terrain", "altitude band's floor": "altitude",
+                "altitude band's ceiling": "altitude", "obstacles": "cylinder"}  # fmt: skip
+
+
+def _under_model(
+    trajs: Sequence[Trajectory],
+    timed: Sequence[Trajectory],
+    sc: Scenario,
+    report: VerifyReport,
+    model: Any,
+    source: Any,
+    skip_pairs: set[tuple[str, ...]],
+) -> list[Violation]:
+    """The checks under the execution model and the margins (:mod:`uavplan.verify.robust`)."""
+    u = sc.uav
+    rec = model.record() if hasattr(model, "record") else dict(model)
+    report.model = rec
+    timing = R.timing_of(rec, float(u.speed))
+    out: list[Violation] = []
+    margins = {t.id: R.UAVMargin(t.id) for t in trajs}
+    checks = (check_cylinders, check_circles, check_polygons)
+    src = None if source is None else (lambda tr: source_clearance(tr, source))
+    what_model = (f"the execution model's tracking error ({timing.track_h:g} m horizontal, "
+                  f"{timing.track_v:g} m vertical)")  # fmt: skip
+    for tr in trajs:
+        m = margins[tr.id]
+        eh, by_h = R.horizontal_clearance(tr, sc, checks, timing.track_h)
+        hb = R.horizontal_bounds(tr, sc)
+        if hb < eh:
+            eh, by_h = hb, "bounds"
+        m.take("track_h", eh, by_h)
+        ev, by_v = R.vertical_clearance(tr, sc, src, terrain_clearance_extrema)
+        m.take("track_v", ev, by_v)
+        for tol, need, by, axis in ((eh, timing.track_h, by_h, "horizontally"),
+                                    (ev, timing.track_v, by_v, "vertically")):  # fmt: skip
+            if tol < need - TOL:
+                out.append(Violation(
+                    _STATIC_KIND.get(by, "bounds"), (tr.id,), None, (), tol, need,
+                    f"{tr.id}: keeps only {tol:.3f} m {axis} from its {by}, under "
+                    f"{what_model}",
+                ))  # fmt: skip
+    if sc.moving_obstacles:
+        for tr in timed:
+            found, pm = R.moving_under(tr, sc.moving_obstacles, timing)
+            out += found
+            for p in pm:
+                margins[tr.id].take("takeoff_s", p.takeoff_s, p.other)
+                margins[tr.id].take("speed", p.speed, p.other)
+                margins[tr.id].take("track_h", p.track_h, p.other)
+                margins[tr.id].take("track_v", p.track_v, p.other)
+            report.pair_margins += pm
+    found, pm = R.separation_under(timed, float(u.separation_radius), timing)
+    out += [v for v in found if v.uavs not in skip_pairs]
+    for p in pm:
+        for a in (p.uav, p.other):
+            margins[a].take("takeoff_s", p.takeoff_s, p.other if a == p.uav else p.uav)
+            margins[a].take("speed", p.speed, p.other if a == p.uav else p.uav)
+            margins[a].take("track_h", p.track_h, p.other if a == p.uav else p.uav)
+            margins[a].take("track_v", p.track_v, p.other if a == p.uav else p.uav)
+    report.pair_margins += pm
+    report.pair_margins.sort(key=lambda p: (p.takeoff_s, p.speed, p.track_h))
+    report.uav_margins = [margins[t.id] for t in trajs]
+    return out
 
 
 def verify_plan(

@@ -11,7 +11,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
+
+from uavplan.world.reservations import window_min_dist2
 
 FloatArray = NDArray[np.float64]
 
@@ -78,3 +81,57 @@ def min_distances(
     tt = np.require(np.broadcast_to(times, p.shape[:-1]), np.float64, ["C", "W"])
     out = [timed_path_min_distance(p, tt, o.times, o.positions) for o in obstacles]
     return np.stack(out, axis=-1) if out else np.zeros((*p.shape[:-2], p.shape[-2] - 1, 0))
+
+
+def robust_min_distances(
+    obstacles: Sequence[MovingObstacle],
+    paths: ArrayLike,
+    times: ArrayLike,
+    delta0: float,
+    rho: float,
+) -> FloatArray:
+    """:func:`min_distances` when the UAV's schedule may drift (take-off error ``delta0`` s,
+    speed error ``rho``; :mod:`uavplan.world.execution`) and the obstacles keep theirs: per
+    path segment and obstacle, the least distance over the pairs of the segment's path time and
+    the obstacle's time that can coincide, (pop, n - 1, K). Exact
+    (:func:`uavplan.world.reservations.window_min_dist2` per pair of pieces)."""
+    p = np.ascontiguousarray(paths, dtype=np.float64)
+    if p.shape[-1] == 2:
+        p = np.concatenate([p, np.zeros((*p.shape[:-1], 1))], axis=-1)
+    tt = np.require(np.broadcast_to(times, p.shape[:-1]), np.float64, ["C", "W"])
+    out = []
+    for o in obstacles:
+        # the held first and last positions as pieces reaching far before and after
+        ot = np.concatenate([[min(o.times[0], 0.0) - FAR], o.times, [o.times[-1] + FAR]])
+        op = np.concatenate([o.positions[:1], o.positions, o.positions[-1:]])
+        out.append(_robust_obstacle(p, tt, ot, np.ascontiguousarray(op), delta0, rho))
+    return np.stack(out, axis=-1) if out else np.zeros((*p.shape[:-2], p.shape[-2] - 1, 0))
+
+
+#: How far before its first and after its last knot a moving obstacle is taken to hold still
+#: (beyond every time a scenario may give, 1e7 s).
+FAR = 2e7
+
+
+@njit(cache=True)
+def _robust_obstacle(P, T, ot, op, delta0, rho):  # pragma: no cover - numba
+    pop, n = T.shape
+    K = ot.shape[0]
+    out = np.full((pop, n - 1), np.inf)
+    for q in range(pop):
+        t0 = T[q, 0]
+        for s in range(n - 1):
+            ta, tb = T[q, s], T[q, s + 1]
+            if not tb >= ta:
+                continue
+            lo = t0 - delta0 + (ta - t0) / (1.0 + rho)
+            hi = t0 + delta0 + (tb - t0) / (1.0 - rho)
+            j = max(np.searchsorted(ot, lo) - 1, 0)
+            best = np.inf
+            while j < K - 1 and ot[j] <= hi:
+                d2 = window_min_dist2(P[q, s], P[q, s + 1], ta, tb, op[j], op[j + 1], ot[j],
+                                      ot[j + 1], t0, delta0, rho, ot[0], 0.0, 0.0)  # fmt: skip
+                best = min(best, d2)
+                j += 1
+            out[q, s] = np.sqrt(best)
+    return out

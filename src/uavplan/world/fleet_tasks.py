@@ -5,7 +5,7 @@ scenarios and up to 500 in scenario 1, but gives neither the start and goal posi
 were chosen (its Fig. 4 only shows the obstacles). The choices below are ours.
 
 * **Where.** Inside the x/y bounds shrunk by an edge margin ``max(uav.turn_radius, uav.s1)``
-  (20 m with the PPSwarm defaults: room for a minimum-radius turn, and the threat safety distance
+  (20 m with the PPSwarm defaults: room for a minimum-radius turn, and the threat cost's distance
   kept from the box walls). Every start and goal is a valid place (``scenario.point_problems``
   empty) and keeps at least ``uav.s1`` (S1) from the edge of every cylinder, circle and no-fly
   polygon, as PPSwarm's threat cost (Eq. 5) asks of the path. Moving obstacles and danger areas

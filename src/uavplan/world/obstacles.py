@@ -146,6 +146,8 @@ class UncertainArea:
     width: float
     height: float
     revealed: bool = True
+    #: how far a path must keep from it once revealed, metres (a robust plan's tracking error)
+    margin: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("x", "y", "width", "height"):
@@ -163,7 +165,7 @@ class UncertainArea:
 
     def as_polygon(self) -> Polygon:
         x, y, w, h = self.x, self.y, self.width, self.height
-        return Polygon(((x, y), (x + w, y), (x + w, y + h), (x, y + h)))
+        return Polygon(((x, y), (x + w, y), (x + w, y + h), (x, y + h)), self.margin)
 
 
 @dataclass(frozen=True)

@@ -767,4 +767,3 @@ def length_over_voids(terrain: Terrain, points: FloatArray) -> float:
     j = np.clip(np.floor((mid[:, 1] - terrain.y0) / terrain.dy).astype(int), 0, ny - 2)
     hit = mask[j, i] | mask[j + 1, i] | mask[j, i + 1] | mask[j + 1, i + 1]
     return float(np.sum((seg[which] / k[which])[hit]))
-

@@ -35,18 +35,37 @@ by ``S_ref`` on every axis, which holds the whole box.
 A UAV is in the air only between its first and last time (it takes off at its start and lands at
 its goal): before and after it is no hazard. :mod:`uavplan.verify` checks the same
 semantics independently, pair by pair.
+
+**Under an execution model** (:mod:`uavplan.world.execution`: take-off error ``delta0``, speed
+error ``rho``), a table made with ``timing=(delta0, rho)`` keeps every UAV's *window*: the
+point ``tau`` of a trajectory taking off at ``t0`` can be flown at any actual time in
+``[t0 - delta0 + (tau - t0) / (1 + rho), t0 + delta0 + (tau - t0) / (1 - rho)]``. A reserved
+piece is entered in its own time bucket, as without a model; a candidate piece whose window
+is ``[w_lo, w_hi]`` looks in the buckets of every path time whose window can meet it, which is
+``[(1 - rho)(w_lo - delta0) + rho t_min, (1 + rho)(w_hi + delta0) - rho t_min]`` for
+trajectories taking off at ``t_min`` or later; two pieces are compared by the least distance
+between their points over the pairs of path times whose windows meet
+(:func:`window_min_dist2`: a convex quadratic over a convex polygon, minimised exactly), after
+a test of their boxes. What the tracking error takes away is in the table's separation
+(:meth:`ReservationTable.for_scenario`). Every pair of pieces that can come within the
+separation is compared: the reserved piece's path times lie in the buckets looked in, and its
+grown box holds the candidate's point.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
 from uavplan.kernel_builds import population_kernel
+
+if TYPE_CHECKING:
+    from uavplan.world.scenario import Scenario
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -332,12 +351,122 @@ def _piece_min_box(a0, a1, ta0, ta1, b0, b1, tb0, tb1, w):  # pragma: no cover -
 
 
 @njit(cache=True, inline="always")
+def _half_plane_clip(L, own, x0, y0, dx, dy, tol):  # pragma: no cover - numba
+    """The parameter interval of the line ``(x0, y0) + t (dx, dy)`` inside every half-plane
+    ``L[k, 0] + L[k, 1] x + L[k, 2] y >= 0`` but ``own`` (the line's own): ``(lo, hi)``, empty
+    when ``lo > hi``."""
+    lo = -np.inf
+    hi = np.inf
+    for k in range(L.shape[0]):
+        if k == own:
+            continue
+        l0 = L[k, 0] + L[k, 1] * x0 + L[k, 2] * y0
+        l1 = L[k, 1] * dx + L[k, 2] * dy
+        if l1 == 0.0:
+            if l0 < -tol:
+                return 1.0, 0.0
+            continue
+        t = -l0 / l1
+        if l1 > 0.0:
+            lo = max(lo, t - tol / abs(l1))
+        else:
+            hi = min(hi, t + tol / abs(l1))
+    return lo, hi
+
+
+@njit(cache=True)
+def window_min_dist2(
+    a0, a1, ta0, ta1, b0, b1, tb0, tb1, t0a, da, ra, t0b, db, rb
+):  # pragma: no cover - numba
+    """The least squared distance between ``A``'s segment ``a0 -> a1`` (path times
+    ``ta0..ta1``) and ``B``'s ``b0 -> b1`` (``tb0..tb1``) over the pairs of path times whose
+    windows meet (:mod:`uavplan.world.execution`: ``A`` takes off at ``t0a`` with take-off error
+    ``da`` and speed error ``ra``; ``B`` likewise), or inf when none do. In the segments'
+    parameters ``(u, w)`` the pairs form the unit square cut by two half-planes (a convex
+    polygon) and the squared distance is a convex quadratic: its minimum is the unconstrained
+    one when inside, else on an edge, where it is a quadratic in one variable."""
+    LA = ta1 - ta0
+    LB = tb1 - tb0
+    L = np.empty((6, 3))
+    L[0, 0], L[0, 1], L[0, 2] = 0.0, 1.0, 0.0
+    L[1, 0], L[1, 1], L[1, 2] = 1.0, -1.0, 0.0
+    L[2, 0], L[2, 1], L[2, 2] = 0.0, 0.0, 1.0
+    L[3, 0], L[3, 1], L[3, 2] = 1.0, 0.0, -1.0
+    # A's earliest time at u before B's latest at w; B's earliest before A's latest
+    k0 = (t0a - da + (ta0 - t0a) / (1.0 + ra)) - (t0b + db + (tb0 - t0b) / (1.0 - rb))
+    L[4, 0], L[4, 1], L[4, 2] = -k0, -LA / (1.0 + ra), LB / (1.0 - rb)
+    m0 = (t0b - db + (tb0 - t0b) / (1.0 + rb)) - (t0a + da + (ta0 - t0a) / (1.0 - ra))
+    L[5, 0], L[5, 1], L[5, 2] = -m0, LA / (1.0 - ra), -LB / (1.0 + rb)
+    scale = 1.0 + abs(ta0) + abs(tb0) + abs(ta1) + abs(tb1)
+    tol = 1e-12 * scale
+    r0x, r0y, r0z = a0[0] - b0[0], a0[1] - b0[1], a0[2] - b0[2]
+    ex, ey, ez = a1[0] - a0[0], a1[1] - a0[1], a1[2] - a0[2]
+    gx, gy, gz = b1[0] - b0[0], b1[1] - b0[1], b1[2] - b0[2]
+    c = r0x * r0x + r0y * r0y + r0z * r0z
+    cu = 2.0 * (r0x * ex + r0y * ey + r0z * ez)
+    cw = -2.0 * (r0x * gx + r0y * gy + r0z * gz)
+    cuu = ex * ex + ey * ey + ez * ez
+    cuw = -2.0 * (ex * gx + ey * gy + ez * gz)
+    cww = gx * gx + gy * gy + gz * gz
+    best = np.inf
+    det = 4.0 * cuu * cww - cuw * cuw
+    if det > 1e-12 * (1.0 + cuu * cww):
+        u = (-cu * 2.0 * cww + cw * cuw) / det
+        w = (-cw * 2.0 * cuu + cu * cuw) / det
+        inside = True
+        for k in range(6):
+            if L[k, 0] + L[k, 1] * u + L[k, 2] * w < -tol:
+                inside = False
+                break
+        if inside:
+            best = c + cu * u + cw * w + cuu * u * u + cuw * u * w + cww * w * w
+            return max(best, 0.0)
+    for k in range(6):
+        nu, nw = L[k, 1], L[k, 2]
+        nn = nu * nu + nw * nw
+        if nn == 0.0:
+            continue
+        x0 = -L[k, 0] * nu / nn
+        y0 = -L[k, 0] * nw / nn
+        dx, dy = -nw, nu
+        lo, hi = _half_plane_clip(L, k, x0, y0, dx, dy, tol)
+        if not lo <= hi or not (math.isfinite(lo) and math.isfinite(hi)):
+            continue
+        # the quadratic along the line: q0 + q1 t + q2 t^2
+        q0 = c + cu * x0 + cw * y0 + cuu * x0 * x0 + cuw * x0 * y0 + cww * y0 * y0
+        q1 = (cu + 2.0 * cuu * x0 + cuw * y0) * dx + (cw + cuw * x0 + 2.0 * cww * y0) * dy
+        q2 = cuu * dx * dx + cuw * dx * dy + cww * dy * dy
+        t = lo
+        if q2 > 0.0:
+            t = min(max(-q1 / (2.0 * q2), lo), hi)
+        v = q0 + t * (q1 + q2 * t)
+        v = min(v, q0 + lo * (q1 + q2 * lo), q0 + hi * (q1 + q2 * hi))
+        if v < best:
+            best = v
+    return max(best, 0.0) if best < np.inf else np.inf
+
+
+@njit(cache=True, inline="always")
+def _box_gap2(a0, a1, b0, b1):  # pragma: no cover - numba
+    """The squared distance between the boxes of segments ``a0 -> a1`` and ``b0 -> b1``."""
+    g = 0.0
+    for d in range(3):
+        e = max(min(a0[d], a1[d]) - max(b0[d], b1[d]), min(b0[d], b1[d]) - max(a0[d], a1[d]))
+        if e > 0.0:
+            g += e * e
+    return g
+
+
+@njit(cache=True, inline="always")
 def path_query(paths, times, p, args):  # pragma: no cover - numba
     """:func:`_query` of path ``p`` of ``paths`` (P, N, 3) at ``times`` (P, N): the smallest
     distance to a reserved piece found within the searched cells, less the piece's pad (inf if
     none), stopping at the first one below ``sep`` unless ``want_min``. ``args``: the tuple
     ``(dt, origin, cell, dims, sep, tkey, tstart, tcount, e_idx, rp0, rp1, rt0, rt1, rpad,
-    want_min, box, w)`` (:meth:`ReservationTable.query_args`)."""
+    want_min, box, w, timed, delta0, rho, rtake, take_min)``
+    (:meth:`ReservationTable.query_args`; ``timed``: the pieces are compared under the
+    execution model's windows, ``rtake`` the take-off time of each reserved piece's
+    trajectory, ``take_min`` the earliest of them, the path's its first time)."""
     (
         dt,
         origin,
@@ -356,8 +485,14 @@ def path_query(paths, times, p, args):  # pragma: no cover - numba
         want_min,
         box,
         w,
+        timed,
+        delta0,
+        rho,
+        rtake,
+        take_min,
     ) = args
     N = paths.shape[1]
+    t0 = times[p, 0]
     nx, ny, nz = dims[0], dims[1], dims[2]
     mask = np.int64(tkey.shape[0] - 1)
     best = np.inf
@@ -384,33 +519,75 @@ def path_query(paths, times, p, args):  # pragma: no cover - numba
                 ix0, ix1 = _cell_range(a0[0], a1[0], 0.0, origin[0], cell, nx)
                 iy0, iy1 = _cell_range(a0[1], a1[1], 0.0, origin[1], cell, ny)
                 iz0, iz1 = _cell_range(a0[2], a1[2], 0.0, origin[2], cell, nz)
-                for ix in range(ix0, ix1 + 1):
-                    for iy in range(iy0, iy1 + 1):
-                        for iz in range(iz0, iz1 + 1):
-                            key = (((k + 1) * nx + ix) * ny + iy) * nz + iz
-                            h = _lookup(key, tkey, mask)
-                            if h < 0:
-                                continue
-                            for e in range(tstart[h], tstart[h] + tcount[h]):
-                                r = e_idx[e]
-                                if box:
-                                    dist = _piece_min_box(
-                                        a0, a1, lo, hi, rp0[r], rp1[r], rt0[r], rt1[r], w
-                                    )
-                                else:
-                                    dist = np.sqrt(
-                                        _piece_min_dist2(
-                                            a0, a1, lo, hi, rp0[r], rp1[r], rt0[r], rt1[r]
-                                        )
-                                    )
-                                if dist == np.inf:
+                k0 = k
+                k1 = k
+                if timed:  # the buckets of every path time whose window can meet this one's
+                    w_lo = t0 - delta0 + (lo - t0) / (1.0 + rho)
+                    w_hi = t0 + delta0 + (hi - t0) / (1.0 - rho)
+                    k0 = int(np.floor(((1.0 - rho) * (w_lo - delta0) + rho * take_min) / dt)) - 1
+                    k1 = int(np.floor(((1.0 + rho) * (w_hi + delta0) - rho * take_min) / dt))
+                for kk in range(k0, k1 + 1):
+                    for ix in range(ix0, ix1 + 1):
+                        for iy in range(iy0, iy1 + 1):
+                            for iz in range(iz0, iz1 + 1):
+                                key = (((kk + 1) * nx + ix) * ny + iy) * nz + iz
+                                h = _lookup(key, tkey, mask)
+                                if h < 0:
                                     continue
-                                dist -= rpad[r]
-                                if dist < best:
-                                    best = dist
-                                    if best < sep and not want_min:
-                                        done = True
-                                        break
+                                for e in range(tstart[h], tstart[h] + tcount[h]):
+                                    r = e_idx[e]
+                                    if timed:
+                                        # the pieces' boxes too far apart for any timing
+                                        if (
+                                            not want_min
+                                            and _box_gap2(a0, a1, rp0[r], rp1[r])
+                                            >= (sep + rpad[r]) ** 2
+                                        ):
+                                            continue
+                                        dist = np.sqrt(
+                                            window_min_dist2(
+                                                a0,
+                                                a1,
+                                                lo,
+                                                hi,
+                                                rp0[r],
+                                                rp1[r],
+                                                rt0[r],
+                                                rt1[r],
+                                                t0,
+                                                delta0,
+                                                rho,
+                                                rtake[r],
+                                                delta0,
+                                                rho,
+                                            )
+                                        )
+                                    elif box:
+                                        dist = _piece_min_box(
+                                            a0, a1, lo, hi, rp0[r], rp1[r], rt0[r], rt1[r], w
+                                        )
+                                    else:
+                                        if (
+                                            not want_min
+                                            and _box_gap2(a0, a1, rp0[r], rp1[r])
+                                            >= (sep + rpad[r]) ** 2
+                                        ):
+                                            continue  # the boxes alone keep them apart
+                                        dist = np.sqrt(
+                                            _piece_min_dist2(
+                                                a0, a1, lo, hi, rp0[r], rp1[r], rt0[r], rt1[r]
+                                            )
+                                        )
+                                    if dist == np.inf:
+                                        continue
+                                    dist -= rpad[r]
+                                    if dist < best:
+                                        best = dist
+                                        if best < sep and not want_min:
+                                            done = True
+                                            break
+                                if done:
+                                    break
                             if done:
                                 break
                         if done:
@@ -449,6 +626,8 @@ class ReservationTable:
         dt: time bucket, seconds.
         cell: grid cell side, metres (default: ``max(4 separation, 40)``; any value is correct,
             it only changes speed).
+        timing: ``(delta0, rho)``: every UAV's take-off and speed error (the module
+            docstring); None or zeros: trajectories are flown exactly.
     """
 
     def __init__(
@@ -458,6 +637,7 @@ class ReservationTable:
         separation: float | Sequence[float],
         dt: float = 1.0,
         cell: float | None = None,
+        timing: tuple[float, float] | None = None,
     ) -> None:
         axes = np.asarray(separation, dtype=np.float64).reshape(-1)
         if axes.size not in (1, 3) or not np.all(axes > 0) or not dt > 0:
@@ -473,6 +653,15 @@ class ReservationTable:
         # scaled Chebyshev weights S_ref / S_i (unused for a sphere)
         self._w = self.separation / np.asarray(self.axes) if self.axes is not None else np.ones(3)
         self.dt = float(dt)
+        delta0, rho = (float(v) for v in (timing or (0.0, 0.0)))
+        if not (delta0 >= 0 and 0 <= rho < 1):
+            raise ValueError(f"timing (delta0 >= 0, 0 <= rho < 1) got {timing}")
+        #: whether trajectories are compared under the execution model's windows
+        self.timed = bool(delta0 or rho)
+        self.delta0, self.rho = delta0, rho
+        if self.timed and self.axes is not None:
+            raise ValueError("a per-axis separation under an execution model: use the sphere "
+                             "that holds the box (ReservationTable.for_scenario does)")  # fmt: skip
         self.cell = float(cell if cell is not None else max(4.0 * self.separation, 40.0))
         lo = np.asarray(lower, dtype=np.float64)[:3]
         hi = np.asarray(upper, dtype=np.float64)[:3]
@@ -484,6 +673,7 @@ class ReservationTable:
         self._t0 = np.zeros(0)
         self._t1 = np.zeros(0)
         self._pad = np.zeros(0)
+        self._take = np.zeros(0)
         self._keys = np.zeros(0, dtype=np.int64)
         self._idx = np.zeros(0, dtype=np.int64)
         self._owner = np.zeros(0, dtype=np.int64)
@@ -504,12 +694,56 @@ class ReservationTable:
             return cls(lower, upper, [float(a) + margin for a in axes], dt=dt)
         return cls(lower, upper, float(uav.s2) + margin, dt=dt)
 
+    @classmethod
+    def for_scenario(
+        cls, scenario: Scenario, margin: float = 0.0, dt: float = 1.0
+    ) -> ReservationTable:
+        """The table for a scenario's fleet: its UAV's separation (:meth:`for_uav`) under the
+        scenario's execution model, when it has one: the separation widened by what tracking
+        error takes away (``sqrt((2 e_h)^2 + (2 e_v)^2)``; a per-axis separation widened axis
+        by axis, or, when the schedule may drift, the sphere that holds the widened box), and
+        the take-off and speed errors as windows."""
+        model = scenario.execution
+        lo, hi, uav = scenario.bounds.lo, scenario.bounds.hi, scenario.uav
+        if scenario.dim == 2:
+            lo, hi = np.append(lo, 0.0), np.append(hi, 1.0)
+        if model is None or model.nominal:
+            return cls.for_uav(lo, hi, uav, margin, dt=dt)
+        timing = model.timing(uav.speed)
+        axes = getattr(uav, "s2_axes", None)
+        if axes is not None:
+            grown = np.asarray(axes, dtype=np.float64) + margin
+            grown += 2.0 * np.array([model.track_h, model.track_h, model.track_v])
+            if not model.timed:
+                return cls(lo, hi, [float(g) for g in grown], dt=dt)
+            return cls(lo, hi, float(np.linalg.norm(grown)), dt=dt, timing=timing)
+        sep = float(uav.s2) + margin + model.tracking_gap()
+        return cls(lo, hi, sep, dt=dt, timing=timing if model.timed else None)
+
+    def window(self, t0: float, tau: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The earliest and latest actual times of path times ``tau`` of a trajectory taking
+        off at ``t0`` (the nominal table: ``tau`` itself)."""
+        s = np.asarray(tau, dtype=np.float64) - t0
+        return (t0 - self.delta0 + s / (1.0 + self.rho),
+                t0 + self.delta0 + s / (1.0 - self.rho))  # fmt: skip
+
     @property
     def radius(self) -> float:
         """The radius of the smallest sphere that holds the separation region (``S2``, or the
         half-diagonal ``|(S_x, S_y, S_z)|`` of the box): a planner that keeps this Euclidean
         distance never conflicts."""
         return float(np.linalg.norm(self.axes)) if self.axes is not None else self.separation
+
+    def clear_time(self) -> float:
+        """The latest instant any reserved trajectory may still be flying: its landing at the
+        latest its execution window allows (the landing itself in the nominal table); -inf
+        when nothing is reserved."""
+        if not self._t1.size:
+            return -math.inf
+        if not self.timed:
+            return float(self._t1.max())
+        latest = self._take + self.delta0 + (self._t1 - self._take) / (1.0 - self.rho)
+        return float(latest.max())
 
     @property
     def n_pieces(self) -> int:
@@ -560,6 +794,9 @@ class ReservationTable:
         self._t0 = np.concatenate([self._t0, t0])
         self._t1 = np.concatenate([self._t1, t1])
         self._pad = np.concatenate([self._pad, pad])
+        self._take = np.concatenate(
+            [self._take, np.full(len(t0), float(ts[0]) if len(ts) else 0.0)]
+        )
         self._owner = np.concatenate([self._owner, np.full(len(t0), len(self.owners) - 1)])
         # the entries stay sorted by key, equal keys in the order added (what a stable sort of
         # all of them gives): the new ones, sorted, go after the equal keys already there
@@ -607,7 +844,8 @@ class ReservationTable:
             self.dt, self.origin, self.cell, self.dims, self.separation,
             self._tkey, self._tstart, self._tcount, self._idx,
             self._p0, self._p1, self._t0, self._t1, self._pad, bool(want_min),
-            self.axes is not None, self._w,
+            self.axes is not None, self._w, self.timed, self.delta0, self.rho, self._take,
+            float(self._take.min()) if self._take.size else 0.0,
         )  # fmt: skip
 
     def conflicts(self, paths: FloatArray, times: FloatArray) -> NDArray[np.bool_]:

@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.world.dynamic import MovingObstacle
+from uavplan.world.execution import ExecutionModel
 from uavplan.world.geo import GeoOrigin
 from uavplan.world.geometry import pack_polygons
 from uavplan.world.obstacles import (
@@ -67,7 +68,9 @@ class UAV:
         speed: cruise speed, m/s (> 0); planners time their paths with it.
         turn_radius: minimum turn radius of the horizontal track, m (>= 0; 0: no limit, the UAV
             turns in place).
-        s1: safety distance to threats, m; s2: safety distance between UAVs, m; size: m.
+        s1: the distance of PPSwarm's threat cost (Eq. 5), m: a cost that grows as a path nears
+            an obstacle, not a clearance any check keeps (the clearance a plan keeps is its
+            execution model's tracking error); s2: separation between UAVs, m; size: m.
         min_speed: slowest allowed speed, m/s (>= 0; 0: it may hover).
         max_speed: fastest allowed speed, m/s (>= speed; None: ``speed``; see :attr:`v_max`).
         max_climb_angle, max_descent_angle: steepest climb and descent, degrees from the
@@ -188,6 +191,9 @@ class Scenario:
     metadata: dict[str, Any] = field(default_factory=dict)
     #: where the local frame sits on Earth (None: not geo-referenced; mission export needs it)
     origin: GeoOrigin | None = None
+    #: the execution error the plan must tolerate (:mod:`uavplan.world.execution`); None: the
+    #: nominal model (flown exactly)
+    execution: ExecutionModel | None = None
 
     def __post_init__(self) -> None:
         if not self.tasks:

@@ -33,6 +33,13 @@ AltitudeFrame = Literal["amsl", "relative", "terrain"]
 MissionEnd = Literal["land", "rtl", "none"]
 #: Above this many metres of georeference error (``GeoOrigin.accuracy``) an export warns.
 ACCURACY_WARNING_M = 1.0
+#: The default most items of a per-vehicle mission (PX4's dataman RAM backend holds 500).
+MAX_ITEMS = 500
+#: The thinning tolerances tried, metres, smallest first: a per-vehicle mission keeps the
+#: fewest waypoints of the dense flown trajectory that stay within the first tolerance that
+#: fits ``max_items`` (its deviation is time-aware, so the thinned mission is within it at
+#: every instant, not only in space).
+THIN_STEPS = (0.25, 0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0, 100.0)
 
 
 class ExportError(ValueError):
@@ -52,6 +59,9 @@ class ExportOptions:
     firmware: Literal["px4", "ardupilot", "generic"] = "px4"
     vehicle: Literal["auto", "fixed-wing", "multirotor"] = "auto"
     epoch: str = "2000-01-01T00:00:00Z"
+    #: the most MAVLink items a per-vehicle mission may hold (PX4 stores 500 on its RAM
+    #: backend; ArduPilot about 700 on a Pixhawk without SD storage: docs/decisions.md)
+    max_items: int = MAX_ITEMS
 
 
 @dataclass(eq=False)
@@ -67,6 +77,8 @@ class Mission:
         default=None, init=False, repr=False
     )
     _trajectories: list[Trajectory] | None = field(default=None, init=False, repr=False)
+    #: per UAV: what its per-vehicle mission holds (items, thinning deviation, take-off time)
+    report: dict[str, dict[str, float]] = field(default_factory=dict)
 
     def trajectories(self) -> list[Trajectory]:
         if self._trajectories is None:
@@ -140,6 +152,36 @@ class Mission:
         return np.where(dt > 0, d / np.where(dt > 0, dt, 1.0), 0.0)
 
     def items(self, tr: Trajectory) -> list[MissionItem]:
+        """The MAVLink mission of one UAV after its home (:meth:`_items`) of the trajectory
+        thinned to the fewest waypoints within the smallest of :data:`THIN_STEPS` that fits
+        ``options.max_items``; records the thinning's deviation in :attr:`report`."""
+        from uavplan.world.reservations import simplify_timed
+
+        P = np.asarray(tr.points, dtype=np.float64)
+        T = np.asarray(tr.times, dtype=np.float64)
+        out: list[MissionItem] = []
+        dev = 0.0
+        for tol in THIN_STEPS:
+            if len(P) > 2:
+                keep, pad = simplify_timed(P, T, tol, 4096)
+            else:
+                keep, pad = np.arange(len(P)), np.zeros(0)
+            thin = Trajectory(tr.id, P[keep], T[keep], tr.feasible)
+            out = self._items(thin)
+            dev = float(pad.max()) if pad.size else 0.0
+            if len(out) <= self.options.max_items:
+                break
+        else:
+            raise ExportError(
+                f"{self.plan.source}: {tr.id}: {len(out)} mission items even thinned "
+                f"{THIN_STEPS[-1]:g} m off its trajectory, above --max-items "
+                f"{self.options.max_items}"
+            )
+        self.report[tr.id] = {"items": float(len(out)), "thinning_m": dev,
+                              "takeoff_s": float(T[0]), "waypoints": float(len(keep))}  # fmt: skip
+        return out
+
+    def _items(self, tr: Trajectory) -> list[MissionItem]:
         """The MAVLink mission of one UAV after its home: take-off at the start, a waypoint per
         point of the trajectory (a wait becomes the waypoint's hold time), each followed by a
         speed command where the next leg's planned speed differs (by more than 1 %) from the
@@ -255,6 +297,63 @@ class Exporter:
 
 
 _FORMATS: dict[str, Exporter] = {}
+
+
+def tolerances(mission: Mission) -> list[str]:
+    """What the operator must keep for the plan's guarantee to hold, in words: each UAV's
+    take-off time (the launch schedule), and the execution model the plan was verified for,
+    less what the missions' thinning already uses of its tracking error."""
+    rec = dict(mission.plan.execution or {})
+    thin = max((r["thinning_m"] for r in mission.report.values()), default=0.0)
+    eh, ev = float(rec.get("track_h", 0.0)), float(rec.get("track_v", 0.0))
+    lines = []
+    if not rec or not any(float(rec.get(k, 0.0)) for k in ("takeoff_s", "speed", "track_h",
+                                                            "track_v", "wind")):  # fmt: skip
+        lines.append("the plan was made for an exact execution (the nominal model): every UAV "
+                     "must take off at its planned second (launch schedule), hold its planned "
+                     "speeds and fly its track exactly; nothing is tolerated")  # fmt: skip
+    else:
+        lines.append(
+            f"the plan holds if every UAV takes off within ±{float(rec.get('takeoff_s', 0)):g} s "
+            f"of its time in the launch schedule, keeps its ground speed within "
+            f"{100 * float(rec.get('speed', 0)):g} % of the commanded speeds"
+            + (f" (wind up to {float(rec['wind']):g} m/s included)" if rec.get("wind") else "")
+            + f", and stays within {max(eh - thin, 0):.3g} m horizontally and "
+            f"{max(ev - thin, 0):.3g} m vertically of its mission's legs (the plan's "
+            f"{eh:g} m and {ev:g} m of tracking error, less {thin:.3g} m the thinning of the "
+            "mission takes)"
+        )  # fmt: skip
+        if thin > min(eh, ev) and (eh or ev):
+            lines.append(f"the thinned missions depart up to {thin:.3g} m from the verified "
+                         f"trajectories, more than the tracking error the plan tolerates "
+                         f"({eh:g} m / {ev:g} m): raise --max-items")  # fmt: skip
+    return lines
+
+
+def write_launch_schedule(mission: Mission, folder: Path) -> Path:
+    """``folder/launch.csv``: per UAV its take-off time (the plan's seconds, and UTC from
+    ``options.epoch``), the tolerances of the plan's execution model, and what its mission
+    holds (items, the thinning's deviation): what the per-vehicle formats cannot carry."""
+    import csv
+    import io
+    from datetime import datetime, timedelta
+
+    from uavplan.io.atomic import write_text_atomic
+
+    rec = dict(mission.plan.execution or {})
+    epoch = datetime.fromisoformat(mission.options.epoch.replace("Z", "+00:00"))
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["uav", "takeoff_s", "takeoff_utc", "takeoff_tolerance_s", "speed_tolerance",
+                "track_h_m", "track_v_m", "mission_items", "waypoints", "thinning_m"])  # fmt: skip
+    for tr in mission.trajectories():
+        r = mission.report.get(tr.id, {})
+        t0 = float(tr.times[0])
+        utc = (epoch + timedelta(seconds=t0)).isoformat().replace("+00:00", "Z")
+        w.writerow([tr.id, f"{t0:.3f}", utc, rec.get("takeoff_s", 0.0), rec.get("speed", 0.0),
+                    rec.get("track_h", 0.0), rec.get("track_v", 0.0), int(r.get("items", 0)),
+                    int(r.get("waypoints", 0)), f"{r.get('thinning_m', 0.0):.3f}"])  # fmt: skip
+    return write_text_atomic(folder / "launch.csv", buf.getvalue())
 
 
 def uav_file(out: Path, uav_id: str, suffix: str) -> Path:

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from uavplan.io.atomic import write_text_atomic
-from uavplan.io.missions import Mission, register_exporter
+from uavplan.io.missions import Mission, register_exporter, tolerances
 
 #: sides of the polygon that stands for a no-fly circle (circumscribed: it contains the circle)
 CIRCLE_SIDES = 72
@@ -55,6 +55,8 @@ def geojson_document(mission: Mission) -> dict[str, Any]:
                 else tr.feasible,
                 "altitude": "metres above mean sea level",
                 "times_s": np.round(tr.times, 6).tolist(),
+                "takeoff_s": round(float(tr.times[0]), 6),
+                "execution": dict(mission.plan.execution or {}),
             },
         })  # fmt: skip
     sc = mission.scenario
@@ -73,7 +75,8 @@ def geojson_document(mission: Mission) -> dict[str, Any]:
             features.append({"type": "Feature",
                              "geometry": {"type": "Polygon", "coordinates": [_ring(P)]},
                              "properties": {"kind": "no-fly polygon"}})  # fmt: skip
-    return {"type": "FeatureCollection", "features": features}
+    return {"type": "FeatureCollection", "features": features,
+            "tolerances": tolerances(mission)}  # fmt: skip
 
 
 @register_exporter("geojson", ".geojson", "RFC 7946 GeoJSON: paths and no-fly zones (fleet)")

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from uavplan.io.atomic import write_bytes_atomic
-from uavplan.io.missions import ExportError, Mission, register_exporter
+from uavplan.io.missions import ExportError, Mission, register_exporter, tolerances
 from uavplan.io.missions.geojson_file import circle_latlon
 
 KML_NS = "http://www.opengis.net/kml/2.2"
@@ -43,6 +43,7 @@ def kml_bytes(mission: Mission) -> bytes:
     root = ET.Element(_k("kml"))
     doc = ET.SubElement(root, _k("Document"))
     ET.SubElement(doc, _k("name")).text = mission.plan.scenario or "uavplan"
+    ET.SubElement(doc, _k("description")).text = "; ".join(tolerances(mission))
     style = ET.SubElement(doc, _k("Style"), id="nofly")
     ps = ET.SubElement(style, _k("PolyStyle"))
     ET.SubElement(ps, _k("color")).text = "7f0000ff"
@@ -50,6 +51,10 @@ def kml_bytes(mission: Mission) -> bytes:
         G = mission.geodetic(tr.points)
         folder = ET.SubElement(doc, _k("Folder"))
         ET.SubElement(folder, _k("name")).text = tr.id
+        when0 = t0 + dt.timedelta(seconds=float(tr.times[0]))
+        ET.SubElement(folder, _k("description")).text = (
+            f"takes off at t = {float(tr.times[0]):.3f} s "
+            f"({when0.isoformat(timespec='milliseconds')})")  # fmt: skip
         pm = ET.SubElement(folder, _k("Placemark"))
         ET.SubElement(pm, _k("name")).text = f"{tr.id} path"
         ls = ET.SubElement(pm, _k("LineString"))

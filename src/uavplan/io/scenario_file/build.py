@@ -42,6 +42,7 @@ from uavplan.world import (
     Terrain,
     UncertainArea,
 )
+from uavplan.world.execution import ExecutionModel
 from uavplan.world.fleet_tasks import fleet_layout, layer_record
 from uavplan.world.geo import GeoOrigin
 from uavplan.world.raster import place_raster, read_raster
@@ -236,6 +237,14 @@ def _dim_reason(spec: ScenarioSpec, dim: int) -> str:
     if spec.terrain is not None:
         return "3-D (it has a terrain)"
     return f"{dim}-D (bounds have {dim} values)"
+
+
+def _execution(spec: ScenarioSpec) -> ExecutionModel | None:
+    if spec.execution is None:
+        return None
+    values = spec.execution.model_dump(exclude={"source"})
+    said = spec.execution.source or "the scenario's execution block"
+    return ExecutionModel(**values, source=said)
 
 
 def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Scenario:
@@ -490,6 +499,7 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
             n_waypoints=spec.planning.n_waypoints,
             description=spec.description,
             origin=GeoOrigin(**spec.origin.model_dump()) if spec.origin is not None else dem_origin,
+            execution=_execution(spec),
             metadata={
                 "source": problems.source,
                 "base_dir": str(base_dir),

@@ -264,7 +264,12 @@ class UAVSpec(_Spec):
         description="Minimum turn radius of the horizontal track, metres (>= 0; 0 = no limit, "
         "the UAV turns in place).",
     )
-    s1: Length = Field(15.0, description="Safety distance to threats, metres.")
+    s1: Length = Field(
+        15.0,
+        description="PPSwarm's S1, metres: the zone beyond a cylinder's edge where the threat "
+        "cost grows (Eq. 5) and the spacing of generated fleets from obstacles. A cost, not a "
+        "clearance a plan keeps (the execution block's tracking error is that).",
+    )
     s2: Length = Field(10.0, description="Safety distance between UAVs, metres.")
     size: Length = Field(1.0, description="UAV size, metres.")
     min_speed: Annotated[float, BeforeValidator(_no_bool), Field(ge=0, le=MAX_SPEED)] = Field(
@@ -463,6 +468,30 @@ class _TasksMissing:
 _TASKS_MISSING = _TasksMissing()
 
 
+class ExecutionSpec(_Spec):
+    """How far flown trajectories may depart from the plan, which a plan is made robust to
+    (``uavplan.world.execution``): each UAV takes off within ``takeoff_s`` of its time, flies
+    its path at a ground speed within ``speed`` (a fraction) of the planned one, and stays
+    within ``track_h`` / ``track_v`` of its path."""
+
+    takeoff_s: Annotated[float, BeforeValidator(_no_bool), Field(ge=0, le=3600)] = Field(
+        0.0, description="Take-off time error, seconds (either way)."
+    )
+    speed: Annotated[float, BeforeValidator(_no_bool), Field(ge=0, lt=0.5)] = Field(
+        0.0, description="Ground-speed error along the path, a fraction (0.03 for 3 %)."
+    )
+    track_h: Length = Field(0.0, description="Horizontal tracking error, metres.")
+    track_v: Length = Field(0.0, description="Vertical tracking error, metres.")
+    wind: Annotated[float, BeforeValidator(_no_bool), Field(ge=0, le=100)] = Field(
+        0.0,
+        description="A steady wind's speed, m/s: adds wind / cruise speed to the speed error "
+        "(a UAV that holds airspeed, the worst heading).",
+    )
+    source: str = Field(
+        "", max_length=1000, description="Where the model comes from (plan files say it)."
+    )
+
+
 class ScenarioSpec(_Spec):
     """A uavplan scenario file (frame: x east, y north, z up; metres, seconds)."""
 
@@ -520,6 +549,12 @@ class ScenarioSpec(_Spec):
         description="GeoJSON files (RFC 7946, relative to the scenario file) whose Polygon and "
         "MultiPolygon features are no-fly polygons (exterior rings; a hole is no-fly too); "
         "needs 'origin'.",
+    )
+    execution: ExecutionSpec | None = Field(
+        None,
+        description="The execution error plans must tolerate. Absent: `uavplan plan` uses "
+        "its default (take-off 2 s, speed 3 %, tracking 3 m / 2 m) and the Python API and "
+        "experiments the nominal model (flown exactly).",
     )
     origin: OriginSpec | None = Field(
         None,

@@ -1,0 +1,641 @@
+"""The plan checked under its execution model, and the margins it has: how much take-off error,
+speed error and tracking error it tolerates before a check fails.
+
+The model (:mod:`uavplan.world.execution`, read here as data): each UAV takes off within
+``delta0`` s of its time, flies its path at a ground speed within ``rho`` of the planned one,
+and stays within ``e_h`` / ``e_v`` of its path. The verifier does its own geometry:
+
+* **Separation.** UAV ``A`` can be at its path time ``tau_A`` at any actual time in
+  ``T_A(tau_A) = [t0 - delta0 + (tau_A - t0) / (1 + rho), t0 + delta0 + (tau_A - t0) / (1 - rho)]``.
+  Two UAVs can be at ``tau_A`` and ``tau_B`` at once when their intervals meet. For a pair of
+  segments, the pairs ``(tau_A, tau_B)`` form the segments' time rectangle clipped by those two
+  conditions, a convex polygon (Sutherland-Hodgman clipping here), on which the squared
+  distance between the two points is a convex quadratic: minimised exactly (inside, or along
+  the polygon's edges). Only segment pairs that can come within the separation at all (their
+  untimed distance; found with a uniform grid over all the fleet's segments) are examined. A
+  pair fails when its least distance is below ``S2 + sqrt((2 e_h)^2 + (2 e_v)^2)``: each UAV
+  may be ``e_h`` and ``e_v`` off its point. A per-axis separation (a box) is taken as the
+  sphere that holds it (conservative).
+* **Moving obstacles**: the same with the obstacle on its own schedule (no error), against
+  ``radius + sqrt(e_h^2 + e_v^2)``.
+* **Static clearances**: the horizontal ones (cylinders, circles, polygons, bounds) must be at
+  least ``e_h``, the vertical ones (terrain, the altitude band, bounds) at least ``e_v``.
+
+**Margins** (per pair and per UAV): the largest take-off error (s) with the model's speed and
+tracking errors, the largest speed error with the model's take-off and tracking errors (both
+by bisection on the pair's close segments: failing is monotone in each), and the largest
+tracking error (m, the same horizontally and vertically, both UAVs) with the model's timing:
+``(d - S2) / (2 sqrt 2)`` from the least distance ``d``. A UAV's margins are the least over
+its pairs and obstacles; its horizontal and vertical static clearances are its tracking
+margins there.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from uavplan.io.plan_file import Trajectory
+from uavplan.verify.report import TOL, Violation, fmt_num, fmt_points
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: The largest take-off error (s) and speed error a margin is searched to: beyond them a pair
+#: is reported as tolerating "at least" that.
+TAKEOFF_CAP = 600.0
+SPEED_CAP = 0.49
+#: Bisection steps (take-off to 600 / 2^14 s = 0.04 s; speed to 0.49 / 2^14)
+BISECT = 14
+
+
+# ================================================================================ window QP
+@njit(cache=True)
+def _pair_terms(P, i, j):  # pragma: no cover - numba
+    """Segments ``i`` (``A0 + u e``) and ``j`` (``B0 + w g``) of ``P``: ``r = A0 - B0``, ``e``,
+    ``g`` and the dot products ``e.e``, ``g.g``, ``e.g``, ``r.e``, ``r.g``."""
+    rx, ry, rz = P[i, 0] - P[j, 0], P[i, 1] - P[j, 1], P[i, 2] - P[j, 2]
+    ex, ey, ez = P[i + 1, 0] - P[i, 0], P[i + 1, 1] - P[i, 1], P[i + 1, 2] - P[i, 2]
+    gx, gy, gz = P[j + 1, 0] - P[j, 0], P[j + 1, 1] - P[j, 1], P[j + 1, 2] - P[j, 2]
+    return (rx, ry, rz, ex, ey, ez, gx, gy, gz,
+            ex * ex + ey * ey + ez * ez, gx * gx + gy * gy + gz * gz, ex * gx + ey * gy + ez * gz,
+            rx * ex + ry * ey + rz * ez, rx * gx + ry * gy + rz * gz)  # fmt: skip
+
+
+@njit(cache=True)
+def _clip(px, py, n, a, b, c, tol):  # pragma: no cover - numba
+    """Sutherland-Hodgman: the convex polygon ``(px, py)[:n]`` cut to ``a + b u + c w >= 0``;
+    returns the new vertex arrays and count."""
+    qx = np.empty(8)
+    qy = np.empty(8)
+    m = 0
+    for k in range(n):
+        x0, y0 = px[k], py[k]
+        x1, y1 = px[(k + 1) % n], py[(k + 1) % n]
+        f0 = a + b * x0 + c * y0
+        f1 = a + b * x1 + c * y1
+        if f0 >= -tol:
+            qx[m] = x0
+            qy[m] = y0
+            m += 1
+        if (f0 >= -tol) != (f1 >= -tol):
+            s = f0 / (f0 - f1)
+            qx[m] = x0 + s * (x1 - x0)
+            qy[m] = y0 + s * (y1 - y0)
+            m += 1
+    return qx, qy, m
+
+
+@njit(cache=True)
+def _win_min(P, i, j, T, t0a, da, ra, t0b, db, rb):  # pragma: no cover - numba
+    """``(d2, u, w)``: the least squared distance between segment ``i`` (of UAV ``A``) and
+    segment ``j`` (of ``B``) of ``P``/``T`` over the pairs of their parameters whose windows
+    meet, and where; ``d2`` inf when none do."""
+    ta0, ta1, tb0, tb1 = T[i], T[i + 1], T[j], T[j + 1]
+    LA, LB = ta1 - ta0, tb1 - tb0
+    px = np.empty(8)
+    py = np.empty(8)
+    px[0], py[0], px[1], py[1], px[2], py[2], px[3], py[3] = 0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0
+    tol = 1e-12 * (1.0 + abs(ta1) + abs(tb1))
+    # A's earliest time no later than B's latest, and B's earliest no later than A's latest
+    a1 = -((t0a - da + (ta0 - t0a) / (1.0 + ra)) - (t0b + db + (tb0 - t0b) / (1.0 - rb)))
+    px, py, n = _clip(px, py, 4, a1, -LA / (1.0 + ra), LB / (1.0 - rb), tol)
+    if n == 0:
+        return np.inf, 0.0, 0.0
+    a2 = -((t0b - db + (tb0 - t0b) / (1.0 + rb)) - (t0a + da + (ta0 - t0a) / (1.0 - ra)))
+    px, py, n = _clip(px, py, n, a2, LA / (1.0 - ra), -LB / (1.0 + rb), tol)
+    if n == 0:
+        return np.inf, 0.0, 0.0
+    # squared distance |(A0 + u eA) - (B0 + w eB)|^2
+    rx, ry, rz, ex, ey, ez, gx, gy, gz, aa, bb, ab, ra_, rb_ = _pair_terms(P, i, j)
+    best = np.inf
+    bu = 0.0
+    bw = 0.0
+    det = aa * bb - ab * ab
+    if det > 1e-12 * (1.0 + aa * bb) and n >= 3:
+        u = (ab * rb_ - bb * ra_) / det
+        w = (aa * rb_ - ab * ra_) / det
+        inside = True
+        area = 0.0
+        for k in range(n):
+            area += px[k] * py[(k + 1) % n] - px[(k + 1) % n] * py[k]
+        sgn = 1.0 if area >= 0.0 else -1.0
+        if abs(area) <= 1e-15:  # a point or a sliver: its edges hold every point of it
+            inside = False
+        for k in range(n):
+            if not inside:
+                break
+            cx = px[(k + 1) % n] - px[k]
+            cy = py[(k + 1) % n] - py[k]
+            if sgn * (cx * (w - py[k]) - cy * (u - px[k])) < -1e-12:
+                inside = False
+                break
+        if inside:
+            dx = rx + u * ex - w * gx
+            dy = ry + u * ey - w * gy
+            dz = rz + u * ez - w * gz
+            return dx * dx + dy * dy + dz * dz, u, w
+    for k in range(n):
+        u0, w0 = px[k], py[k]
+        du, dw = px[(k + 1) % n] - u0, py[(k + 1) % n] - w0
+        # r(t) = (r + u0 e - w0 g) + t (du e - dw g)
+        sx = rx + u0 * ex - w0 * gx
+        sy = ry + u0 * ey - w0 * gy
+        sz = rz + u0 * ez - w0 * gz
+        vx = du * ex - dw * gx
+        vy = du * ey - dw * gy
+        vz = du * ez - dw * gz
+        vv = vx * vx + vy * vy + vz * vz
+        t = 0.0
+        if vv > 0.0:
+            t = min(max(-(sx * vx + sy * vy + sz * vz) / vv, 0.0), 1.0)
+        qx, qy, qz = sx + t * vx, sy + t * vy, sz + t * vz
+        d2 = qx * qx + qy * qy + qz * qz
+        if d2 < best:
+            best = d2
+            bu = u0 + t * du
+            bw = w0 + t * dw
+    return best, bu, bw
+
+
+# ================================================================================ close pairs
+@njit(cache=True)
+def _seg_dist2(P, i, j):  # pragma: no cover - numba
+    """Squared distance between segments ``i`` and ``j`` of ``P`` (as point sets)."""
+    rx, ry, rz, ex, ey, ez, gx, gy, gz, aa, bb, ab, ra, rb = _pair_terms(P, i, j)
+    best = np.inf
+    # the ends against the other segment, and the interior critical point
+    cands = np.empty((6, 2))
+    m = 0
+    det = aa * bb - ab * ab
+    if det > 1e-12 * (1.0 + aa * bb):
+        u = (ab * rb - bb * ra) / det
+        w = (aa * rb - ab * ra) / det
+        if 0.0 <= u <= 1.0 and 0.0 <= w <= 1.0:
+            cands[m, 0], cands[m, 1] = u, w
+            m += 1
+    for e in range(2):
+        w = float(e)
+        u = 0.0 if aa == 0.0 else min(max((w * ab - ra) / aa, 0.0), 1.0)
+        cands[m, 0], cands[m, 1] = u, w
+        m += 1
+        u = float(e)
+        w = 0.0 if bb == 0.0 else min(max((u * ab + rb) / bb, 0.0), 1.0)
+        cands[m, 0], cands[m, 1] = u, w
+        m += 1
+    for k in range(m):
+        u, w = cands[k, 0], cands[k, 1]
+        dx = rx + u * ex - w * gx
+        dy = ry + u * ey - w * gy
+        dz = rz + u * ez - w * gz
+        best = min(best, dx * dx + dy * dy + dz * dz)
+    return best
+
+
+@njit(cache=True)
+def _close_pairs(P, owner, valid, gap, cell):  # pragma: no cover - numba
+    """Every pair of segments ``(i, j)`` of different owners (``owner[i] < owner[j]``; segment
+    ``i`` runs from row ``i`` to ``i + 1``, ``valid[i]`` it is one) whose untimed distance is
+    below ``gap``: a uniform grid of side ``cell`` holds each segment in the cells its box
+    grown by ``gap`` towards +x, +y, +z touches (two segments closer than ``gap`` have such
+    boxes overlapping on every axis, at the larger of their closest coordinates, so they share
+    a cell)."""
+    n = P.shape[0] - 1
+    lo = np.empty(3)
+    hi = np.empty(3)
+    for d in range(3):
+        lo[d] = np.inf
+        hi[d] = -np.inf
+    for i in range(n):
+        if valid[i]:
+            for d in range(3):
+                lo[d] = min(lo[d], P[i, d], P[i + 1, d])
+                hi[d] = max(hi[d], P[i, d], P[i + 1, d])
+    dims = np.empty(3, dtype=np.int64)
+    for d in range(3):
+        dims[d] = int((hi[d] - lo[d] + gap) / cell) + 2
+    count = 0
+    for i in range(n):
+        if not valid[i]:
+            continue
+        c = 1
+        for d in range(3):
+            a = int((min(P[i, d], P[i + 1, d]) - lo[d]) / cell)
+            b = int((max(P[i, d], P[i + 1, d]) + gap - lo[d]) / cell)
+            c *= b - a + 1
+        count += c
+    keys = np.empty(count, dtype=np.int64)
+    segs = np.empty(count, dtype=np.int64)
+    e = 0
+    for i in range(n):
+        if not valid[i]:
+            continue
+        a0 = int((min(P[i, 0], P[i + 1, 0]) - lo[0]) / cell)
+        a1 = int((max(P[i, 0], P[i + 1, 0]) + gap - lo[0]) / cell)
+        b0 = int((min(P[i, 1], P[i + 1, 1]) - lo[1]) / cell)
+        b1 = int((max(P[i, 1], P[i + 1, 1]) + gap - lo[1]) / cell)
+        c0 = int((min(P[i, 2], P[i + 1, 2]) - lo[2]) / cell)
+        c1 = int((max(P[i, 2], P[i + 1, 2]) + gap - lo[2]) / cell)
+        for x in range(a0, a1 + 1):
+            for y in range(b0, b1 + 1):
+                for z in range(c0, c1 + 1):
+                    keys[e] = (x * dims[1] + y) * dims[2] + z
+                    segs[e] = i
+                    e += 1
+    keys = keys[:e]
+    segs = segs[:e]
+    order = np.argsort(keys, kind="mergesort")
+    keys = keys[order]
+    segs = segs[order]
+    found = []
+    g2 = gap * gap
+    s = 0
+    while s < e:
+        t = s
+        while t < e and keys[t] == keys[s]:
+            t += 1
+        for p in range(s, t):
+            for q in range(p + 1, t):
+                i, j = segs[p], segs[q]
+                if owner[i] == owner[j]:
+                    continue
+                if owner[i] > owner[j]:
+                    i, j = j, i
+                if _seg_dist2(P, i, j) < g2:
+                    found.append(i * (n + 1) + j)
+        s = t
+    out = np.empty((len(found), 2), dtype=np.int64)
+    if len(found):
+        arr = np.unique(np.array(found, dtype=np.int64))
+        out = np.empty((arr.shape[0], 2), dtype=np.int64)
+        for k in range(arr.shape[0]):
+            out[k, 0] = arr[k] // (n + 1)
+            out[k, 1] = arr[k] % (n + 1)
+    return out
+
+
+@njit(cache=True)
+def _group_min(P, T, pairs, take, da, ra, db, rb, start, stop, stop_below):  # pragma: no cover
+    """The least window distance over ``pairs[start:stop]`` (segment rows of one pair of
+    owners; ``take[i]``: the take-off time of the owner of row ``i``), and the row and ``(u,
+    w)`` where it is; stops at the first below ``stop_below``."""
+    best = np.inf
+    at = -1
+    bu = 0.0
+    bw = 0.0
+    for k in range(start, stop):
+        i, j = pairs[k, 0], pairs[k, 1]
+        d2, u, w = _win_min(P, i, j, T, take[i], da, ra, take[j], db, rb)
+        if d2 < best:
+            best = d2
+            at = k
+            bu, bw = u, w
+            if math.sqrt(best) < stop_below:
+                break
+    return math.sqrt(best), at, bu, bw
+
+
+# ================================================================================ records
+@dataclass(frozen=True)
+class PairMargin:
+    """How much execution error a pair (two UAVs, or a UAV and a moving obstacle) tolerates.
+
+    Attributes:
+        uav, other: the UAV ids (``other`` may be ``"moving obstacle k"``).
+        time: an actual time when the closest approach under the model can happen, s.
+        where: the two points, metres.
+        distance: the least distance under the model's take-off and speed errors, metres.
+        required: the separation (or the obstacle's radius) plus what the model's tracking
+            error takes away, metres.
+        takeoff_s, speed: the largest take-off error (s) and speed error (fraction)
+            tolerated, each with the model's other errors; ``inf``: not limited (beyond
+            :data:`TAKEOFF_CAP` / :data:`SPEED_CAP`).
+        track_h, track_v: the largest horizontal and vertical tracking errors tolerated with
+            the model's timing, in the model's proportions (the same both ways when the model
+            has none), metres.
+    """
+
+    uav: str
+    other: str
+    time: float
+    where: tuple[tuple[float, ...], ...]
+    distance: float
+    required: float
+    takeoff_s: float
+    speed: float
+    track_h: float
+    track_v: float
+
+    @property
+    def ok(self) -> bool:
+        return self.distance >= self.required - TOL
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"uav": self.uav, "other": self.other, "time": _num(self.time),
+                "distance": _num(self.distance), "required": self.required,
+                "takeoff_s": _num(self.takeoff_s), "speed": _num(self.speed),
+                "track_h": _num(self.track_h), "track_v": _num(self.track_v),
+                "ok": self.ok}  # fmt: skip
+
+
+@dataclass
+class UAVMargin:
+    """A UAV's margins: the least over its pairs and obstacles (``inf``: unlimited), and what
+    limits each."""
+
+    uav: str
+    takeoff_s: float = math.inf
+    speed: float = math.inf
+    track_h: float = math.inf
+    track_v: float = math.inf
+    limited_by: dict[str, str] = field(default_factory=dict)
+
+    def take(self, what: str, value: float, by: str) -> None:
+        if value < getattr(self, what):
+            setattr(self, what, value)
+            self.limited_by[what] = by
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"uav": self.uav, "takeoff_s": _num(self.takeoff_s), "speed": _num(self.speed),
+                "track_h": _num(self.track_h), "track_v": _num(self.track_v),
+                "limited_by": dict(self.limited_by)}  # fmt: skip
+
+
+def _num(v: float) -> float | None:
+    return float(v) if math.isfinite(v) else None
+
+
+# ================================================================================ the checks
+@dataclass(frozen=True)
+class Timing:
+    """The model's numbers as the checks use them."""
+
+    delta0: float
+    rho: float
+    track_h: float
+    track_v: float
+
+    @property
+    def gap(self) -> float:
+        return math.hypot(2.0 * self.track_h, 2.0 * self.track_v)
+
+    @property
+    def norm(self) -> float:
+        return math.hypot(self.track_h, self.track_v)
+
+
+def timing_of(model: Any, cruise: float) -> Timing:
+    """The model (an :class:`~uavplan.world.execution.ExecutionModel` or its record) for a
+    UAV cruising at ``cruise`` m/s: the wind's share added to the speed error."""
+    rec = model.record() if hasattr(model, "record") else dict(model)
+    rho = float(rec.get("speed", 0.0)) + (float(rec.get("wind", 0.0)) / cruise if cruise else 0)
+    return Timing(float(rec.get("takeoff_s", 0.0)), rho, float(rec.get("track_h", 0.0)),
+                  float(rec.get("track_v", 0.0)))  # fmt: skip
+
+
+def _pack(trajs: Sequence[Trajectory]) -> tuple[FloatArray, FloatArray, IntArray, NDArray[Any]]:
+    n = sum(len(t.times) for t in trajs)
+    P = np.zeros((n, 3))
+    T = np.zeros(n)
+    owner = np.full(n, -1, dtype=np.int64)
+    valid = np.zeros(n, dtype=np.bool_)
+    r = 0
+    for k, t in enumerate(trajs):
+        m = len(t.times)
+        P[r : r + m, : t.dim] = t.points
+        T[r : r + m] = t.times
+        owner[r : r + m] = k
+        valid[r : r + m - 1] = True  # the last row of each starts no segment
+        r += m
+    return P, T, owner, valid
+
+
+def separation_under(
+    trajs: Sequence[Trajectory], s2: float, timing: Timing
+) -> tuple[list[Violation], list[PairMargin]]:
+    """Every pair of UAVs under the model: a violation for each pair that can come closer
+    than ``s2`` plus the tracking gap, and the margins of every pair that can come within
+    ``s2 + 2 gap + 10`` m at all (the others tolerate any timing)."""
+    if len(trajs) < 2:
+        return [], []
+    P, T, owner, valid = _pack(trajs)
+    take = np.array([float(trajs[k].times[0]) for k in range(len(trajs))])[np.maximum(owner, 0)]
+    required = s2 + timing.gap
+    search = s2 + 2.0 * timing.gap + 10.0
+    pairs = _close_pairs(P, owner, valid, float(search), float(max(search, 20.0)))
+    if not len(pairs):
+        return [], []
+    key = owner[pairs[:, 0]] * len(trajs) + owner[pairs[:, 1]]
+    order = np.argsort(key, kind="stable")
+    pairs, key = np.ascontiguousarray(pairs[order]), key[order]
+    cuts = np.flatnonzero(np.diff(key)) + 1
+    starts = np.concatenate([[0], cuts])
+    stops = np.concatenate([cuts, [len(key)]])
+    out: list[Violation] = []
+    margins: list[PairMargin] = []
+    for s, e in zip(starts, stops, strict=True):
+        a, b = trajs[int(owner[pairs[s, 0]])], trajs[int(owner[pairs[s, 1]])]
+        m = _pair_margin(P, T, pairs, take, int(s), int(e), required, timing, a.id, b.id, False)
+        margins.append(m)
+        if not m.ok:
+            out.append(Violation(
+                "separation", (a.id, b.id), m.time, m.where, m.distance, required,
+                f"{a.id} and {b.id} can come {fmt_num(m.distance)} m apart under the execution "
+                f"model (take-off ±{timing.delta0:g} s, speed ±{100 * timing.rho:.3g} %), "
+                f"about t={m.time:.1f} s, where {fmt_num(required)} m is needed (S2 {s2:g} m + "
+                f"{fmt_num(timing.gap)} m of tracking): {a.id} near "
+                f"{fmt_points(m.where[0])}, {b.id} near {fmt_points(m.where[1])}; it tolerates "
+                f"take-off ±{_show(m.takeoff_s)} s, speed ±{_show(100 * m.speed)} %, tracking "
+                f"{_show(m.track_h)} m horizontal and {_show(m.track_v)} m vertical",
+            ))  # fmt: skip
+    return out, margins
+
+
+def _show(v: float) -> str:
+    return "any" if not math.isfinite(v) else f"{v:.3g}"
+
+
+def _pair_margin(
+    P: FloatArray, T: FloatArray, pairs: IntArray, take: FloatArray, s: int, e: int,
+    required: float, timing: Timing, a: str, b: str, moving: bool,
+) -> PairMargin:  # fmt: skip
+    """One pair's least distance under the model and its margins (module docstring);
+    ``moving``: the second side is a moving obstacle on its own schedule (no error)."""
+    d0, r0 = timing.delta0, timing.rho
+
+    def dist(delta: float, rho: float, stop: float = -1.0) -> tuple[float, int, float, float]:
+        db, rb = (0.0, 0.0) if moving else (delta, rho)
+        return _group_min(P, T, pairs, take, delta, rho, db, rb, s, e, stop)
+
+    def fails(delta: float, rho: float) -> bool:
+        return dist(delta, rho, required - TOL)[0] < required - TOL
+
+    passes = not fails(d0, r0)  # the model's own errors: a known lower end of each search
+    takeoff = _largest(lambda x: fails(x, r0), TAKEOFF_CAP, d0 if passes else 0.0)
+    speed = _largest(lambda x: fails(d0, x), SPEED_CAP, r0 if passes else 0.0)
+    d, k, u, w = dist(d0, r0)
+    if k < 0:  # no two points can coincide under the model
+        return PairMargin(a, b, math.nan, (), math.inf, float(required), takeoff, speed,
+                          math.inf, math.inf)  # fmt: skip
+    i, j = int(pairs[k, 0]), int(pairs[k, 1])
+    pa = P[i] + u * (P[i + 1] - P[i])
+    pb = P[j] + w * (P[j + 1] - P[j])
+    tau_a = T[i] + u * (T[i + 1] - T[i])
+    tau_b = T[j] + w * (T[j + 1] - T[j])
+    lo_a = take[i] - d0 + (tau_a - take[i]) / (1 + r0)
+    hi_a = take[i] + d0 + (tau_a - take[i]) / (1 - r0)
+    lo_b, hi_b = tau_b, tau_b
+    if not moving:
+        lo_b = take[j] - d0 + (tau_b - take[j]) / (1 + r0)
+        hi_b = take[j] + d0 + (tau_b - take[j]) / (1 - r0)
+    t = 0.5 * (max(lo_a, lo_b) + min(hi_a, hi_b))
+    # the tracking errors the least distance leaves room for, in the model's proportions
+    eh, ev = (timing.track_h, timing.track_v) if timing.gap > 0 else (1.0, 1.0)
+    per = math.hypot(eh, ev) * (1.0 if moving else 2.0)  # what (eh, ev) takes away
+    base = required - (timing.norm if moving else timing.gap)  # the separation or radius
+    k_ = max(0.0, (d - base) / per)
+    return PairMargin(a, b, float(t), (tuple(pa.tolist()), tuple(pb.tolist())), float(d),
+                      float(required), takeoff, speed, float(k_ * eh), float(k_ * ev))  # fmt: skip
+
+
+def _largest(fails: Any, cap: float, known: float = 0.0) -> float:
+    """The largest ``x`` in [0, cap] with ``fails(x)`` False (failing monotone in x), ``known``
+    a value known not to fail: 0 when it fails at 0, inf when not at ``cap``."""
+    if known <= 0.0 and fails(0.0):
+        return 0.0
+    if not fails(cap):
+        return math.inf
+    lo, hi = known, cap
+    for _ in range(BISECT):
+        mid = 0.5 * (lo + hi)
+        if fails(mid):
+            hi = mid
+        else:
+            lo = mid
+    return lo
+
+
+def moving_under(
+    traj: Trajectory, obstacles: Sequence[Any], timing: Timing
+) -> tuple[list[Violation], list[PairMargin]]:
+    """The UAV against each moving obstacle (on its own schedule) under the model."""
+    out: list[Violation] = []
+    margins: list[PairMargin] = []
+    for oi, obs in enumerate(obstacles):
+        ot = np.asarray(obs.times, dtype=np.float64)
+        op = np.asarray(obs.positions, dtype=np.float64)[:, :3]
+        far = 2e7
+        times = np.concatenate([[min(0.0, ot[0]) - far], ot, [ot[-1] + far]])
+        pts = np.concatenate([op[:1], op, op[-1:]])
+        other = Trajectory(f"moving obstacle {oi}", pts, times)
+        P, T, owner, valid = _pack([traj, other])
+        take = np.where(owner == 0, float(traj.times[0]), float(times[0]))
+        ia = np.flatnonzero(valid & (owner == 0))
+        ib = np.flatnonzero(valid & (owner == 1))
+        pairs = np.stack(np.meshgrid(ia, ib, indexing="ij"), axis=-1).reshape(-1, 2)
+        pairs = np.ascontiguousarray(pairs, dtype=np.int64)
+        required = float(obs.radius) + timing.norm
+        m = _pair_margin(P, T, pairs, take, 0, len(pairs), required, timing, traj.id, other.id,
+                         True)  # fmt: skip
+        margins.append(m)
+        if not m.ok:
+            out.append(Violation(
+                "moving", (traj.id,), m.time, (m.where[0],), m.distance, required,
+                f"{traj.id} can come {fmt_num(m.distance)} m from the centre of moving obstacle "
+                f"{oi} under the execution model, about t={m.time:.1f} s, where "
+                f"{fmt_num(required)} m is needed (radius {obs.radius:g} m + "
+                f"{fmt_num(timing.norm)} m of tracking); it tolerates take-off "
+                f"±{_show(m.takeoff_s)} s, speed ±{_show(100 * m.speed)} %",
+            ))  # fmt: skip
+    return out, margins
+
+
+def horizontal_clearance(
+    traj: Trajectory, scenario: Any, checks: Any, known: float = 0.0
+) -> tuple[float, str]:
+    """The largest horizontal tracking error the UAV's static checks tolerate (cylinders,
+    circles, polygons widened by it, as a robust plan is planned; bisection from ``known``,
+    the model's, when the checks pass with it), and what limits it. ``checks``:
+    ``(check_cylinders, check_circles, check_polygons)``."""
+    cyl, circ, poly = checks
+    cylinders = tuple(scenario.cylinders) if traj.dim == 3 else ()
+    circles = tuple(scenario.circles)
+    polygons = tuple(scenario.no_fly_polygons)
+    if not (cylinders or circles or polygons):
+        return math.inf, ""
+
+    def fails(e: float) -> str:
+        if cylinders and cyl(traj, [replace(c, margin=c.margin + e) for c in cylinders]):
+            return "cylinders"
+        if circles and circ(traj, [replace(c, margin=c.margin + e) for c in circles]):
+            return "circles"
+        if polygons and poly(traj, [replace(p, margin=p.margin + e) for p in polygons]):
+            return "polygons"
+        return ""
+
+    lo = known if known > 0.0 and not fails(known) else 0.0
+    if lo == 0.0 and fails(0.0):
+        return 0.0, fails(0.0)
+    cap = 1000.0
+    if not fails(cap):
+        return math.inf, ""
+    hi = cap
+    for _ in range(BISECT + 6):
+        mid = 0.5 * (lo + hi)
+        if fails(mid):
+            hi = mid
+        else:
+            lo = mid
+    return lo, fails(hi) or "obstacles"
+
+
+def vertical_clearance(
+    traj: Trajectory, scenario: Any, source: Any, extrema: Any
+) -> tuple[float, str]:
+    """The largest vertical tracking error the UAV's flight tolerates (exact): the least of
+    its height above the ground (the raster's own, ``source``, else the scenario's grid), its
+    distances to the altitude band's ends along every segment, and to the bounds' floor and
+    ceiling; and what limits it. ``extrema``: the verifier's grid clearance function
+    (``terrain_clearance_extrema``); ``source``: :func:`~uavplan.verify.source_terrain.
+    source_clearance` bound to the raster, or None."""
+    if traj.dim != 3:
+        return math.inf, ""
+    z = traj.points[:, 2]
+    lo, hi = scenario.bounds.lower[2], scenario.bounds.upper[2]
+    best = (float(min(np.min(z - lo), np.min(hi - z))), "bounds")
+    band = scenario.altitude
+    low_c, high_c = math.inf, -math.inf
+    terrain = scenario.terrain
+    if source is not None:
+        low_c, high_c = source(traj)
+    elif terrain is not None:
+        a, b = traj.points[:-1], traj.points[1:]
+        low_c = float(np.min(extrema(a, b, terrain)[:, 0]))
+        ceil = terrain if terrain.lower is None else replace(terrain, heights=terrain.lower,
+                                                             lower=None)  # fmt: skip
+        high_c = float(np.max(extrema(a, b, ceil)[:, 2]))
+    elif band is not None and band.reference == "ground":  # flat ground at 0
+        low_c, high_c = float(z.min()), float(z.max())
+    if math.isfinite(low_c):
+        best = min(best, (low_c, "terrain"))
+    if band is not None:
+        if band.reference == "ground":
+            best = min(best, (low_c - band.min, "altitude band's floor"),
+                       (band.max - high_c, "altitude band's ceiling"))  # fmt: skip
+        else:
+            best = min(best, (float(np.min(z - band.min)), "altitude band's floor"),
+                       (float(np.min(band.max - z)), "altitude band's ceiling"))  # fmt: skip
+    return max(best[0], 0.0), best[1]
+
+
+def horizontal_bounds(traj: Trajectory, scenario: Any) -> float:
+    """The least horizontal distance from the flight's points to the bounds' sides."""
+    p = traj.points[:, :2]
+    lo, hi = np.asarray(scenario.bounds.lower[:2]), np.asarray(scenario.bounds.upper[:2])
+    return max(float(min(np.min(p - lo), np.min(hi - p))), 0.0)

@@ -1,0 +1,210 @@
+"""How far a flown trajectory may stray from its plan: the execution model a plan is made
+robust to, and what it means in space and time.
+
+A plan's trajectories are timed: UAV ``A`` is to be at ``p_A(tau)`` at time ``tau`` from its
+take-off ``t0`` to its landing ``tf``. Executed, it is not. :class:`ExecutionModel` bounds how it
+is not:
+
+* **take-off** (``takeoff_s``, ``delta0``): it leaves at ``t0 + d``, ``|d| <= delta0`` seconds;
+* **speed** (``speed``, ``rho``, a fraction): its ground speed along the path is the planned one
+  times a factor ``s(t)`` in ``[1 - rho, 1 + rho]``, varying as it likes (an autopilot holds its
+  speed command to within this, and a wind changes ground speed: ``wind`` adds ``|W| / v`` to
+  ``rho``, ``v`` the UAV's cruise speed, the worst heading of a UAV that holds airspeed);
+* **tracking** (``track_h``, ``track_v``, metres): at every instant it is within ``e_h``
+  horizontally and ``e_v`` vertically of the point of its path it is flying (navigation and
+  guidance error).
+
+**Windows.** Under the first two, the UAV reaches its path's point ``tau`` at an actual time
+``t`` in ``T(tau) = [t0 - delta0 + (tau - t0) / (1 + rho), t0 + delta0 + (tau - t0) / (1 - rho)]``,
+and every time in that interval is reachable (a constant speed factor and take-off error hit any
+of them). Two UAVs' executions are independent, so ``A`` at ``tau_A`` and ``B`` at ``tau_B`` can
+be at the same instant exactly when ``T_A(tau_A)`` and ``T_B(tau_B)`` meet: two linear
+inequalities in ``(tau_A, tau_B)`` (:meth:`ExecutionModel.window`). The separation under the
+model is the least distance between ``p_A(tau_A)`` and ``p_B(tau_B)`` over that region, less
+what tracking can take away: ``sqrt((e_hA + e_hB)^2 + (e_vA + e_vB)^2)`` (the horizontal and
+vertical offsets of two points each within its cylinder). The nominal model (all zero) makes
+the region the line ``tau_A = tau_B``: the nominal check.
+
+**Static clearances** (obstacles, terrain, the altitude band, the bounds) do not depend on
+time: tracking widens them by ``e_h`` horizontally and ``e_v`` vertically
+(:func:`widened`). A moving obstacle is a UAV with a nominal model.
+
+The default a user gets from ``uavplan plan`` is :data:`DEFAULT` (``docs/decisions.md`` says
+where its numbers come from); experiments and the Python API plan with the scenario's model,
+the nominal one unless the scenario states another.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from uavplan.world.scenario import Scenario
+
+#: The largest speed fraction a model may have (beyond it a "schedule" means little, and
+#: ``1 - rho`` must stay well above 0).
+MAX_RHO = 0.5
+
+
+@dataclass(frozen=True)
+class ExecutionModel:
+    """Bounds on how a flown trajectory departs from its plan (see the module docstring).
+
+    Attributes:
+        takeoff_s: take-off time error, seconds (``delta0``).
+        speed: ground-speed error along the path, a fraction of the planned speed (``rho``).
+        track_h, track_v: horizontal and vertical tracking error, metres.
+        wind: a steady wind's horizontal speed, m/s (0: none); it adds ``wind / v`` to the
+            speed error, ``v`` the UAV's cruise speed.
+        source: where the model comes from (for the console and the plan file).
+    """
+
+    takeoff_s: float = 0.0
+    speed: float = 0.0
+    track_h: float = 0.0
+    track_v: float = 0.0
+    wind: float = 0.0
+    source: str = "nominal"
+
+    def __post_init__(self) -> None:
+        for name in ("takeoff_s", "speed", "track_h", "track_v", "wind"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise ValueError(f"execution {name}: {v!r} is not a finite number")
+            if v < 0:
+                raise ValueError(f"execution {name}: {v} is negative")
+            object.__setattr__(self, name, float(v))
+        if self.speed >= MAX_RHO:
+            raise ValueError(f"execution speed: {self.speed} is not below {MAX_RHO} (a fraction "
+                             "of the planned speed, 0.03 for 3 %)")  # fmt: skip
+
+    @property
+    def nominal(self) -> bool:
+        """True when the model allows no error at all (the plan as flown exactly)."""
+        return not (self.takeoff_s or self.speed or self.track_h or self.track_v or self.wind)
+
+    @property
+    def timed(self) -> bool:
+        """True when the schedule may drift (take-off, speed or wind)."""
+        return bool(self.takeoff_s or self.speed or self.wind)
+
+    def rho(self, cruise: float) -> float:
+        """The speed fraction with the wind's share for a UAV cruising at ``cruise`` m/s."""
+        r = self.speed + (self.wind / cruise if cruise > 0 else 0.0)
+        if r >= MAX_RHO:
+            raise ValueError(
+                f"execution: speed error {self.speed:g} with a {self.wind:g} m/s wind at "
+                f"{cruise:g} m/s is {r:.3g} of the speed, not below {MAX_RHO}"
+            )
+        return r
+
+    def timing(self, cruise: float) -> tuple[float, float]:
+        """``(delta0, rho)`` for a UAV cruising at ``cruise`` m/s."""
+        return self.takeoff_s, self.rho(cruise)
+
+    def tracking_gap(self) -> float:
+        """How much closer two UAVs with this model may come than their planned positions:
+        ``sqrt((2 e_h)^2 + (2 e_v)^2)``, metres."""
+        return float(math.hypot(2.0 * self.track_h, 2.0 * self.track_v))
+
+    def tracking_norm(self) -> float:
+        """How far one UAV may be from its planned position: ``sqrt(e_h^2 + e_v^2)``."""
+        return float(math.hypot(self.track_h, self.track_v))
+
+    def describe(self) -> str:
+        """One line for the console."""
+        if self.nominal:
+            return "nominal (the plan flown exactly: no take-off, speed or tracking error)"
+        bits = [f"take-off ±{self.takeoff_s:g} s", f"speed ±{100 * self.speed:g} %",
+                f"tracking {self.track_h:g} m horizontal, {self.track_v:g} m vertical"]  # fmt: skip
+        if self.wind:
+            bits.append(f"wind {self.wind:g} m/s")
+        return ", ".join(bits)
+
+    def record(self) -> dict[str, Any]:
+        """The plan and scenario files' ``execution`` block."""
+        return {"takeoff_s": self.takeoff_s, "speed": self.speed, "track_h": self.track_h,
+                "track_v": self.track_v, "wind": self.wind, "source": self.source}  # fmt: skip
+
+    @classmethod
+    def from_record(cls, rec: Any) -> ExecutionModel:
+        """The inverse of :meth:`record` (ValueError naming the field)."""
+        if not isinstance(rec, dict):
+            raise ValueError(f"execution: {rec!r} is not a mapping")
+        unknown = set(rec) - {"takeoff_s", "speed", "track_h", "track_v", "wind", "source"}
+        if unknown:
+            raise ValueError(f"execution: unknown fields {sorted(unknown)}")
+        return cls(**{k: rec[k] for k in rec})
+
+
+#: The plan flown exactly.
+NOMINAL = ExecutionModel()
+
+#: What ``uavplan plan`` plans against unless the scenario states a model or ``--nominal`` is
+#: given: small UAVs under a standard autopilot (``docs/decisions.md``, "Execution model").
+DEFAULT = ExecutionModel(2.0, 0.03, 3.0, 2.0, 0.0, "uavplan's default for small UAVs")
+
+
+def windows(t0: float, delta0: float, rho: float, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``T(tau)`` for a UAV taking off at ``t0``: the earliest and latest actual times it can be
+    at its path's point ``tau`` (arrays like ``tau``)."""
+    s = np.asarray(tau, dtype=np.float64) - t0
+    return t0 - delta0 + s / (1.0 + rho), t0 + delta0 + s / (1.0 - rho)
+
+
+def widened(scenario: Scenario, model: ExecutionModel) -> Scenario:
+    """``scenario`` with every static clearance widened by the model's tracking error, the world
+    a robust plan is planned in: cylinders, circles and polygons (and uncertain areas) ``e_h``
+    wider, moving obstacles ``sqrt(e_h^2 + e_v^2)`` wider, the terrain's floor ``e_v`` higher and
+    its ceiling ``e_v`` lower, the altitude band ``e_v`` narrower at each end, the bounds
+    ``e_h`` (``e_v``) smaller on each side (a band above the ground follows the terrain's
+    grids instead); the scenario's ``execution`` set to ``model``. The
+    scenario itself when the model has no tracking error (only ``execution`` set)."""
+    eh, ev = model.track_h, model.track_v
+    if not (eh or ev):
+        return replace(scenario, execution=model)
+    from uavplan.world.obstacles import AltitudeBand
+    from uavplan.world.scenario import Bounds
+    from uavplan.world.terrain import Terrain
+
+    lo, hi = np.asarray(scenario.bounds.lo), np.asarray(scenario.bounds.hi)
+    pad = np.array([eh, eh, ev][: scenario.dim])
+    if np.any(hi - lo <= 2 * pad):
+        raise ValueError(f"the bounds leave no room for a tracking error of {eh:g} m horizontally "
+                         f"and {ev:g} m vertically")  # fmt: skip
+    bounds = Bounds(tuple(lo + pad), tuple(hi - pad))
+    terrain = scenario.terrain
+    if terrain is not None and ev:
+        t = terrain
+        low = t.ceiling_heights - ev
+        terrain = Terrain(t.heights + ev, t.x0, t.y0, t.dx, t.dy, t.name, dict(t.georef), low)
+    band = scenario.altitude
+    if band is not None and ev:
+        if band.max - band.min <= 2 * ev:
+            raise ValueError(
+                f"the altitude band [{band.min:g}, {band.max:g}] m leaves no room for a "
+                f"vertical tracking error of {ev:g} m"
+            )
+        # a band above the ground moves with the terrain's grids, already e_v higher (floor)
+        # and lower (ceiling); an absolute band, or one over no terrain, is narrowed itself
+        if not (band.reference == "ground" and terrain is not None):
+            band = AltitudeBand(band.min + ev, band.max - ev, band.reference)
+    norm = model.tracking_norm()
+    return replace(
+        scenario,
+        bounds=bounds,
+        terrain=terrain,
+        altitude=band,
+        cylinders=tuple(replace(c, margin=c.margin + eh) for c in scenario.cylinders),
+        circles=tuple(replace(c, margin=c.margin + eh) for c in scenario.circles),
+        polygons=tuple(replace(p, margin=p.margin + eh) for p in scenario.polygons),
+        uncertain_areas=tuple(replace(u, margin=u.margin + eh) for u in scenario.uncertain_areas),
+        moving_obstacles=tuple(
+            replace(m, radius=m.radius + norm) for m in scenario.moving_obstacles
+        ),
+        execution=model,
+    )

@@ -1,0 +1,189 @@
+"""The execution model: windows, the widened world, and the reservation table's separation under
+take-off and speed errors, tested against brute force: sampled executions (never closer than
+the table says) and a dense grid of the pairs of path times whose windows meet (the table's
+bound is attained)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from uavplan.scenarios import resolve
+from uavplan.world.dynamic import MovingObstacle, min_distances, robust_min_distances
+from uavplan.world.execution import DEFAULT, NOMINAL, ExecutionModel, widened, windows
+from uavplan.world.reservations import ReservationTable, _split, window_min_dist2
+
+
+def _traj(rng: np.random.Generator, n: int = 7) -> tuple[np.ndarray, np.ndarray]:
+    p = np.cumsum(rng.uniform(-40, 40, (n, 3)), axis=0) + 200.0
+    dt = rng.uniform(0.5, 4.0, n - 1)
+    dt[rng.random(n - 1) < 0.15] = rng.uniform(0.2, 2.0)  # some holds below
+    t = rng.uniform(0, 10) + np.concatenate([[0.0], np.cumsum(dt)])
+    hold = rng.random(n - 1) < 0.1
+    for k in np.flatnonzero(hold):
+        p[k + 1] = p[k]
+    return p, t
+
+
+def _at(p: np.ndarray, t: np.ndarray, when: np.ndarray) -> np.ndarray:
+    return np.stack([np.interp(when, t, p[:, k]) for k in range(3)], axis=-1)
+
+
+def _execute(p, t, d, s, grid):
+    """Positions at the actual times ``grid`` of an execution: take-off ``d`` late, segment
+    speed factors ``s``; outside the flight (before take-off, after landing) NaN."""
+    actual = t[0] + d + np.concatenate([[0.0], np.cumsum(np.diff(t) / s)])
+    pos = _at(p, actual, grid)
+    pos[(grid < actual[0]) | (grid > actual[-1])] = np.nan
+    return pos
+
+
+def test_a_model_says_what_it_is_and_refuses_nonsense() -> None:
+    assert NOMINAL.nominal and not DEFAULT.nominal and DEFAULT.timed
+    assert DEFAULT.record()["takeoff_s"] == 2.0 and ExecutionModel.from_record(
+        DEFAULT.record()) == DEFAULT  # fmt: skip
+    assert DEFAULT.tracking_gap() == pytest.approx(np.hypot(6.0, 4.0))
+    assert "take-off ±2 s" in DEFAULT.describe()
+    for bad in ({"speed": 0.6}, {"takeoff_s": -1.0}, {"track_h": float("nan")}):
+        with pytest.raises(ValueError, match="execution"):
+            ExecutionModel(**bad)  # type: ignore[arg-type]
+    assert ExecutionModel(speed=0.03, wind=2.0).rho(20.0) == pytest.approx(0.13)
+    lo, hi = windows(10.0, 2.0, 0.05, np.array([10.0, 30.0]))
+    assert lo[0] == 8.0 and hi[0] == 12.0 and lo[1] == pytest.approx(8 + 20 / 1.05)
+
+
+def test_the_widened_world_keeps_every_clearance_wider() -> None:
+    sc = resolve("ppswarm1")
+    w = widened(sc, DEFAULT)
+    assert w.execution is DEFAULT
+    assert all(b.margin == a.margin + 3.0 for a, b in zip(sc.cylinders, w.cylinders, strict=True))
+    assert sc.altitude is not None and w.altitude is not None
+    # a band above the ground follows the terrain's grids, each moved by e_v (not twice)
+    assert (w.altitude.min, w.altitude.max) == (sc.altitude.min, sc.altitude.max)
+    x, y = 500.0, 500.0
+    g = float(sc.terrain.height(x, y)) if sc.terrain is not None else 0.0
+    for dz, ok in ((sc.altitude.min + 1.9, False), (sc.altitude.min + 2.1, True),
+                   (sc.altitude.max - 2.1, True), (sc.altitude.max - 1.9, False)):  # fmt: skip
+        why = [w_ for w_ in w.point_problems(np.array([x, y, g + dz])) if "band" in w_]
+        assert (not why) == ok, (dz, why)
+    op = resolve("open")  # an absolute band over no terrain is narrowed itself
+    wo = widened(op, DEFAULT)
+    assert op.altitude is not None and wo.altitude is not None
+    assert (wo.altitude.min, wo.altitude.max) == (op.altitude.min + 2, op.altitude.max - 2)
+    assert sc.terrain is not None and w.terrain is not None
+    assert np.array_equal(w.terrain.heights, sc.terrain.heights + 2.0)
+    assert np.array_equal(w.terrain.ceiling_heights, sc.terrain.heights - 2.0)
+    assert (
+        w.bounds.lower[0] == sc.bounds.lower[0] + 3 and w.bounds.upper[2] == sc.bounds.upper[2] - 2
+    )
+    assert widened(sc, NOMINAL).cylinders == sc.cylinders
+    tight = ExecutionModel(track_v=60.0)
+    with pytest.raises(ValueError, match="altitude band"):
+        widened(sc, tight)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), delta0=st.sampled_from([0.0, 0.5, 2.0]),
+       rho=st.sampled_from([0.0, 0.03, 0.1]))  # fmt: skip
+def test_no_sampled_execution_comes_closer_than_the_table_says(
+    seed: int, delta0: float, rho: float
+) -> None:
+    """Two timed trajectories, one reserved: 300 executions of both (take-off errors and speed
+    factors drawn, extreme ones among them) are never closer at any instant of a fine grid than
+    the table's minimum under the model; and a dense grid of the pairs of path times whose
+    windows meet finds the table's minimum (within the grid's resolution)."""
+    rng = np.random.default_rng(seed)
+    if not (delta0 or rho):
+        delta0 = 0.25
+    pa, ta = _traj(rng)
+    pb, tb = _traj(rng)
+    table = ReservationTable(np.zeros(3) - 500, np.zeros(3) + 900, 500.0, timing=(delta0, rho))
+    table.add("b", pb, tb)
+    bound = float(table.min_distance(pa[None], ta[None])[0])
+    lo = min(ta[0], tb[0]) - delta0 - 1
+    hi = max(ta[-1], tb[-1]) * 1.2 + delta0 + 1
+    grid = np.linspace(lo, hi, 4000)
+    least = np.inf
+    for _ in range(300):
+        ends = rng.random() < 0.3
+        da, db = rng.uniform(-delta0, delta0, 2) if not ends else rng.choice([-delta0, delta0], 2)
+        sa = (rng.uniform(1 - rho, 1 + rho, len(ta) - 1) if not ends
+              else rng.choice([1 - rho, 1 + rho], len(ta) - 1))  # fmt: skip
+        sb = (rng.uniform(1 - rho, 1 + rho, len(tb) - 1) if not ends
+              else rng.choice([1 - rho, 1 + rho], len(tb) - 1))  # fmt: skip
+        d = np.linalg.norm(_execute(pa, ta, da, sa, grid) - _execute(pb, tb, db, sb, grid), axis=1)
+        if np.isfinite(d).any():
+            least = min(least, float(np.nanmin(d)))
+    assert bound <= least + 1e-9
+    # the bound is attained: the pairs of path times whose windows meet, on a dense grid
+    tau_a, tau_b = np.linspace(ta[0], ta[-1], 900), np.linspace(tb[0], tb[-1], 900)
+    la, ha = windows(ta[0], delta0, rho, tau_a)
+    lb, hb = windows(tb[0], delta0, rho, tau_b)
+    meet = (la[:, None] <= hb[None]) & (lb[None] <= ha[:, None])
+    if meet.any():
+        dist = np.linalg.norm(_at(pa, ta, tau_a)[:, None] - _at(pb, tb, tau_b)[None], axis=2)
+        speed = max(
+            np.max(np.linalg.norm(np.diff(p, axis=0), axis=1) / np.maximum(np.diff(t), 1e-9))
+            for p, t in ((pa, ta), (pb, tb))
+        )
+        step = max((ta[-1] - ta[0]) / 899, (tb[-1] - tb[0]) / 899)
+        assert bound <= float(dist[meet].min()) + 1e-9
+        assert float(dist[meet].min()) - bound <= 2 * speed * step + 1e-6
+
+
+def test_table_conflicts_agree_with_every_reserved_piece() -> None:
+    """The table's bucketed search under a model finds exactly the conflicts a comparison of
+    every candidate piece with every reserved piece finds (600 candidate paths)."""
+    rng = np.random.default_rng(7)
+    bad = 0
+    for trial in range(20):
+        delta0, rho = [(0.5, 0.0), (2.0, 0.03), (1.0, 0.1)][trial % 3]
+        table = ReservationTable(np.zeros(3) - 500, np.zeros(3) + 900, 15.0, timing=(delta0, rho))
+        for k in range(8):
+            table.add(f"u{k}", *_traj(rng))
+        cands = [_traj(rng) for _ in range(30)]
+        P = np.array([c[0] for c in cands])
+        T = np.array([c[1] for c in cands])
+        found = table.conflicts(P, T)
+        for q in range(len(P)):
+            a0, a1, t0, t1, _ = _split(P[q], T[q], 1.0)
+            d2 = min(
+                window_min_dist2(a0[i], a1[i], t0[i], t1[i], table._p0[j], table._p1[j],
+                                 table._t0[j], table._t1[j], T[q, 0], delta0, rho,
+                                 table._take[j], delta0, rho)
+                for i in range(len(t0)) for j in range(table.n_pieces)
+            )  # fmt: skip
+            bad += bool(found[q]) != bool(np.sqrt(d2) < 15.0)
+    assert bad == 0
+
+
+def test_for_scenario_widens_the_separation_by_the_tracking_gap() -> None:
+    sc = resolve("ppswarm1")
+    assert ReservationTable.for_scenario(sc).separation == sc.uav.s2
+    t = ReservationTable.for_scenario(widened(sc, DEFAULT))
+    assert t.timed and t.delta0 == 2.0 and t.rho == pytest.approx(0.03)
+    assert t.separation == pytest.approx(sc.uav.s2 + np.hypot(6.0, 4.0))
+    box = resolve("rscdwoa-mixed")
+    tb = ReservationTable.for_scenario(widened(box, DEFAULT))
+    assert tb.axes is None and tb.separation == pytest.approx(np.linalg.norm([56, 56, 24]))
+    only = ReservationTable.for_scenario(widened(box, ExecutionModel(track_h=1.0)))
+    assert only.axes == (52.0, 52.0, 20.0) and not only.timed
+
+
+def test_moving_obstacles_under_a_drifting_schedule() -> None:
+    o = MovingObstacle(5.0, np.array([0.0, 10.0, 20.0]), np.array([[0, 0, 100], [100, 0, 100],
+                                                                  [200, 0, 100]]))  # fmt: skip
+    P = np.array([[[80.0, -50, 100], [80.0, 50, 100]]])
+    T = np.array([[3.0, 7.0]])
+    nominal = min_distances([o], P, T)[0, 0, 0]
+    assert robust_min_distances([o], P, T, 0.0, 0.0)[0, 0, 0] == pytest.approx(nominal)
+    d1 = robust_min_distances([o], P, T, 1.0, 0.0)[0, 0, 0]
+    d3 = robust_min_distances([o], P, T, 3.0, 0.0)[0, 0, 0]
+    assert nominal > d1 > d3 == 0.0
+    # brute force: the UAV at its path time tau at any actual time within 1 s of it
+    tau = np.linspace(3.0, 7.0, 2001)[:, None]
+    t = tau + np.linspace(-1.0, 1.0, 2001)[None]
+    d = np.hypot(80.0 - np.clip(10.0 * t, 0, 200), -50.0 + 25.0 * (tau - 3.0))
+    assert d1 <= d.min() + 1e-9 and d.min() - d1 < 0.05
