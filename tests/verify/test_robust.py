@@ -171,3 +171,64 @@ def test_the_verifier_and_the_planners_table_agree(
     verifier = margins[0].distance if margins else math.inf
     if planner < 50.0 or verifier < 50.0:  # within both searches
         assert verifier == pytest.approx(planner, abs=1e-6)
+
+
+def test_a_horizontal_tracking_error_moves_the_ground_under_the_uav() -> None:
+    """Over a slope the band's floor is above the ground within the horizontal error, not
+    only below the track: a flight 15 m above a 0.5-gradient ramp with the band's floor at
+    10 m keeps 5 m vertically with no horizontal error, and with 3 m of it at most 3.5 m (the
+    ramp rises 1.5 m within 3 m); the verifier's bound is never looser than that, and a plan
+    whose vertical margin only held without the horizontal error is rejected under the
+    model."""
+    from dataclasses import replace
+
+    from uavplan.verify.robust import vertical_clearance
+    from uavplan.verify.terrain import terrain_clearance_extrema, within_reach
+    from uavplan.world.obstacles import AltitudeBand
+    from uavplan.world.scenario import Bounds
+    from uavplan.world.terrain import Terrain
+
+    xs = np.arange(0.0, 101.0)
+    H = np.tile(0.5 * xs, (101, 1))
+    sc = resolve("spso")
+    sc = replace(sc, terrain=Terrain(H, 0.0, 0.0, 1.0, 1.0, "ramp"), cylinders=(),
+                 altitude=AltitudeBand(10.0, 100.0, "ground"),
+                 bounds=Bounds((0.0, 0.0, 0.0), (100.0, 100.0, 500.0)))  # fmt: skip
+    x = np.linspace(20.0, 80.0, 7)
+    P = np.column_stack([x, np.full(7, 50.0), 0.5 * x + 15.0])
+    tr = Trajectory("u", P, np.linspace(0.0, 6.0, 7), True)
+    ev0, _ = vertical_clearance(tr, sc, None, terrain_clearance_extrema, 0.0, within_reach)
+    ev3, by = vertical_clearance(tr, sc, None, terrain_clearance_extrema, 3.0, within_reach)
+    assert ev0 == pytest.approx(5.0)
+    assert ev3 <= 3.5 + 1e-9 and ev3 >= 5.0 - 0.5 * (3.0 + 2.0) - 1e-9 and "floor" in by
+    model = ExecutionModel(0.0, 0.0, 3.0, 2.0)
+    ok = verify_trajectories([tr], sc, kinematics=False, model=ExecutionModel(0.0, 0.0, 0.0, 2.0))
+    assert ok.ok, ok.violations[:2]
+    P2 = P.copy()
+    P2[:, 2] = 0.5 * x + 12.5  # 2.5 m above the floor: enough without a horizontal error only
+    tight = Trajectory("u", P2, tr.times, True)
+    assert verify_trajectories([tight], sc, kinematics=False,
+                               model=ExecutionModel(0.0, 0.0, 0.0, 2.0)).ok  # fmt: skip
+    assert not verify_trajectories([tight], sc, kinematics=False, model=model).ok
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), how=st.sampled_from(["height", "slope"]))
+def test_the_verifiers_ground_within_reach_bounds_it_brute_force(seed: int, how: str) -> None:
+    from uavplan.verify.terrain import bilinear_height, within_reach
+    from uavplan.world.terrain import Terrain
+
+    rng = np.random.default_rng(seed)
+    ny, nx = (int(v) for v in rng.integers(2, 9, 2))
+    du, dv = (float(v) for v in rng.uniform(0.3, 40.0, 2))
+    H = rng.normal(0.0, 5.0, (ny, nx))
+    reach = float(rng.uniform(0.01, 12.0))
+    T = Terrain(H, 0.0, 0.0, du, dv)
+    hi = Terrain(within_reach(H, du, dv, reach, True, how), 0.0, 0.0, du, dv)
+    lo = Terrain(within_reach(H, du, dv, reach, False, how), 0.0, 0.0, du, dv)
+    p = rng.uniform([-3.0, -3.0], [du * (nx - 1) + 3, dv * (ny - 1) + 3], (200, 2))
+    a, d = rng.uniform(0, 2 * np.pi, 200), rng.uniform(0, reach, 200)
+    q = p + d[:, None] * np.column_stack([np.cos(a), np.sin(a)])
+    at_q = bilinear_height(T, q[:, 0], q[:, 1])
+    assert np.all(bilinear_height(hi, p[:, 0], p[:, 1]) >= at_q - 1e-9)
+    assert np.all(bilinear_height(lo, p[:, 0], p[:, 1]) <= at_q + 1e-9)

@@ -12,8 +12,16 @@ from hypothesis import strategies as st
 
 from uavplan.scenarios import resolve
 from uavplan.world.dynamic import MovingObstacle, min_distances, robust_min_distances
-from uavplan.world.execution import DEFAULT, NOMINAL, ExecutionModel, widened, windows
+from uavplan.world.execution import (
+    DEFAULT,
+    NOMINAL,
+    ExecutionModel,
+    reach_rise,
+    widened,
+    windows,
+)
 from uavplan.world.reservations import ReservationTable, _split, window_min_dist2
+from uavplan.world.terrain import Terrain
 
 
 def _traj(rng: np.random.Generator, n: int = 7) -> tuple[np.ndarray, np.ndarray]:
@@ -62,19 +70,24 @@ def test_the_widened_world_keeps_every_clearance_wider() -> None:
     assert sc.altitude is not None and w.altitude is not None
     # a band above the ground follows the terrain's grids, each moved by e_v (not twice)
     assert (w.altitude.min, w.altitude.max) == (sc.altitude.min, sc.altitude.max)
-    x, y = 500.0, 500.0
-    g = float(sc.terrain.height(x, y)) if sc.terrain is not None else 0.0
-    for dz, ok in ((sc.altitude.min + 1.9, False), (sc.altitude.min + 2.1, True),
-                   (sc.altitude.max - 2.1, True), (sc.altitude.max - 1.9, False)):  # fmt: skip
+    assert sc.terrain is not None and w.terrain is not None
+    assert (sc.terrain.x0, sc.terrain.y0, sc.terrain.dx, sc.terrain.dy) == (1, 1, 1, 1)
+    rise = reach_rise(sc.terrain.heights, sc.terrain.dx, sc.terrain.dy, 3.0)
+    fall = reach_rise(sc.terrain.heights, sc.terrain.dx, sc.terrain.dy, 3.0, up=False)
+    x, y = 501.0, 501.0  # node (500, 500)
+    g = float(sc.terrain.height(x, y))
+    up, down = 2.0 + float(rise[500, 500]), 2.0 + float(fall[500, 500])  # node (500, 500)
+    for dz, ok in ((sc.altitude.min + up - 0.1, False), (sc.altitude.min + up + 0.1, True),
+                   (sc.altitude.max - down - 0.1, True),
+                   (sc.altitude.max - down + 0.1, False)):  # fmt: skip
         why = [w_ for w_ in w.point_problems(np.array([x, y, g + dz])) if "band" in w_]
         assert (not why) == ok, (dz, why)
     op = resolve("open")  # an absolute band over no terrain is narrowed itself
     wo = widened(op, DEFAULT)
     assert op.altitude is not None and wo.altitude is not None
     assert (wo.altitude.min, wo.altitude.max) == (op.altitude.min + 2, op.altitude.max - 2)
-    assert sc.terrain is not None and w.terrain is not None
-    assert np.array_equal(w.terrain.heights, sc.terrain.heights + 2.0)
-    assert np.array_equal(w.terrain.ceiling_heights, sc.terrain.heights - 2.0)
+    assert np.array_equal(w.terrain.heights, sc.terrain.heights + 2.0 + rise)
+    assert np.array_equal(w.terrain.ceiling_heights, sc.terrain.heights - 2.0 - fall)
     assert (
         w.bounds.lower[0] == sc.bounds.lower[0] + 3 and w.bounds.upper[2] == sc.bounds.upper[2] - 2
     )
@@ -187,3 +200,26 @@ def test_moving_obstacles_under_a_drifting_schedule() -> None:
     t = tau + np.linspace(-1.0, 1.0, 2001)[None]
     d = np.hypot(80.0 - np.clip(10.0 * t, 0, 200), -50.0 + 25.0 * (tau - 3.0))
     assert d1 <= d.min() + 1e-9 and d.min() - d1 < 0.05
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), how=st.sampled_from(["height", "slope", "least"]))
+def test_the_ground_raised_by_its_reach_stands_above_the_ground_anywhere_within_it(
+    seed: int, how: str
+) -> None:
+    """A horizontal tracking error moves the ground under a UAV: the raised floor (lowered
+    ceiling) at any point bounds the original anywhere within the reach (brute force)."""
+    rng = np.random.default_rng(seed)
+    ny, nx = (int(v) for v in rng.integers(2, 9, 2))
+    dx, dy = (float(v) for v in rng.uniform(0.3, 40.0, 2))
+    H = rng.normal(0.0, 5.0, (ny, nx))
+    reach = float(rng.uniform(0.0, 12.0))
+    T = Terrain(H, 0.0, 0.0, dx, dy)
+    hi = Terrain(H + reach_rise(H, dx, dy, reach, how=how), 0.0, 0.0, dx, dy)
+    lo = Terrain(H - reach_rise(H, dx, dy, reach, up=False, how=how), 0.0, 0.0, dx, dy)
+    for _ in range(100):
+        p = rng.uniform([-3.0, -3.0], [dx * (nx - 1) + 3, dy * (ny - 1) + 3])
+        a, d = rng.uniform(0, 2 * np.pi), rng.uniform(0, reach)
+        q = p + d * np.array([np.cos(a), np.sin(a)])
+        assert hi.height(*p) >= T.height(*q) - 1e-9
+        assert lo.height(*p) <= T.height(*q) + 1e-9

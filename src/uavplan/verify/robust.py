@@ -557,20 +557,30 @@ def moving_under(
 
 
 def horizontal_clearance(
-    traj: Trajectory, scenario: Any, checks: Any, known: float = 0.0
+    traj: Trajectory,
+    scenario: Any,
+    checks: Any,
+    known: float = 0.0,
+    ground: Any = None,
 ) -> tuple[float, str]:
     """The largest horizontal tracking error the UAV's static checks tolerate (cylinders,
-    circles, polygons widened by it, as a robust plan is planned; bisection from ``known``,
-    the model's, when the checks pass with it), and what limits it. ``checks``:
-    ``(check_cylinders, check_circles, check_polygons)``."""
+    circles, polygons widened by it, as a robust plan is planned; and, with ``ground``, the
+    checks against the ground, which a horizontal error moves under the UAV: ``ground(e)``
+    says which fails with a horizontal error ``e`` and the model's vertical one, or ""),
+    found by bisection from ``known``, the model's, when the checks pass with it; and what
+    limits it. ``checks``: ``(check_cylinders, check_circles, check_polygons)``."""
     cyl, circ, poly = checks
     cylinders = tuple(scenario.cylinders) if traj.dim == 3 else ()
     circles = tuple(scenario.circles)
     polygons = tuple(scenario.no_fly_polygons)
-    if not (cylinders or circles or polygons):
+    if not (cylinders or circles or polygons or ground is not None):
         return math.inf, ""
 
     def fails(e: float) -> str:
+        if ground is not None:
+            why = ground(e)
+            if why:
+                return str(why)
         if cylinders and cyl(traj, [replace(c, margin=c.margin + e) for c in cylinders]):
             return "cylinders"
         if circles and circ(traj, [replace(c, margin=c.margin + e) for c in circles]):
@@ -596,14 +606,18 @@ def horizontal_clearance(
 
 
 def vertical_clearance(
-    traj: Trajectory, scenario: Any, source: Any, extrema: Any
-) -> tuple[float, str]:
-    """The largest vertical tracking error the UAV's flight tolerates (exact): the least of
-    its height above the ground (the raster's own, ``source``, else the scenario's grid), its
-    distances to the altitude band's ends along every segment, and to the bounds' floor and
-    ceiling; and what limits it. ``extrema``: the verifier's grid clearance function
-    (``terrain_clearance_extrema``); ``source``: :func:`~uavplan.verify.source_terrain.
-    source_clearance` bound to the raster, or None."""
+    traj: Trajectory, scenario: Any, source: Any, extrema: Any, reach: float = 0.0,
+    within: Any = None,
+) -> tuple[float, str]:  # fmt: skip
+    """The largest vertical tracking error the UAV's flight tolerates (exact for ``reach``
+    0): the least of its height above the ground (the raster's own, ``source``, else the
+    scenario's grid), its distances to the altitude band's ends along every segment, and to
+    the bounds' floor and ceiling; and what limits it. With a horizontal tracking error
+    ``reach``, the ground anywhere within it of the flight (a bound: the grid's nodes moved to
+    the highest and lowest within reach, ``within``, :func:`~uavplan.verify.terrain.
+    within_reach`). ``extrema``: the verifier's grid clearance function
+    (``terrain_clearance_extrema``); ``source``: ``source(traj, reach)``, the clearances over
+    the raster (:func:`~uavplan.verify.source_terrain.source_clearance`), or None."""
     if traj.dim != 3:
         return math.inf, ""
     z = traj.points[:, 2]
@@ -613,13 +627,22 @@ def vertical_clearance(
     low_c, high_c = math.inf, -math.inf
     terrain = scenario.terrain
     if source is not None:
-        low_c, high_c = source(traj)
+        low_c, high_c = source(traj, reach)
     elif terrain is not None:
         a, b = traj.points[:-1], traj.points[1:]
-        low_c = float(np.min(extrema(a, b, terrain)[:, 0]))
-        ceil = terrain if terrain.lower is None else replace(terrain, heights=terrain.lower,
-                                                             lower=None)  # fmt: skip
-        high_c = float(np.max(extrema(a, b, ceil)[:, 2]))
+        floor0 = terrain.heights
+        top0 = terrain.heights if terrain.lower is None else terrain.lower
+        low_c, high_c = -math.inf, math.inf
+        for how in ("height", "slope") if reach > 0 and within is not None else ("",):
+            floor, top = floor0, top0
+            if how:
+                floor = within(floor0, terrain.dx, terrain.dy, reach, True, how)
+                top = within(top0, terrain.dx, terrain.dy, reach, False, how)
+            # each construction bounds the ground within reach: the better bound holds
+            fl = replace(terrain, heights=floor, lower=None)
+            tp = replace(terrain, heights=top, lower=None)
+            low_c = max(low_c, float(np.min(extrema(a, b, fl)[:, 0])))
+            high_c = min(high_c, float(np.max(extrema(a, b, tp)[:, 2])))
     elif band is not None and band.reference == "ground":  # flat ground at 0
         low_c, high_c = float(z.min()), float(z.max())
     if math.isfinite(low_c):

@@ -35,7 +35,7 @@ import math
 import os
 import warnings
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Any
 
@@ -44,7 +44,7 @@ from numpy.typing import NDArray
 
 from uavplan.io.plan_file import Trajectory
 from uavplan.verify.report import TOL, Violation, fmt_num, fmt_points, point_at
-from uavplan.verify.terrain import bilinear_height, terrain_clearance_extrema
+from uavplan.verify.terrain import bilinear_height, terrain_clearance_extrema, within_reach
 from uavplan.world.obstacles import AltitudeBand
 from uavplan.world.terrain import Terrain
 
@@ -276,11 +276,33 @@ def _source_extrema(traj: Trajectory, source: SourceGround) -> tuple[Any, ...]:
     return pa, pb, seg, span, ua, va, ub, vb, lo_ext, hi_ext
 
 
-def source_clearance(traj: Trajectory, source: SourceGround) -> tuple[float, float]:
+def source_clearance(
+    traj: Trajectory, source: SourceGround, reach: float = 0.0
+) -> tuple[float, float]:
     """The least and the largest height above the raster's own ground along the flight (over
-    the floor's and the ceiling's void fills), metres."""
+    the floor's and the ceiling's void fills), metres; with ``reach`` > 0, above the highest
+    and lowest ground within ``reach`` metres horizontally of the flight (a bound: the
+    samples moved to the highest and lowest within the reach in samples, the local metres'
+    largest stretch into samples about the flight, measured, times 1.1)."""
     if traj.dim != 3 or len(traj.points) < 2:
         return math.inf, -math.inf
+    if reach > 0:
+        P = traj.points
+        u0, v0 = source.to_samples(P[:, 0], P[:, 1])
+        stretch = 0.0
+        for ddx, ddy in ((1.0, 0.0), (0.0, 1.0)):
+            u1, v1 = source.to_samples(P[:, 0] + ddx, P[:, 1] + ddy)
+            stretch = max(stretch, float(np.max(np.hypot(u1 - u0, v1 - v0))))
+        # both unit steps' images bound the map's stretch within sqrt(2) in any direction
+        r = 1.1 * math.sqrt(2.0) * stretch * reach
+        low, high = -math.inf, math.inf
+        for how in ("height", "slope"):  # each bounds the ground within reach: the better
+            s = replace(source, hi=within_reach(source.hi, 1.0, 1.0, r, True, how),
+                        lo=within_reach(source.lo, 1.0, 1.0, r, False, how))  # fmt: skip
+            ext = _source_extrema(traj, s)
+            low = max(low, float(np.min(ext[8][:, 0])))
+            high = min(high, float(np.max(ext[9][:, 2])))
+        return low, high
     ext = _source_extrema(traj, source)
     return float(np.min(ext[8][:, 0])), float(np.max(ext[9][:, 2]))
 

@@ -162,6 +162,52 @@ def terrain_clearance_extrema(a: FloatArray, b: FloatArray, terrain: Terrain) ->
     )
 
 
+def within_reach(
+    H: FloatArray, du: float, dv: float, reach: float, highest: bool, how: str = "height"
+) -> FloatArray:
+    """The verifier's own bound on the ground within ``reach`` horizontally of any point: a
+    grid whose bilinear surface at a point is at least (``highest``; at most otherwise) the
+    surface of ``H`` (columns ``du``, rows ``dv`` apart, edges extended) anywhere within
+    ``reach`` of it. ``how="height"``: each node moved to the highest (lowest) node within
+    ``ceil(reach / d) + 1`` nodes per axis (a point within reach lies in a cell whose corners
+    are all that close to each corner of the point's own cell). ``how="slope"``: each node
+    moved by ``reach`` times the steepest cell gradient within that many cells (a cell's
+    gradient is at most the hypot of its larger x-edge and y-edge slopes, and the surface is
+    continuous). Either holds alone; the verifier uses the better clearance of the two. Kept
+    per grid and window (the margins' bisections ask for the same windows again)."""
+    G = np.asarray(H, dtype=np.float64)
+    if reach <= 0:
+        return G
+    ku = math.ceil(reach / du) + 1
+    kv = math.ceil(reach / dv) + 1
+    key = (id(H), ku, kv, bool(highest), how, float(reach) if how == "slope" else 0.0)
+    hit = _WITHIN.get(key)
+    if hit is not None and hit[0] is H:
+        return hit[1]
+    from scipy.ndimage import maximum_filter, minimum_filter
+
+    size = (2 * kv + 1, 2 * ku + 1)
+    if how == "height":
+        f = maximum_filter if highest else minimum_filter
+        out = np.asarray(f(G, size=size, mode="nearest"))
+    else:
+        ny, nx = G.shape
+        su = np.abs(G[:, 1:] - G[:, :-1]) / du
+        sv = np.abs(G[1:, :] - G[:-1, :]) / dv
+        steep = np.zeros((ny + 1, nx + 1))
+        steep[1:ny, 1:nx] = np.sqrt(np.maximum(su[1:], su[:-1]) ** 2
+                                    + np.maximum(sv[:, 1:], sv[:, :-1]) ** 2)  # fmt: skip
+        near = maximum_filter(steep, size=size, mode="constant", cval=0.0)[:ny, :nx]
+        out = G + reach * near if highest else G - reach * near
+    if len(_WITHIN) > 64:
+        _WITHIN.clear()
+    _WITHIN[key] = (H, out)
+    return out
+
+
+_WITHIN: dict[tuple[int, int, int, bool, str, float], tuple[FloatArray, FloatArray]] = {}
+
+
 def bilinear_height(terrain: Terrain, x: FloatArray, y: FloatArray) -> FloatArray:
     """The verifier's own bilinear lookup (nearest edge outside the grid), metres."""
     H = np.asarray(terrain.heights, dtype=np.float64)

@@ -97,7 +97,7 @@ from uavplan.verify.report import (
 )
 from uavplan.verify.separation import check_moving, check_separation
 from uavplan.verify.source_terrain import check_source_terrain, read_source, source_clearance
-from uavplan.verify.terrain import check_terrain, terrain_clearance_extrema
+from uavplan.verify.terrain import check_terrain, terrain_clearance_extrema, within_reach
 from uavplan.verify.timing import check_bounds, check_speed, check_times
 from uavplan.world.scenario import Scenario
 
@@ -255,17 +255,31 @@ def _under_model(
     out: list[Violation] = []
     margins = {t.id: R.UAVMargin(t.id) for t in trajs}
     checks = (check_cylinders, check_circles, check_polygons)
-    src = None if source is None else (lambda tr: source_clearance(tr, source))
+    src = None if source is None else (lambda tr, reach: source_clearance(tr, source, reach))
     what_model = (f"the execution model's tracking error ({timing.track_h:g} m horizontal, "
                   f"{timing.track_v:g} m vertical)")  # fmt: skip
+    ground_refs = sc.terrain is not None or (
+        sc.altitude is not None and sc.altitude.reference == "ground")  # fmt: skip
     for tr in trajs:
         m = margins[tr.id]
-        eh, by_h = R.horizontal_clearance(tr, sc, checks, timing.track_h)
+
+        def vertical(reach: float, tr: Trajectory = tr) -> tuple[float, str]:
+            return R.vertical_clearance(tr, sc, src, terrain_clearance_extrema, reach,
+                                        within_reach)  # fmt: skip
+
+        def ground(e: float, vertical: Any = vertical) -> str:
+            # a horizontal error moves the ground under the UAV: the ground checks must
+            # still leave the model's vertical error
+            ev_, by_ = vertical(e)
+            return by_ if ev_ < timing.track_v - TOL else ""
+
+        use_ground = ground if tr.dim == 3 and ground_refs else None
+        eh, by_h = R.horizontal_clearance(tr, sc, checks, timing.track_h, use_ground)
         hb = R.horizontal_bounds(tr, sc)
         if hb < eh:
             eh, by_h = hb, "bounds"
         m.take("track_h", eh, by_h)
-        ev, by_v = R.vertical_clearance(tr, sc, src, terrain_clearance_extrema)
+        ev, by_v = vertical(timing.track_h)
         m.take("track_v", ev, by_v)
         for tol, need, by, axis in ((eh, timing.track_h, by_h, "horizontally"),
                                     (ev, timing.track_v, by_v, "vertically")):  # fmt: skip

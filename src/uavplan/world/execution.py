@@ -156,11 +156,59 @@ def windows(t0: float, delta0: float, rho: float, tau: np.ndarray) -> tuple[np.n
     return t0 - delta0 + s / (1.0 + rho), t0 + delta0 + s / (1.0 - rho)
 
 
+def reach_rise(
+    heights: np.ndarray, dx: float, dy: float, reach: float, up: bool = True, how: str = "least"
+) -> np.ndarray:
+    """Per grid node, how much to raise it (``up``; lower it otherwise) so that the bilinear
+    surface of the moved nodes at any point stands above (below) the original surface
+    anywhere within ``reach`` metres horizontally. Two constructions, each sound alone; the
+    one that moves the grid less on average is used:
+
+    * **by the neighbours' heights**: the highest (lowest) node within ``k + 1`` nodes of it,
+      ``k = ceil(reach / d)`` per axis, less (minus) its own height. The original at a point
+      within reach of ``p`` is at most the highest corner of the cell it lies in, and those
+      corners are within ``k + 1`` nodes of each corner of ``p``'s cell; the moved surface at
+      ``p`` is at least its lowest corner. Tight where cells are small beside the reach.
+    * **by the slope**: ``reach`` times the steepest gradient the surface has in a cell
+      within ``k + 1`` cells of the node (in a cell ``|dh/dx|`` is at most the larger of its
+      two x-edge differences over ``dx``, likewise in y, the gradient's norm at most their
+      hypot; the surface is continuous, so along the straight line to a point within reach it
+      changes by at most the reach times the steepest cell crossed, every such cell within
+      that window of each corner of ``p``'s cell). Tight where cells are large.
+
+    (ny, nx) metres, 0 for ``reach`` 0; outside the grid the surface extends its edges, as the
+    terrain's lookups do. ``how``: ``"height"`` or ``"slope"`` forces one (for the tests)."""
+    from scipy.ndimage import maximum_filter, minimum_filter
+
+    H = np.asarray(heights, dtype=np.float64)
+    ny, nx = H.shape
+    if reach <= 0:
+        return np.zeros_like(H)
+    kx = math.ceil(reach / dx) + 1
+    ky = math.ceil(reach / dy) + 1
+    size = (2 * ky + 1, 2 * kx + 1)
+    if up:
+        by_height = maximum_filter(H, size=size, mode="nearest") - H
+    else:
+        by_height = H - minimum_filter(H, size=size, mode="nearest")
+    gx = np.abs(np.diff(H, axis=1)) / dx  # (ny, nx - 1): the x edges
+    gy = np.abs(np.diff(H, axis=0)) / dy  # (ny - 1, nx): the y edges
+    cells = np.zeros((ny + 1, nx + 1))  # cell (j, i) at [j + 1, i + 1]; 0 off the grid
+    cells[1:ny, 1:nx] = np.hypot(np.maximum(gx[:-1], gx[1:]), np.maximum(gy[:, :-1], gy[:, 1:]))
+    # node (j, i) at [j, i]: the window [j - ky, j + ky] holds the cells j - ky - 1 .. j + ky - 1
+    steepest = maximum_filter(cells, size=size, mode="constant", cval=0.0)[:ny, :nx]
+    by_slope = reach * steepest
+    if how == "height" or (how == "least" and by_height.mean() <= by_slope.mean()):
+        return np.asarray(by_height)
+    return np.asarray(by_slope)
+
+
 def widened(scenario: Scenario, model: ExecutionModel) -> Scenario:
     """``scenario`` with every static clearance widened by the model's tracking error, the world
     a robust plan is planned in: cylinders, circles and polygons (and uncertain areas) ``e_h``
     wider, moving obstacles ``sqrt(e_h^2 + e_v^2)`` wider, the terrain's floor ``e_v`` higher and
-    its ceiling ``e_v`` lower, the altitude band ``e_v`` narrower at each end, the bounds
+    its ceiling ``e_v`` lower, each also by what the ground can rise (fall) within ``e_h``
+    (:func:`reach_rise`), the altitude band ``e_v`` narrower at each end, the bounds
     ``e_h`` (``e_v``) smaller on each side (a band above the ground follows the terrain's
     grids instead); the scenario's ``execution`` set to ``model``. The
     scenario itself when the model has no tracking error (only ``execution`` set)."""
@@ -178,10 +226,13 @@ def widened(scenario: Scenario, model: ExecutionModel) -> Scenario:
                          f"and {ev:g} m vertically")  # fmt: skip
     bounds = Bounds(tuple(lo + pad), tuple(hi - pad))
     terrain = scenario.terrain
-    if terrain is not None and ev:
+    if terrain is not None and (ev or eh):
         t = terrain
-        low = t.ceiling_heights - ev
-        terrain = Terrain(t.heights + ev, t.x0, t.y0, t.dx, t.dy, t.name, dict(t.georef), low)
+        # within e_h of a point the ground may stand higher (lower) than at the point
+        up = ev + reach_rise(t.heights, t.dx, t.dy, eh)
+        down = ev + reach_rise(t.ceiling_heights, t.dx, t.dy, eh, up=False)
+        terrain = Terrain(t.heights + up, t.x0, t.y0, t.dx, t.dy, t.name, dict(t.georef),
+                          t.ceiling_heights - down)  # fmt: skip
     band = scenario.altitude
     if band is not None and ev:
         if band.max - band.min <= 2 * ev:
