@@ -52,6 +52,7 @@ BUILTINS = [
     "ppswarm2",
     "ppswarm3",
     "ppswarm4",
+    "quadrotors",
     "rscdwoa-mixed",
     "rscdwoa-static",
     "simple2d",
@@ -389,7 +390,7 @@ def test_ppswarm_uav_limits() -> None:
         u = load_builtin(f"ppswarm{k}").uav
         assert u == UAV(
             speed=20, turn_radius=20, s1=15, s2=10, min_speed=10, max_climb_angle=30,
-            max_descent_angle=30,
+            max_descent_angle=30, airframe="small-fixed-wing",
         )  # fmt: skip
         assert u.v_max == 20
 

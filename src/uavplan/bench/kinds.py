@@ -1,7 +1,8 @@
 """Run kinds: how one run of a plan is executed, by name (a plan's ``kind``).
 
 Built in: ``planner`` (a single-UAV planner), ``function`` (an optimizer on a benchmark
-function), ``fleet`` (a fleet planner, its plan checked by the independent verifier). A paper
+function), ``fleet`` (a fleet planner, its plan checked by the independent verifier),
+``simulate`` (a plan's missions flown in simulation, :mod:`uavplan.bench.simulation`). A paper
 whose runs need something else registers its own kind with :func:`register_kind` in its module
 under :mod:`uavplan.bench.papers`. A kind takes the :class:`~uavplan.bench.plans.RunSpec` and
 returns the run's metrics (the columns of its row).
@@ -46,7 +47,9 @@ def run_kind(name: str) -> RunKind:
     """The run kind registered under ``name`` (the paper modules' kinds too: a worker process
     imports them here, on its first run of a kind it does not know)."""
     if name not in _KINDS:
-        import uavplan.bench.papers  # noqa: F401  (registers the papers' kinds)
+        # the papers' kinds, and "simulate"
+        import uavplan.bench.papers
+        import uavplan.bench.simulation  # noqa: F401
     try:
         return _KINDS[name]
     except KeyError:

@@ -1,9 +1,10 @@
-"""Command line: ``uavplan plan | demo | verify | export | view | planners | schema | scenario ... |
-bench ... | report``.
+"""Command line: ``uavplan plan | demo | verify | fly | export | simulate | view | planners |
+schema | scenario ... | bench ... | report``.
 
 One module per command group: :mod:`uavplan.cli.plan` (``plan``, ``demo``),
 :mod:`uavplan.cli.scenario`, :mod:`uavplan.cli.bench` (``bench``, ``report``),
-:mod:`uavplan.cli.verify`, :mod:`uavplan.cli.export`, :mod:`uavplan.cli.view`,
+:mod:`uavplan.cli.verify`, :mod:`uavplan.cli.export`, :mod:`uavplan.cli.simulate`,
+:mod:`uavplan.cli.view`,
 :mod:`uavplan.cli.planners`,
 :mod:`uavplan.cli.schema`.
 """
@@ -22,6 +23,7 @@ from uavplan.cli.planners import PlannerListInHelp
 from uavplan.cli.planners import planners as planners_command
 from uavplan.cli.scenario import scenario_app
 from uavplan.cli.schema import schema as schema_command
+from uavplan.cli.simulate import simulate as simulate_command
 from uavplan.cli.verify import verify as verify_command
 from uavplan.cli.view import view as view_command
 
@@ -40,6 +42,7 @@ app.command("report")(report_command)
 app.command("verify")(verify_command)
 app.command("fly")(fly_command)
 app.command("export")(export_command)
+app.command("simulate")(simulate_command)
 app.command("view")(view_command)
 app.command("planners")(planners_command)
 app.command("algorithms", help="The same as `planners`: every planner, or NAME's options.")(

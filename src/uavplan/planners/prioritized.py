@@ -624,9 +624,12 @@ class PrioritizedPlanner(FleetPlanner):
         world = flight_validator(scenario, task, None)
         short = flight_validator(scenario, task, None, kinematics=False)
         per_cand: list[tuple[PlanResult, list[Flight]]] = []
-        if tried is not None and tried.flown is not None and tried.flown_violations and set(
-            tried.flown_violations
-        ) <= TIME_CHECKS:  # the flight just tried fails by time alone: it first
+        if (
+            tried is not None
+            and tried.flown is not None
+            and tried.flown_violations
+            and set(tried.flown_violations) <= TIME_CHECKS
+        ):  # the flight just tried fails by time alone: it first
             own = Flight(np.asarray(tried.flown), np.asarray(tried.flown_times),
                          tried.flown_kind, "declared", ())  # fmt: skip
             per_cand.append((tried, [own]))

@@ -80,6 +80,9 @@ class UAV:
             all three at once (an axis-aligned box). When given it replaces the sphere ``s2``
             in every separation check (the motion validator, the reservation table, the
             verifier); None: the sphere of radius ``s2``.
+        airframe: the UAV's class and airframe for flight simulation
+            (:data:`uavplan.world.airframes.AIRFRAMES`); None: by its limits
+            (:func:`uavplan.world.airframes.airframe_of`).
 
     Defaults: PPSwarm Sect. 5.1 for speed, s1 and s2 (20 m/s, 15 m, 10 m); no turn, climb or
     minimum-speed limit (the PPSwarm scenario files set the paper's 20 m turn radius).
@@ -95,8 +98,15 @@ class UAV:
     max_climb_angle: float | None = None
     max_descent_angle: float | None = None
     s2_axes: tuple[float, float, float] | None = None
+    airframe: str | None = None
 
     def __post_init__(self) -> None:
+        if self.airframe is not None:
+            from uavplan.world.airframes import AIRFRAMES
+
+            if self.airframe not in AIRFRAMES:
+                raise ValueError(f"uav airframe {self.airframe!r}: choose from "
+                                 f"{', '.join(sorted(AIRFRAMES))}")  # fmt: skip
         for name in ("speed", "turn_radius", "s1", "s2", "size", "min_speed"):
             value = getattr(self, name)
             if not np.isfinite(value) or value < 0 or (name == "speed" and value == 0):

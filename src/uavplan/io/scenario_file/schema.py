@@ -294,6 +294,12 @@ class UAVSpec(_Spec):
         "axis-aligned box); replaces the sphere s2 in every separation check. null = the "
         "sphere s2.",
     )
+    airframe: Literal["small-fixed-wing", "fast-fixed-wing", "quadrotor"] | None = Field(
+        None,
+        description="The UAV's class and airframe for flight simulation (uavplan simulate): "
+        "the dynamics, the autopilot's guidance and the navigation error. null = by its "
+        "limits: a fixed wing with a turn radius or a minimum speed, else a quadrotor.",
+    )
 
     @field_validator("min_speed")
     @classmethod

@@ -42,6 +42,8 @@ def _uav_data(uav: UAV) -> dict[str, Any]:
             out[name] = value
     if uav.s2_axes is not None:
         out["s2_axes"] = list(uav.s2_axes)
+    if uav.airframe is not None:
+        out["airframe"] = uav.airframe
     return out
 
 

@@ -1,0 +1,194 @@
+"""One simulated execution of a plan (:func:`simulate_once`): the conditions drawn from a
+seed (each UAV's take-off error within the plan's execution model, a steady wind, the
+turbulence's intensity, the navigation errors), every UAV's exported mission flown by the
+batched model (:mod:`uavplan.sim.fleet`), and the flown tracks with their tracking and timing
+errors against the trajectories the plan verified. Whether the tracks are safe is for the
+independent verifier to say (:mod:`uavplan.bench.simulation`)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from uavplan.io.plan_file import PlanFile, Trajectory
+from uavplan.sim.fleet import DRAWS, init_state, params, step_fleet
+from uavplan.sim.missions import Legs, mission_legs
+from uavplan.sim.turbulence import INTENSITIES
+from uavplan.world.airframes import Airframe, airframe_of
+
+FloatArray = NDArray[np.float64]
+
+#: Time step of the batched model, s, the recording interval of the tracks, s, and the steps
+#: the kernel takes per call (the random draws of that many steps are made at once).
+DT = 0.05
+REC_DT = 0.5
+CHUNK = 400
+
+
+@dataclass(frozen=True)
+class Conditions:
+    """What one execution meets: ``wind_max`` (m/s, the steady wind's speed is uniform up to
+    it, its direction uniform), ``turbulence`` (a name of
+    :data:`~uavplan.sim.turbulence.INTENSITIES`), ``takeoff_s`` (each UAV's take-off error is
+    uniform within it; None: the plan's execution model's), the navigation errors on
+    (``nav``), the height the gust scales use (``h_agl``, m)."""
+
+    wind_max: float = 3.0
+    turbulence: str = "light"
+    takeoff_s: float | None = None
+    nav: bool = True
+    h_agl: float = 100.0
+
+    def record(self) -> dict[str, Any]:
+        return {"wind_max": self.wind_max, "turbulence": self.turbulence,
+                "takeoff_s": self.takeoff_s, "nav": self.nav, "h_agl": self.h_agl}  # fmt: skip
+
+
+@dataclass
+class Execution:
+    """One simulated execution: the tracks (as trajectories the verifier reads), the drawn
+    conditions, per UAV the largest horizontal and vertical tracking errors and the timing
+    error range (s, actual minus planned time at the same point of the path), and all samples'
+    errors pooled (for quantiles)."""
+
+    tracks: list[Trajectory]
+    wind: FloatArray
+    takeoff_errors: dict[str, float]
+    track_h: dict[str, float] = field(default_factory=dict)
+    track_v: dict[str, float] = field(default_factory=dict)
+    timing: dict[str, tuple[float, float]] = field(default_factory=dict)
+    samples_h: FloatArray = field(default_factory=lambda: np.zeros(0))
+    samples_v: FloatArray = field(default_factory=lambda: np.zeros(0))
+    samples_t: FloatArray = field(default_factory=lambda: np.zeros(0))
+    finished: int = 0
+    items: dict[str, int] = field(default_factory=dict)
+
+
+def pack(legs: list[Legs]) -> tuple[FloatArray, NDArray[np.int64], FloatArray, FloatArray]:
+    """The kernel's padded arrays of every UAV's legs."""
+    U = len(legs)
+    N = max(len(lg.points) for lg in legs)
+    P = np.zeros((U, N, 3))
+    S = np.zeros((U, N))
+    H = np.zeros((U, N))
+    n = np.zeros(U, dtype=np.int64)
+    for i, lg in enumerate(legs):
+        m = len(lg.points)
+        P[i, :m] = lg.points
+        P[i, m:] = lg.points[-1]
+        S[i, : m - 1] = lg.speeds
+        H[i, :m] = lg.holds
+        n[i] = m
+    return P, n, S, H
+
+
+def errors_against(
+    track: Trajectory, planned: Trajectory, window: float = 120.0
+) -> tuple[FloatArray, ...]:
+    """Per sample of ``track``: the horizontal and vertical distances to the nearest point of
+    the ``planned`` path (horizontally nearest, segment by segment, among the segments the
+    plan flies within ``window`` seconds of the sample's time: a path that passes near itself
+    is not matched to its other pass) and the time error there (actual minus the planned
+    time at that point)."""
+    A = planned.points[:-1]
+    B = planned.points[1:]
+    tA, tB = planned.times[:-1], planned.times[1:]
+    Q = track.points
+    h = np.empty(len(Q))
+    v = np.empty(len(Q))
+    te = np.empty(len(Q))
+    D = B[:, :2] - A[:, :2]
+    dd = np.maximum(np.einsum("ij,ij->i", D, D), 1e-12)
+    for lo in range(0, len(Q), 256):
+        q = Q[lo : lo + 256]
+        r = q[:, None, :2] - A[None, :, :2]
+        s = np.clip(np.einsum("qij,ij->qi", r, D) / dd, 0.0, 1.0)
+        foot = A[None, :, :2] + s[..., None] * D[None]
+        d2 = np.sum((q[:, None, :2] - foot) ** 2, axis=2)
+        tq = track.times[lo : lo + 256, None]
+        near = (tB[None] >= tq - window) & (tA[None] <= tq + window)
+        d2 = np.where(near | ~near.any(axis=1, keepdims=True), d2, np.inf)
+        j = np.argmin(d2, axis=1)
+        sj = s[np.arange(len(q)), j]
+        h[lo : lo + 256] = np.sqrt(d2[np.arange(len(q)), j])
+        zp = A[j, 2] + sj * (B[j, 2] - A[j, 2])
+        v[lo : lo + 256] = q[:, 2] - zp
+        te[lo : lo + 256] = track.times[lo : lo + 256] - (tA[j] + sj * (tB[j] - tA[j]))
+    return h, v, te
+
+
+def simulate_once(
+    plan: PlanFile,
+    scenario: Any,
+    seed: int,
+    conditions: Conditions = Conditions(),
+    airframe: Airframe | None = None,
+    max_items: int = 500,
+) -> Execution:
+    """Fly ``plan``'s exported missions once under conditions drawn from ``seed``."""
+    from uavplan.io.missions import ExportOptions, Mission
+    from uavplan.world.geo import GeoOrigin
+
+    af = airframe or airframe_of(scenario.uav)
+    rng = np.random.default_rng(seed)
+    opts = ExportOptions(frame="amsl", end="none", max_items=max_items)
+    if plan.origin is None and scenario.origin is None:  # only the round trip needs one
+        plan = dataclasses.replace(plan, origin=GeoOrigin(0.0, 0.0, 0.0))
+    mission = Mission(plan, scenario, opts)
+    legs = mission_legs(mission, float(scenario.uav.speed))
+    rec = dict(plan.execution or {})
+    d0 = float(conditions.takeoff_s if conditions.takeoff_s is not None
+               else rec.get("takeoff_s", 0.0))  # fmt: skip
+    errs = rng.uniform(-d0, d0, len(legs)) if d0 > 0 else np.zeros(len(legs))
+    speed = rng.uniform(0.0, conditions.wind_max)
+    heading = rng.uniform(0.0, 2 * math.pi)
+    wind = np.array([speed * math.cos(heading), speed * math.sin(heading), 0.0])
+    P, n, S, H = pack(legs)
+    t0 = np.array([lg.takeoff for lg in legs]) + errs
+    kind = 0 if af.kind == "fixed-wing" else 1
+    prm = params(af, scenario.uav)
+    if not conditions.nav:
+        prm = (*prm[:14], 0.0, 0.0, *prm[16:])
+    planned = plan.trajectories("flown")
+    span = max(float(tr.times[-1] - tr.times[0]) for tr in planned)
+    t_end = float(t0.max()) + 2.0 * span + 120.0
+    R = math.ceil((2.0 * span + 120.0) / REC_DT) + 2
+    U = len(legs)
+    out_xyz = np.zeros((U, R, 3))
+    out_t = np.zeros((U, R))
+    out_n = np.zeros(U, dtype=np.int64)
+    w20 = INTENSITIES[conditions.turbulence]
+    nav0 = rng.standard_normal((U, 3)) * np.array([prm[14], prm[14], prm[15]])
+    st = init_state(P, n, S, H, t0, nav0)
+    t = float(t0.min())
+    finished = 0
+    while t < t_end and finished < U:
+        noise = rng.standard_normal((U, CHUNK, DRAWS))
+        finished = step_fleet(st, P, n, S, H, t0, kind, prm, wind, w20, conditions.h_agl, DT, t,
+                              CHUNK, REC_DT, noise, out_xyz, out_t, out_n)  # fmt: skip
+        t += CHUNK * DT
+    tracks = []
+    ex = Execution([], wind, {lg.uav: float(e) for lg, e in zip(legs, errs, strict=True)},
+                   finished=int(finished), items={lg.uav: lg.items for lg in legs})  # fmt: skip
+    hs, vs, ts = [], [], []
+    for i, (lg, pl) in enumerate(zip(legs, planned, strict=True)):
+        m = int(out_n[i])
+        tr = Trajectory(lg.uav, out_xyz[i, :m].copy(), out_t[i, :m].copy(), True)
+        tracks.append(tr)
+        h, v, te = errors_against(tr, pl)
+        ex.track_h[lg.uav] = float(h.max()) if m else math.nan
+        ex.track_v[lg.uav] = float(np.abs(v).max()) if m else math.nan
+        ex.timing[lg.uav] = (float(te.min()), float(te.max())) if m else (math.nan, math.nan)
+        hs.append(h)
+        vs.append(v)
+        ts.append(te)
+    ex.tracks = tracks
+    ex.samples_h = np.concatenate(hs) if hs else np.zeros(0)
+    ex.samples_v = np.concatenate(vs) if vs else np.zeros(0)
+    ex.samples_t = np.concatenate(ts) if ts else np.zeros(0)
+    return ex

@@ -1,0 +1,108 @@
+"""UAV classes and their airframes: what the simulated autopilot and airframe do.
+
+A scenario's ``uav.airframe`` names one of :data:`AIRFRAMES`; without one, a UAV with a turn
+radius or a minimum speed is a fixed wing (:data:`SMALL_FIXED_WING`), else a multirotor
+(:data:`QUADROTOR`). The parameters are those of a point-mass model with first-order responses
+(the batched model of :mod:`uavplan.sim.fleet`): docs/decisions.md ("Flight simulation") says
+where each comes from and how the reference libraries were used to check them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Literal
+
+#: The UAV classes.
+Kind = Literal["fixed-wing", "multirotor"]
+
+
+@dataclass(frozen=True)
+class Airframe:
+    """A UAV class's airframe, autopilot and navigation.
+
+    Attributes:
+        name, kind: the airframe's name and its class.
+        tau_speed: airspeed (fixed wing) response time constant, s.
+        tau_bank: bank-angle response time constant, s (fixed wing).
+        max_bank_deg: the bank limit, degrees (fixed wing; the turn radius the plan assumes
+            needs ``atan(v^2 / (g R))``).
+        tau_gamma: flight-path-angle response time constant, s (fixed wing).
+        l1_period, l1_damping: L1 guidance period (s) and damping (ArduPilot's NAVL1_PERIOD
+            and NAVL1_DAMPING; PX4's L1 controller the same).
+        k_height: height error to climb-rate gain, 1/s (fixed wing) or vertical position gain
+            (multirotor).
+        k_speed, ki_speed: ground-speed error to airspeed command, proportional (-) and
+            integral (1/s) (a fixed wing holds an airspeed; the mission commands ground
+            speeds).
+        tau_vel: velocity response time constant, s (multirotor).
+        max_accel: the largest horizontal acceleration, m/s^2 (multirotor).
+        k_pos: position error to velocity command gain, 1/s (multirotor, PX4's MPC_XY_P).
+        drag: how gusts push a multirotor: acceleration per m/s of gust, 1/s.
+        lead: how far the multirotor's setpoint may run ahead of it, m.
+        nav_h, nav_v: the position estimate's error, 1-sigma, m (horizontal per axis,
+            vertical); a first-order Gauss-Markov process.
+        nav_tau: its correlation time, s.
+        accept: the waypoint acceptance radius, m (a waypoint is passed within it, or once
+            the UAV is past the line through it normal to the leg).
+        tau_att: how fast a multirotor's acceleration follows its command (the attitude loop
+            tilting the thrust, and the rotors), s.
+    """
+
+    name: str
+    kind: Kind
+    tau_speed: float = 2.0
+    tau_bank: float = 0.3
+    max_bank_deg: float = 65.0
+    tau_gamma: float = 0.8
+    l1_period: float = 6.0
+    l1_damping: float = 0.75
+    k_height: float = 0.4
+    k_speed: float = 0.5
+    ki_speed: float = 0.1
+    tau_vel: float = 0.4
+    max_accel: float = 5.0
+    k_pos: float = 0.95
+    drag: float = 0.35
+    lead: float = 10.0
+    nav_h: float = 1.0
+    nav_v: float = 1.5
+    nav_tau: float = 100.0
+    accept: float = 2.0
+    tau_att: float = 0.15
+
+    def record(self) -> dict[str, Any]:
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+
+#: A small fixed wing (the PPSwarm UAV: 20 m/s, 20 m turns, a 64 degree bank at cruise).
+SMALL_FIXED_WING = Airframe("small-fixed-wing", "fixed-wing")
+#: A fast fixed wing (RSCDWOA's UAV: 50 m/s, 2 km turns): slower responses, gentle banks.
+FAST_FIXED_WING = Airframe("fast-fixed-wing", "fixed-wing", tau_speed=4.0, tau_bank=0.6,
+                           max_bank_deg=35.0, tau_gamma=1.5, l1_period=17.0,
+                           k_height=0.2, accept=10.0)  # fmt: skip
+#: A quadrotor under a position and velocity controller (PX4's multicopter defaults).
+QUADROTOR = Airframe("quadrotor", "multirotor", nav_h=0.8, nav_v=1.0, accept=2.0)
+
+AIRFRAMES: dict[str, Airframe] = {a.name: a for a in (SMALL_FIXED_WING, FAST_FIXED_WING,
+                                                      QUADROTOR)}  # fmt: skip
+
+
+def airframe_of(uav: Any) -> Airframe:
+    """The airframe of a scenario's UAV: its ``airframe`` when named, else by its limits."""
+    name = getattr(uav, "airframe", None)
+    if name:
+        try:
+            return AIRFRAMES[name]
+        except KeyError:
+            raise ValueError(
+                f"unknown airframe {name!r}; choose from {', '.join(sorted(AIRFRAMES))}"
+            ) from None
+    if float(getattr(uav, "turn_radius", 0.0)) > 0 or float(getattr(uav, "min_speed", 0.0)) > 0:
+        return SMALL_FIXED_WING
+    return QUADROTOR
+
+
+def bank_for(speed: float, radius: float) -> float:
+    """The bank angle (degrees) of a coordinated turn of ``radius`` at ``speed``."""
+    return math.degrees(math.atan(speed * speed / (9.80665 * radius))) if radius > 0 else 0.0
