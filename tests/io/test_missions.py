@@ -154,14 +154,18 @@ def test_wpl_reads_back_with_pymavlink(tmp_path: Path) -> None:
         assert np.abs(got[:, :2] - G[:, :2]).max() < 1e-7  # pymavlink keeps 8 decimals here
         assert np.abs(got[:, 2] - G[:, 2]).max() < 1e-3
         speeds = [it.param2 for it in items if it.command == 178]
+        # ground speeds are horizontal (MAV_CMD_DO_CHANGE_SPEED's): a little under the 3-D
+        # 20 and 15 m/s where the path climbs over the terrain
+        hs = np.linalg.norm(np.diff(tr.points[:, :2], axis=0), axis=1) / np.diff(tr.times)
+        assert speeds[0] == pytest.approx(hs[0], rel=1e-6) and hs[0] < 20.0
         if tr.id == "uav1":
             assert [w.param1 for w in wps][1] == pytest.approx(5.0)
-            assert speeds == pytest.approx([20.0, 15.0], rel=1e-6)
+            assert speeds == pytest.approx([20.0, 15.0], rel=0.01)
             # each speed right after the waypoint its leg starts from: WP0 20 WP1(hold) 15 WP2
             cmds = [it.command for it in items[1:]]
             assert cmds[:6] == [22, 16, 178, 16, 178, 16]
         else:
-            assert speeds == pytest.approx([20.0], rel=1e-6)
+            assert all(s == pytest.approx(20.0, rel=0.02) for s in speeds)
 
 
 def test_qgc_plans_pass_qgcs_loader_rules(tmp_path: Path) -> None:
@@ -176,7 +180,7 @@ def test_qgc_plans_pass_qgcs_loader_rules(tmp_path: Path) -> None:
         assert qgc_plan_problems(doc) == []
         mission = doc["mission"]
         cruise = 15.0 if path.stem == "uav1" else 20.0  # the median planned speed
-        assert mission["cruiseSpeed"] == pytest.approx(cruise, rel=1e-3)
+        assert mission["cruiseSpeed"] == pytest.approx(cruise, rel=0.02)  # ground speed: horizontal
         assert qgc_plan_problems(doc, strict=True) == []
         cmds = [it["command"] for it in mission["items"]]
         assert cmds[0] == 22 and cmds[-1] == 21 and cmds.count(16) >= 4

@@ -223,3 +223,17 @@ def test_the_ground_raised_by_its_reach_stands_above_the_ground_anywhere_within_
         q = p + d * np.array([np.cos(a), np.sin(a)])
         assert hi.height(*p) >= T.height(*q) - 1e-9
         assert lo.height(*p) <= T.height(*q) + 1e-9
+
+
+def test_the_default_takes_a_named_airframes_calibrated_tracking_error() -> None:
+    from types import SimpleNamespace
+
+    from uavplan.world.airframes import AIRFRAMES
+    from uavplan.world.execution import default_for
+
+    assert default_for(SimpleNamespace(airframe=None, turn_radius=20.0)) is DEFAULT
+    for af in AIRFRAMES.values():
+        m = default_for(SimpleNamespace(airframe=af.name))
+        assert (m.takeoff_s, m.speed) == (DEFAULT.takeoff_s, DEFAULT.speed)
+        assert m.track_h == max(3.0, af.track_h) and m.track_v == max(2.0, af.track_v)
+        assert af.name in m.source or m is DEFAULT

@@ -135,7 +135,8 @@ def wilson(k: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
     d = 1.0 + z * z / n
     c = (p + z * z / (2 * n)) / d
     h = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
-    return max(0.0, c - h), min(1.0, c + h)
+    # the bounds are exactly 0 (1) when k = 0 (n); c - h leaves round-off there
+    return (0.0 if k == 0 else max(0.0, c - h)), (1.0 if k == n else min(1.0, c + h))
 
 
 def summarize(rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:

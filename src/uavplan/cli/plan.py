@@ -213,9 +213,9 @@ def planning_world(scenario: Any, ref: str, nominal: bool, model: Any = None) ->
     task does not fit in the widened world."""
     import numpy as np
 
-    from uavplan.world.execution import DEFAULT, NOMINAL, widened
+    from uavplan.world.execution import NOMINAL, default_for, widened
 
-    model = NOMINAL if nominal else (model or scenario.execution or DEFAULT)
+    model = NOMINAL if nominal else (model or scenario.execution or default_for(scenario.uav))
     where = "--nominal" if nominal else model.source
     hint = "" if nominal or model.nominal else "; --nominal plans for an exact execution"
     out.print(f"execution model: {model.describe()} ({where}){hint}", markup=False)
@@ -469,7 +469,8 @@ def plan(
         typer.Option(
             help="Plan for an exact execution (no take-off, speed or tracking error) instead "
             "of the scenario's execution model or uavplan's default (take-off ±2 s, speed "
-            "±3 %, tracking 3 m horizontal and 2 m vertical)."
+            "±3 %, tracking 3 m horizontal and 2 m vertical, or the tracking error calibrated "
+            "for the UAV's named airframe when larger)."
         ),
     ] = False,
 ) -> None:

@@ -247,8 +247,20 @@ def step_fleet(
                 integ = min(max(integ + err * dt, -v_max), v_max)
                 va_cmd = min(max(v_leg + k_s * err + ki_s * integ, v_min), v_max)
                 va += (va_cmd - va) * (1.0 - math.exp(-dt / tau_v))
-                # height: a climb rate as a flight-path angle within the limits
-                rate = k_h * (z_cmd - ze) + slope * max(vg_along, 0.0)
+                # height: a climb rate as a flight-path angle within the limits; the climb
+                # rate fed forward is the path's slope tau_g seconds ahead (the flight-path
+                # angle lags its command by about tau_g, so a slope change at a waypoint is
+                # commanded that much before it)
+                ahead = max(vg_along, 0.0) * tau_g
+                slope_ff = slope
+                if ahead > 0.0 and L - along < ahead and k + 2 < n:
+                    L2 = math.sqrt((P[u, k + 2, 0] - P[u, k + 1, 0]) ** 2
+                                   + (P[u, k + 2, 1] - P[u, k + 1, 1]) ** 2)  # fmt: skip
+                    if L2 > 0.0:
+                        w = min(max(1.0 - (L - along) / ahead, 0.0), 1.0)
+                        slope2 = (P[u, k + 2, 2] - P[u, k + 1, 2]) / L2
+                        slope_ff = (1.0 - w) * slope + w * slope2
+                rate = k_h * (z_cmd - ze) + slope_ff * max(vg_along, 0.0)
                 sg = min(max(rate / max(va, 1.0), -math.sin(descent)), math.sin(climb))
                 gam += (math.asin(sg) - gam) * (1.0 - math.exp(-dt / tau_g))
                 vx = va * math.cos(gam) * math.cos(psi) + wx

@@ -47,6 +47,11 @@ class Airframe:
             the UAV is past the line through it normal to the leg).
         tau_att: how fast a multirotor's acceleration follows its command (the attitude loop
             tilting the thrust, and the rotors), s.
+        track_h, track_v: the tracking error the default execution model assumes for the
+            class, m (horizontal, vertical): the largest per-flight error of the class's
+            calibration flights (``benchmarks/calibrate_tracking.py``: the 99th percentile of
+            each UAV flight's largest error, rounded up to half a metre; the default model
+            never assumes less than 3 m and 2 m).
     """
 
     name: str
@@ -70,19 +75,23 @@ class Airframe:
     nav_tau: float = 100.0
     accept: float = 2.0
     tau_att: float = 0.15
+    track_h: float = 3.0
+    track_v: float = 2.0
 
     def record(self) -> dict[str, Any]:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
 
 
 #: A small fixed wing (the PPSwarm UAV: 20 m/s, 20 m turns, a 64 degree bank at cruise).
-SMALL_FIXED_WING = Airframe("small-fixed-wing", "fixed-wing")
+SMALL_FIXED_WING = Airframe("small-fixed-wing", "fixed-wing", track_h=4.5, track_v=7.5)
 #: A fast fixed wing (RSCDWOA's UAV: 50 m/s, 2 km turns): slower responses, gentle banks.
 FAST_FIXED_WING = Airframe("fast-fixed-wing", "fixed-wing", tau_speed=4.0, tau_bank=0.6,
                            max_bank_deg=35.0, tau_gamma=1.5, l1_period=17.0,
-                           k_height=0.2, accept=10.0)  # fmt: skip
+                           k_height=0.2, accept=10.0, track_h=8.5, track_v=12.5)  # fmt: skip
 #: A quadrotor under a position and velocity controller (PX4's multicopter defaults).
-QUADROTOR = Airframe("quadrotor", "multirotor", nav_h=0.8, nav_v=1.0, accept=2.0)
+QUADROTOR = Airframe(
+    "quadrotor", "multirotor", nav_h=0.8, nav_v=1.0, accept=2.0, track_h=6.5, track_v=7.5
+)
 
 AIRFRAMES: dict[str, Airframe] = {a.name: a for a in (SMALL_FIXED_WING, FAST_FIXED_WING,
                                                       QUADROTOR)}  # fmt: skip

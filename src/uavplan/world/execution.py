@@ -144,9 +144,29 @@ class ExecutionModel:
 #: The plan flown exactly.
 NOMINAL = ExecutionModel()
 
-#: What ``uavplan plan`` plans against unless the scenario states a model or ``--nominal`` is
-#: given: small UAVs under a standard autopilot (``docs/decisions.md``, "Execution model").
+#: The least model ``uavplan plan`` plans against unless the scenario states one or
+#: ``--nominal`` is given: small UAVs under a standard autopilot (``docs/decisions.md``,
+#: "Execution model"); :func:`default_for` raises its tracking error to the UAV class's.
 DEFAULT = ExecutionModel(2.0, 0.03, 3.0, 2.0, 0.0, "uavplan's default for small UAVs")
+
+
+def default_for(uav: Any) -> ExecutionModel:
+    """uavplan's default model for a scenario's UAV: :data:`DEFAULT`'s take-off and speed
+    errors, and for a UAV that names its airframe (``uav.airframe``) the larger of its
+    tracking error and the one calibrated in flight simulation for that airframe
+    (:attr:`uavplan.world.airframes.Airframe.track_h`, ``track_v``). A UAV that names none
+    gets :data:`DEFAULT` (its class is only a guess from its limits)."""
+    from uavplan.world.airframes import AIRFRAMES
+
+    if getattr(uav, "airframe", None) not in AIRFRAMES:
+        return DEFAULT
+    af = AIRFRAMES[uav.airframe]
+    h, v = max(DEFAULT.track_h, af.track_h), max(DEFAULT.track_v, af.track_v)
+    if (h, v) == (DEFAULT.track_h, DEFAULT.track_v):
+        return DEFAULT
+    return replace(DEFAULT, track_h=h, track_v=v,
+                   source=f"uavplan's default for a {af.name}, tracking calibrated in "
+                   "flight simulation")  # fmt: skip
 
 
 def windows(t0: float, delta0: float, rho: float, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -146,8 +146,10 @@ class Mission:
         return z - self.ground(P[:, :2])
 
     def segment_speeds(self, tr: Trajectory) -> FloatArray:
-        """Speed over each segment, m/s (0 where the UAV waits)."""
-        d = np.linalg.norm(np.diff(tr.points, axis=0), axis=1)
+        """Ground speed over each segment, m/s: horizontal, as ``MAV_CMD_DO_CHANGE_SPEED``'s
+        ground speed is (ArduCopter's WPNAV_SPEED and PX4's cruise speed are horizontal, a
+        climb's rate is the autopilot's own); 0 where the UAV waits or only climbs."""
+        d = np.linalg.norm(np.diff(tr.points[:, :2], axis=0), axis=1)
         dt = np.diff(tr.times)
         return np.where(dt > 0, d / np.where(dt > 0, dt, 1.0), 0.0)
 

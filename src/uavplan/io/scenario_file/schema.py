@@ -559,7 +559,8 @@ class ScenarioSpec(_Spec):
     execution: ExecutionSpec | None = Field(
         None,
         description="The execution error plans must tolerate. Absent: `uavplan plan` uses "
-        "its default (take-off 2 s, speed 3 %, tracking 3 m / 2 m) and the Python API and "
+        "its default (take-off 2 s, speed 3 %, tracking 3 m / 2 m, or the named airframe's "
+        "calibrated tracking error when larger) and the Python API and "
         "experiments the nominal model (flown exactly).",
     )
     origin: OriginSpec | None = Field(

@@ -1,0 +1,85 @@
+"""Where the default execution model's tracking error comes from: each UAV class's exported
+missions flown many times by the batched flight model (:mod:`uavplan.sim`) under the
+calibration conditions (Dryden turbulence ``--turbulence``, a steady wind up to ``--wind``
+m/s, navigation error on), and the distribution of each UAV flight's largest horizontal and
+vertical distance from the trajectory the plan verified.
+
+    python benchmarks/calibrate_tracking.py --runs 50
+
+The classes' plans are the default plans of a built-in scenario of that class, made with the
+nominal model (``uavplan plan --nominal``: the tracking error comes from the missions and the
+flight, not from the margins a robust plan adds). The chosen figure per class is the largest
+per-flight error seen, rounded up to the next half metre; the airframes
+(:mod:`uavplan.world.airframes`) carry the figures, and ``docs/results.md`` the runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+CLASSES = {"small-fixed-wing": "ppswarm1", "fast-fixed-wing": "rscdwoa-static",
+           "quadrotor": "quadrotors"}  # fmt: skip
+
+
+def main() -> None:
+    from typer.testing import CliRunner
+
+    from uavplan.cli import app
+    from uavplan.io.plan_file import read_plan_file
+    from uavplan.scenarios import resolve
+    from uavplan.sim.runs import Conditions, simulate_once
+    from uavplan.world.airframes import AIRFRAMES
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--classes", nargs="+", default=list(CLASSES))
+    ap.add_argument("--runs", type=int, default=20)
+    ap.add_argument("--wind", type=float, default=3.0)
+    ap.add_argument("--turbulence", default="light")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args()
+    cond = Conditions(args.wind, args.turbulence)
+    print(
+        "class | scenario | flights | per-flight h p50/p90/p99/max | per-flight v p50/p90/p99/max"
+        " | samples h p99.9, v p99.9 | stated e_h/e_v | s per run"
+    )
+    for name in args.classes:
+        ref = CLASSES[name]
+        with tempfile.TemporaryDirectory() as tmp:
+            out = Path(tmp)
+            r = CliRunner().invoke(app, ["plan", ref, "--nominal", "--seed", str(args.seed),
+                                         "--out", str(out)])  # fmt: skip
+            if r.exit_code not in (0, 1):
+                raise SystemExit(f"uavplan plan {ref} failed: {r.output}")
+            pf = read_plan_file(out / "plan.json")
+        scenario = resolve(ref)
+        af = AIRFRAMES[name]
+        hm: list[float] = []
+        vm: list[float] = []
+        sh, sv = [], []
+        t = time.perf_counter()
+        for run in range(args.runs):
+            ex = simulate_once(pf, scenario, 1000 * args.seed + run, cond, af)
+            hm += [x for x in ex.track_h.values() if math.isfinite(x)]
+            vm += [x for x in ex.track_v.values() if math.isfinite(x)]
+            sh.append(ex.samples_h)
+            sv.append(np.abs(ex.samples_v))
+        per_run = (time.perf_counter() - t) / args.runs
+        H, V = np.asarray(hm), np.asarray(vm)
+
+        def fmt(a: np.ndarray) -> str:
+            return "/".join(f"{x:.2f}" for x in (*np.quantile(a, (0.5, 0.9, 0.99)), a.max()))
+
+        print(f"{name} | {ref} | {len(H)} | {fmt(H)} | {fmt(V)} | "
+              f"{np.quantile(np.concatenate(sh), 0.999):.2f}, "
+              f"{np.quantile(np.concatenate(sv), 0.999):.2f} | "
+              f"{af.track_h}/{af.track_v} | {per_run:.2f}", flush=True)  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
