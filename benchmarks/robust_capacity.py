@@ -12,6 +12,8 @@ band.
         --executions 1000 --json results.json
 
 A nominal plan is executed under the default model too: what planning against the model buys.
+``--models calibrated`` plans against the model ``uavplan plan`` uses for the map's UAV (the
+default with its named airframe's calibrated tracking error) and draws the executions from it.
 """
 
 from __future__ import annotations
@@ -47,10 +49,14 @@ def run(
     from uavplan.verify import verify_trajectories
     from uavplan.verify.executions import sample_fleet
     from uavplan.verify.robust import Timing
-    from uavplan.world.execution import DEFAULT, NOMINAL, widened
+    from uavplan.world.execution import DEFAULT, NOMINAL, default_for, widened
 
     given = resolve(name)
-    model = DEFAULT if model_name == "default" else NOMINAL
+    calibrated = default_for(given.uav)
+    model = {"default": DEFAULT, "nominal": NOMINAL, "calibrated": calibrated}[model_name]
+    # the model the margins are checked against and the executions drawn from: the calibrated
+    # one for its plans, else uavplan's least default (a nominal plan is executed under it)
+    against = calibrated if model_name == "calibrated" else DEFAULT
     world = widened(given, model)
     clock = Stopwatch()
     opts = {} if restarts is None else {"n_restart": restarts}
@@ -59,13 +65,13 @@ def run(
     pf = parse_plan(plan_document(plan), world.dim)
     trajs = pf.trajectories("flown")
     t0 = time.perf_counter()
-    report = verify_trajectories(trajs, given, pf.scenario, model=DEFAULT)
+    report = verify_trajectories(trajs, given, pf.scenario, model=against)
     verify_s = time.perf_counter() - t0
     fleet = plan.fleet
     delays = (fleet.info.get("delayed") or {}) if fleet is not None else {}
     flown = sum(float(np.sum(np.linalg.norm(np.diff(r.flown_trajectory()[0], axis=0), axis=1)))
                 for r in plan.results)  # fmt: skip
-    timing = Timing(DEFAULT.takeoff_s, DEFAULT.speed, DEFAULT.track_h, DEFAULT.track_v)
+    timing = Timing(against.takeoff_s, against.speed, against.track_h, against.track_v)
     rng = np.random.default_rng(seed)
     broken = 0
     by_kind: dict[str, int] = {}
@@ -98,7 +104,12 @@ def main() -> None:
     ap.add_argument("--executions", type=int, default=200)
     ap.add_argument("--restarts", type=int, default=None,
                     help="PPSwarm's N_restart [its default, 5]; 1 for 500-1,000 UAVs")  # fmt: skip
-    ap.add_argument("--models", nargs="+", default=["nominal", "default"])
+    ap.add_argument(
+        "--models",
+        nargs="+",
+        default=["nominal", "default"],
+        choices=["nominal", "default", "calibrated"],
+    )
     ap.add_argument("--json", type=Path, default=None, help="append each row to this file")
     args = ap.parse_args()
     head = ("map", "model", "flown", "delayed", "cost", "flown km", "plan s", "x nominal",

@@ -11,8 +11,19 @@ flight-dynamics library (the optional extra ``uavplan[sim]``).
   SE(3) controller as ``k_pos / tau_vel`` and ``1 / tau_vel``, its drag as rotorpy's at the
   leg speed), so what is compared is the dynamics, not two tunings.
 
-What is not here: a fixed-wing reference (JSBSim ships no small fixed-wing airframe in its
-PyPI package, and none is ours yet): docs/decisions.md says so.
+* **Fixed wing: JSBSim** (Berndt et al., PyPI ``jsbsim``): its Cessna 172 (``c172x``, the
+  smallest powered airplane its package ships; 50 m/s is its cruise, the speed of the
+  ``fast-fixed-wing`` class) trimmed in level flight, flown by the batched model's guidance
+  (the same L1 law, period, damping and bank limit, the same height loop's gain and slope
+  feed-forward, the same ground-speed target) through inner loops of ours that stand in for
+  an autopilot's: bank by aileron (a PI on the bank error with roll-rate damping), the
+  commanded climb rate by pitch (a PI on the climb-rate error setting the pitch attitude, held
+  by elevator with pitch-rate damping), ground speed by throttle (PI). Turbulence is JSBSim's
+  own MIL-F-8785C/MIL-HDBK-1797 Dryden model (``turb-type`` 3) at the same wind at 20 ft, so
+  the gusts too are not ours. :func:`compare_fixed_wing` flies both and returns their
+  horizontal and vertical errors; the batched model runs with ``fast-fixed-wing`` at the
+  Cessna's 30 degree bank limit and without navigation error (JSBSim's flight is flown on
+  true position).
 """
 
 from __future__ import annotations
@@ -156,3 +167,145 @@ def compare_multirotor(
                 break
         ours.append(cross_track(xyz[0, : nn[0]], legs.points))
     return {"reference": np.concatenate(ref), "batched": np.concatenate(ours)}
+
+
+def _jsbsim_flight(legs: Legs, speed: float, l1_period: float, l1_damping: float,
+                   max_bank_deg: float, k_height: float, w20: float,
+                   seed: int) -> FloatArray:  # fmt: skip
+    """JSBSim's Cessna 172 flying ``legs`` (local metres, heights AMSL over a flat sea-level
+    ground) under the batched model's guidance and our inner loops; rows ``(t, x, y, z)``
+    every 0.5 s. The local frame is an azimuthal equidistant projection about a fixed
+    origin (pyproj), exact at the metres compared here."""
+    import jsbsim
+    from pyproj import Transformer
+
+    from uavplan.sim.fleet import _l1_point, _leg_geometry
+
+    ft, g0 = 0.3048, 9.80665
+    aeqd = "+proj=aeqd +lat_0=37 +lon_0=-122 +ellps=WGS84 +units=m"
+    to_local = Transformer.from_crs("EPSG:4326", aeqd, always_xy=True)
+    to_geo = Transformer.from_crs(aeqd, "EPSG:4326", always_xy=True)
+    P = np.ascontiguousarray(legs.points, dtype=np.float64)
+    n = len(P)
+    fdm = jsbsim.FGFDMExec(None)
+    fdm.set_debug_level(0)
+    fdm.load_model("c172x")
+    fdm["simulation/randomseed"] = seed
+    dt = fdm.get_delta_t()
+    d = P[1] - P[0]
+    lon, lat = to_geo.transform(P[0, 0], P[0, 1])
+    fdm["ic/lat-geod-deg"], fdm["ic/long-gc-deg"] = lat, lon
+    fdm["ic/h-sl-ft"] = P[0, 2] / ft
+    fdm["ic/psi-true-deg"] = math.degrees(math.atan2(d[0], d[1])) % 360.0
+    fdm["ic/vt-kts"] = speed / 0.514444
+    fdm.run_ic()
+    fdm["propulsion/set-running"] = -1
+    fdm["fcs/mixture-cmd-norm"] = 1.0
+    fdm["simulation/do_simple_trim"] = 1
+    thr0, el0, th0 = (fdm["fcs/throttle-cmd-norm"], fdm["fcs/elevator-cmd-norm"],
+                      fdm["attitude/theta-rad"])  # fmt: skip
+    if w20 > 0:
+        fdm["atmosphere/turb-type"] = 3
+        fdm["atmosphere/turbulence/milspec/windspeed_at_20ft_AGL-fps"] = w20 / ft
+        fdm["atmosphere/turbulence/milspec/severity"] = 3
+    max_bank = math.radians(max_bank_deg)
+    k = 0
+    i_roll = i_rate = i_speed = 0.0
+    t, next_rec = 0.0, 0.0
+    span = 2.0 * float(np.sum(np.linalg.norm(np.diff(P[:, :2], axis=0), axis=1))) / speed + 60
+    out = []
+    while t < span:
+        fdm.run()
+        t += dt
+        x, y = to_local.transform(fdm["position/long-gc-deg"], fdm["position/lat-geod-deg"])
+        z = fdm["position/h-sl-meters"]
+        gx, gy = fdm["velocities/v-east-fps"] * ft, fdm["velocities/v-north-fps"] * ft
+        vz = -fdm["velocities/v-down-fps"] * ft
+        vg = math.hypot(gx, gy)
+        if t >= next_rec:
+            out.append((t, x, y, z))
+            next_rec += 0.5
+        while k < n - 1 and _leg_geometry(P, k, x, y)[3] >= _leg_geometry(P, k, x, y)[2] - 10:
+            k += 1
+        if k >= n - 1:
+            break
+        _, _, L, along, cross = _leg_geometry(P, k, x, y)
+        # the batched model's L1 guidance: a lateral acceleration, as a bank (JSBSim's phi is
+        # positive right wing down, a right turn; the L1 law's acceleration is positive left)
+        L1 = max(l1_damping * l1_period * vg / math.pi, 1.0)
+        px, py = _l1_point(P, n, k, x, y, along, cross, L1)
+        px, py = px - x, py - y
+        eta = min(max(math.atan2(gx * py - gy * px, gx * px + gy * py), -math.pi / 2),
+                  math.pi / 2)  # fmt: skip
+        a_lat = 4.0 * l1_damping**2 * vg * vg / L1 * math.sin(eta)
+        bank_cmd = -min(max(math.atan(a_lat / g0), -max_bank), max_bank)
+        e_roll = bank_cmd - fdm["attitude/phi-rad"]
+        i_roll = min(max(i_roll + e_roll * dt, -0.5), 0.5)
+        ail = 2.0 * e_roll + 0.5 * i_roll - 0.3 * fdm["velocities/p-rad_sec"]
+        fdm["fcs/aileron-cmd-norm"] = min(max(ail, -1.0), 1.0)
+        # the batched model's height loop: a climb rate, held by pitch (JSBSim's positive
+        # elevator command pitches the nose down)
+        dz = P[k + 1, 2] - P[k, 2]
+        z_cmd = P[k, 2] + (min(max(along / L, 0.0), 1.0) if L > 0 else 1.0) * dz
+        rate = k_height * (z_cmd - z) + (dz / L if L > 0 else 0.0) * vg
+        i_rate = min(max(i_rate + (rate - vz) * dt, -20.0), 20.0)
+        theta_cmd = th0 + 0.04 * (rate - vz) + 0.01 * i_rate
+        e_pitch = theta_cmd - fdm["attitude/theta-rad"]
+        elev = el0 - (4.0 * e_pitch - 1.0 * fdm["velocities/q-rad_sec"])
+        fdm["fcs/elevator-cmd-norm"] = min(max(elev, -1.0), 1.0)
+        # the leg's ground speed, by throttle
+        v_leg = float(legs.speeds[min(k, len(legs.speeds) - 1)])
+        i_speed = min(max(i_speed + (v_leg - vg) * dt, -30.0), 30.0)
+        thr = thr0 + 0.1 * (v_leg - vg) + 0.02 * i_speed
+        fdm["fcs/throttle-cmd-norm"] = min(max(thr, 0.0), 1.0)
+    return np.asarray(out, dtype=np.float64)
+
+
+def compare_fixed_wing(
+    legs: Legs, turbulence: str = "light", seeds: int = 3
+) -> dict[str, FloatArray]:
+    """Horizontal (cross-track) and vertical errors (m, pooled over ``seeds`` gust
+    realizations) against ``legs``' path, flown at its mean leg speed by JSBSim's Cessna 172
+    and by the batched model (``fast-fixed-wing`` at a 30 degree bank limit, no navigation
+    error): keys ``reference_h``, ``batched_h``, ``reference_v``, ``batched_v``."""
+    from uavplan.io.plan_file import Trajectory
+    from uavplan.sim.fleet import DRAWS, init_state, params, step_fleet
+    from uavplan.sim.runs import REC_DT, errors_against, pack
+    from uavplan.world.airframes import FAST_FIXED_WING
+    from uavplan.world.scenario import UAV
+
+    v = float(np.mean(legs.speeds))
+    af = dataclasses.replace(FAST_FIXED_WING, max_bank_deg=30.0)
+    uav = UAV(speed=v, turn_radius=v * v / (9.80665 * math.tan(math.radians(30.0))),
+              min_speed=0.6 * v, max_speed=1.2 * v, max_climb_angle=20.0,
+              max_descent_angle=20.0)  # fmt: skip
+    seg = np.linalg.norm(np.diff(legs.points, axis=0), axis=1)
+    path = Trajectory("path", legs.points, np.r_[0.0, np.cumsum(seg)] / v, True)
+    w20 = INTENSITIES[turbulence]
+    out: dict[str, list[FloatArray]] = {k: [] for k in ("reference_h", "batched_h",
+                                                        "reference_v", "batched_v")}  # fmt: skip
+    P, n, S, H = pack([legs])
+    prm = params(af, uav)
+    prm = (*prm[:14], 0.0, 0.0, *prm[16:])
+    for sd in range(seeds):
+        ref = _jsbsim_flight(legs, v, af.l1_period, af.l1_damping, af.max_bank_deg,
+                             af.k_height, w20, 1000 + sd)  # fmt: skip
+        tr = Trajectory("ref", ref[:, 1:], ref[:, 0], True)
+        out["reference_h"].append(cross_track(tr.points, legs.points))
+        out["reference_v"].append(np.abs(errors_against(tr, path)[1]))
+        rng = np.random.default_rng(2000 + sd)
+        st = init_state(P, n, S, H, np.zeros(1), np.zeros((1, 3)))
+        R = int(2 * path.times[-1] / REC_DT) + 10
+        xyz, tt, nn = np.zeros((1, R, 3)), np.zeros((1, R)), np.zeros(1, dtype=np.int64)
+        t = 0.0
+        while t < 2 * path.times[-1]:
+            noise = rng.standard_normal((1, 400, DRAWS))
+            done = step_fleet(st, P, n, S, H, np.zeros(1), 0, prm, np.zeros(3), w20, 100.0,
+                              0.05, t, 400, REC_DT, noise, xyz, tt, nn)  # fmt: skip
+            t += 400 * 0.05
+            if done:
+                break
+        ours = Trajectory("ours", xyz[0, : nn[0]], tt[0, : nn[0]], True)
+        out["batched_h"].append(cross_track(ours.points, legs.points))
+        out["batched_v"].append(np.abs(errors_against(ours, path)[1]))
+    return {k: np.concatenate(v_) for k, v_ in out.items()}
