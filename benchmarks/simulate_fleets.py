@@ -81,7 +81,7 @@ def main() -> None:
                                     name=f"simfleets-{ref}-{model}")  # fmt: skip
             run_sweep(sweep, folder / "runs", "smoke", None, None, 0, "process", args.workers)
             s = summarize(ResultStore(folder / "runs").read().to_dict("records"))
-            flown = sum(bool(u.feasible) for u in pf.uavs)
+            flown = sum(bool(t.feasible) for t in pf.trajectories("flown"))
             lo, hi = s["wilson95"]
             line = (ref, model, len(pf.uavs), flown, s["runs"], s["violated"],
                     f"{s['p_violation']:.4f}", f"[{lo:.4f}, {hi:.4f}]",

@@ -91,10 +91,11 @@ def errors_against(
     track: Trajectory, planned: Trajectory, window: float = 120.0
 ) -> tuple[FloatArray, ...]:
     """Per sample of ``track``: the horizontal and vertical distances to the nearest point of
-    the ``planned`` path (horizontally nearest, segment by segment, among the segments the
-    plan flies within ``window`` seconds of the sample's time: a path that passes near itself
-    is not matched to its other pass) and the time error there (actual minus the planned
-    time at that point)."""
+    the ``planned`` path (nearest in 3-D, each segment's point horizontally nearest, among the
+    segments the plan flies within ``window`` seconds of the sample's time: a path that
+    passes near itself, as a climbing or descending loop does a few metres above or below,
+    is not matched to its other pass) and the time error there (actual minus the planned time
+    at that point)."""
     A = planned.points[:-1]
     B = planned.points[1:]
     tA, tB = planned.times[:-1], planned.times[1:]
@@ -110,14 +111,15 @@ def errors_against(
         s = np.clip(np.einsum("qij,ij->qi", r, D) / dd, 0.0, 1.0)
         foot = A[None, :, :2] + s[..., None] * D[None]
         d2 = np.sum((q[:, None, :2] - foot) ** 2, axis=2)
+        dz = q[:, None, 2] - (A[None, :, 2] + s * (B[None, :, 2] - A[None, :, 2]))
         tq = track.times[lo : lo + 256, None]
         near = (tB[None] >= tq - window) & (tA[None] <= tq + window)
-        d2 = np.where(near | ~near.any(axis=1, keepdims=True), d2, np.inf)
-        j = np.argmin(d2, axis=1)
-        sj = s[np.arange(len(q)), j]
-        h[lo : lo + 256] = np.sqrt(d2[np.arange(len(q)), j])
-        zp = A[j, 2] + sj * (B[j, 2] - A[j, 2])
-        v[lo : lo + 256] = q[:, 2] - zp
+        j = np.argmin(np.where(near | ~near.any(axis=1, keepdims=True), d2 + dz * dz, np.inf),
+                      axis=1)  # fmt: skip
+        rows = np.arange(len(q))
+        sj = s[rows, j]
+        h[lo : lo + 256] = np.sqrt(d2[rows, j])
+        v[lo : lo + 256] = dz[rows, j]
         te[lo : lo + 256] = track.times[lo : lo + 256] - (tA[j] + sj * (tB[j] - tA[j]))
     return h, v, te
 
