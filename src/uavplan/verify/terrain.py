@@ -180,32 +180,36 @@ def within_reach(
         return G
     ku = math.ceil(reach / du) + 1
     kv = math.ceil(reach / dv) + 1
-    key = (id(H), ku, kv, bool(highest), how, float(reach) if how == "slope" else 0.0)
+    # the filtered grid depends on the window alone (for "slope", the steepest gradient
+    # near each node, which the reach then scales): kept per grid and window
+    key = (id(H), ku, kv, bool(highest) if how == "height" else True, how)
     hit = _WITHIN.get(key)
     if hit is not None and hit[0] is H:
-        return hit[1]
-    from scipy.ndimage import maximum_filter, minimum_filter
-
-    size = (2 * kv + 1, 2 * ku + 1)
-    if how == "height":
-        f = maximum_filter if highest else minimum_filter
-        out = np.asarray(f(G, size=size, mode="nearest"))
+        near = hit[1]
     else:
-        ny, nx = G.shape
-        su = np.abs(G[:, 1:] - G[:, :-1]) / du
-        sv = np.abs(G[1:, :] - G[:-1, :]) / dv
-        steep = np.zeros((ny + 1, nx + 1))
-        steep[1:ny, 1:nx] = np.sqrt(np.maximum(su[1:], su[:-1]) ** 2
-                                    + np.maximum(sv[:, 1:], sv[:, :-1]) ** 2)  # fmt: skip
-        near = maximum_filter(steep, size=size, mode="constant", cval=0.0)[:ny, :nx]
-        out = G + reach * near if highest else G - reach * near
-    if len(_WITHIN) > 64:
-        _WITHIN.clear()
-    _WITHIN[key] = (H, out)
-    return out
+        from scipy.ndimage import maximum_filter, minimum_filter
+
+        size = (2 * kv + 1, 2 * ku + 1)
+        if how == "height":
+            f = maximum_filter if highest else minimum_filter
+            near = np.asarray(f(G, size=size, mode="nearest"))
+        else:
+            ny, nx = G.shape
+            su = np.abs(G[:, 1:] - G[:, :-1]) / du
+            sv = np.abs(G[1:, :] - G[:-1, :]) / dv
+            steep = np.zeros((ny + 1, nx + 1))
+            steep[1:ny, 1:nx] = np.sqrt(np.maximum(su[1:], su[:-1]) ** 2
+                                        + np.maximum(sv[:, 1:], sv[:, :-1]) ** 2)  # fmt: skip
+            near = maximum_filter(steep, size=size, mode="constant", cval=0.0)[:ny, :nx]
+        if len(_WITHIN) > 64:
+            _WITHIN.clear()
+        _WITHIN[key] = (H, near)
+    if how == "height":
+        return near
+    return G + reach * near if highest else G - reach * near
 
 
-_WITHIN: dict[tuple[int, int, int, bool, str, float], tuple[FloatArray, FloatArray]] = {}
+_WITHIN: dict[tuple[int, int, int, bool, str], tuple[FloatArray, FloatArray]] = {}
 
 
 def bilinear_height(terrain: Terrain, x: FloatArray, y: FloatArray) -> FloatArray:
