@@ -281,12 +281,17 @@ def step_fleet(
                     if nl > 1e-9:
                         v_corner = v_leg * max((nx_ * ux + ny_ * uy) / nl, 0.0)
                 v_sp = min(v_leg, math.sqrt(v_corner**2 + a_max * max(L - s_sp, 0.0)))
+                # the setpoint runs on while the vehicle is within ``lead`` of it or ahead of
+                # it along the leg (waiting for a vehicle ahead, with the velocity fed forward,
+                # would hold it ``v / k_pos`` ahead for ever), and its velocity is fed forward
+                # only while it runs
+                runs = d_sp < lead or along >= s_sp
                 if s_sp < L:
-                    if d_sp < lead:
+                    if runs:
                         s_sp = min(s_sp + v_sp * dt, L)
                 elif hold_left > 0.0:
                     hold_left -= dt
-                moving = s_sp < L
+                moving = s_sp < L and runs
                 sx = P[u, k, 0] + ux * s_sp
                 sy = P[u, k, 1] + uy * s_sp
                 sz = P[u, k, 2] + (min(s_sp / L, 1.0) if L > 0 else 1.0) * dz_leg
