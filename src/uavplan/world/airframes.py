@@ -90,7 +90,7 @@ FAST_FIXED_WING = Airframe("fast-fixed-wing", "fixed-wing", tau_speed=4.0, tau_b
                            k_height=0.2, accept=10.0, track_h=8.5, track_v=12.5)  # fmt: skip
 #: A quadrotor under a position and velocity controller (PX4's multicopter defaults).
 QUADROTOR = Airframe(
-    "quadrotor", "multirotor", nav_h=0.8, nav_v=1.0, accept=2.0, track_h=6.5, track_v=7.5
+    "quadrotor", "multirotor", nav_h=0.8, nav_v=1.0, accept=2.0, track_h=6.5, track_v=7.0
 )
 
 AIRFRAMES: dict[str, Airframe] = {a.name: a for a in (SMALL_FIXED_WING, FAST_FIXED_WING,
