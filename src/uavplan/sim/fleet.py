@@ -16,12 +16,14 @@ given to it (from the run's ``numpy.random.Generator``).
   on the ground-speed error (wind compensated by its integral) within the UAV's speed range,
   reached with ``tau_speed``;
 * height: the altitude commanded along the leg (interpolated between its ends, as both
-  autopilots do), a climb rate ``k_height * error`` plus the leg's own slope, as a flight-path
+  autopilots do), a climb rate ``k_height * error`` plus the path's slope ``tau_gamma`` ahead
+  (the next leg's blended in near a leg's end), as a flight-path
   angle within the climb and descent limits, reached with ``tau_gamma`` (a total-energy
   controller's closed loop, first order).
 
 **Multirotor**: a setpoint moves along the legs at the commanded speed (at most ``lead`` ahead
-of the vehicle, as PX4's mission setpoints wait for it), slowed before a corner to the speed
+of the vehicle, as PX4's mission setpoints wait for it; never waiting for a vehicle ahead of
+it), slowed before a corner to the speed
 the turn allows, holds at a waypoint for its hold time; the velocity command is the
 setpoint's velocity plus ``k_pos`` times the position error, within the speed limit; the
 velocity follows with ``tau_vel`` within ``max_accel``, through the attitude's and rotors'
