@@ -42,6 +42,13 @@ def main() -> None:
     ap.add_argument("--wind", type=float, default=3.0)
     ap.add_argument("--turbulence", default="light")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument(
+        "--plans",
+        choices=["nominal", "default"],
+        default="nominal",
+        help="fly the nominal plans (the calibration) or the default plans made "
+        "under the calibrated model (its check)",
+    )
     args = ap.parse_args()
     cond = Conditions(args.wind, args.turbulence)
     print(
@@ -52,8 +59,8 @@ def main() -> None:
         ref = CLASSES[name]
         with tempfile.TemporaryDirectory() as tmp:
             out = Path(tmp)
-            r = CliRunner().invoke(app, ["plan", ref, "--nominal", "--seed", str(args.seed),
-                                         "--out", str(out)])  # fmt: skip
+            cmd = ["plan", ref, "--seed", str(args.seed), "--out", str(out)]
+            r = CliRunner().invoke(app, cmd + (["--nominal"] if args.plans == "nominal" else []))
             if r.exit_code not in (0, 1):
                 raise SystemExit(f"uavplan plan {ref} failed: {r.output}")
             pf = read_plan_file(out / "plan.json")
@@ -73,7 +80,8 @@ def main() -> None:
         H, V = np.asarray(hm), np.asarray(vm)
 
         def fmt(a: np.ndarray) -> str:
-            return "/".join(f"{x:.2f}" for x in (*np.quantile(a, (0.5, 0.9, 0.99)), a.max()))
+            q = np.quantile(a, (0.5, 0.9, 0.99, 0.999))
+            return "/".join(f"{x:.2f}" for x in (*q, a.max()))
 
         print(f"{name} | {ref} | {len(H)} | {fmt(H)} | {fmt(V)} | "
               f"{np.quantile(np.concatenate(sh), 0.999):.2f}, "
