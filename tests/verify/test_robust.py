@@ -99,12 +99,12 @@ def test_a_fleet_planned_under_the_default_model_meets_it(robust_fleet: Path) ->
     doc = json.loads((robust_fleet / "plan.json").read_text())
     assert doc["format"] == "uavplan.plan/4"
     # ppswarm1's UAV is a small fixed wing: the default takes its calibrated tracking error
-    assert doc["execution"]["takeoff_s"] == 2.0 and doc["execution"]["track_h"] == 4.5
-    assert doc["execution"]["track_v"] == 7.5 and "small-fixed-wing" in doc["execution"]["source"]
+    assert doc["execution"]["takeoff_s"] == 2.0 and doc["execution"]["track_h"] == 6.0
+    assert doc["execution"]["track_v"] == 8.0 and "small-fixed-wing" in doc["execution"]["source"]
     uavs = doc["margins"]["uavs"]
     assert len(uavs) == 8
     for m in uavs:
-        for key, need in (("takeoff_s", 2.0), ("speed", 0.03), ("track_h", 4.5), ("track_v", 7.5)):
+        for key, need in (("takeoff_s", 2.0), ("speed", 0.03), ("track_h", 6.0), ("track_v", 8.0)):
             assert m[key] is None or m[key] >= need - 1e-6, (m, key)
     v = CliRunner().invoke(app, ["verify", str(robust_fleet), "ppswarm1@8"])
     assert v.exit_code == 0 and "margin: the fleet tolerates" in v.output

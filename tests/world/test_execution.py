@@ -237,3 +237,20 @@ def test_the_default_takes_a_named_airframes_calibrated_tracking_error() -> None
         assert (m.takeoff_s, m.speed) == (DEFAULT.takeoff_s, DEFAULT.speed)
         assert m.track_h == max(3.0, af.track_h) and m.track_v == max(2.0, af.track_v)
         assert af.name in m.source or m is DEFAULT
+
+
+def test_default_plans_turn_no_tighter_than_the_airframe_flies_in_wind() -> None:
+    from uavplan.scenarios import resolve
+    from uavplan.world.airframes import SMALL_FIXED_WING, turn_radius_in_wind
+    from uavplan.world.execution import flyable_turns
+
+    sc = resolve("ppswarm1@4")
+    r = turn_radius_in_wind(SMALL_FIXED_WING, float(sc.uav.speed))
+    # 23 m/s over the ground at a 65 degree bank: 25.2 m, above the scenario's 20 m
+    assert r == pytest.approx(23.0**2 / (9.80665 * np.tan(np.radians(65.0))))
+    wider, planned = flyable_turns(sc)
+    assert planned == pytest.approx(r) and wider.uav.turn_radius == pytest.approx(r) and r > 20.0
+    assert wider.uav.speed == sc.uav.speed and wider.tasks == sc.tasks
+    # a multirotor, or a UAV that names no airframe, keeps its turns
+    assert flyable_turns(resolve("quadrotors@4"))[1] == 0.0
+    assert turn_radius_in_wind(SMALL_FIXED_WING, 20.0, wind=0.0) < 20.0

@@ -213,9 +213,20 @@ def planning_world(scenario: Any, ref: str, nominal: bool, model: Any = None) ->
     task does not fit in the widened world."""
     import numpy as np
 
-    from uavplan.world.execution import NOMINAL, default_for, widened
+    from uavplan.world.airframes import AIRFRAMES
+    from uavplan.world.execution import NOMINAL, default_for, flyable_turns, widened
 
+    by_default = not nominal and model is None and scenario.execution is None
     model = NOMINAL if nominal else (model or scenario.execution or default_for(scenario.uav))
+    if by_default:  # uavplan's default also turns no tighter than the airframe flies in wind
+        given_r = float(scenario.uav.turn_radius)
+        scenario, r = flyable_turns(scenario)
+        if r > 0:
+            af = AIRFRAMES[scenario.uav.airframe]
+            out.print(f"turns planned at {r:.1f} m radius, not {given_r:g} m: the tightest a "
+                      f"{af.name} flies at its {af.max_bank_deg:g} degree bank limit with "
+                      f"{af.turn_wind:g} m/s of wind behind it (--nominal plans the scenario's "
+                      "turns)", markup=False)  # fmt: skip
     where = "--nominal" if nominal else model.source
     hint = "" if nominal or model.nominal else "; --nominal plans for an exact execution"
     out.print(f"execution model: {model.describe()} ({where}){hint}", markup=False)

@@ -52,6 +52,9 @@ class Airframe:
             calibration flights (``benchmarks/calibrate_tracking.py``: the 99th percentile of
             each UAV flight's largest error, rounded up to half a metre; the default model
             never assumes less than 3 m and 2 m).
+        turn_wind: the wind (m/s) a fixed wing's planned turns leave room for, the
+            calibration's: uavplan's default plans its turns no tighter than the airframe can
+            fly at its bank limit with this much wind behind it (:func:`turn_radius_in_wind`).
     """
 
     name: str
@@ -77,13 +80,14 @@ class Airframe:
     tau_att: float = 0.15
     track_h: float = 3.0
     track_v: float = 2.0
+    turn_wind: float = 3.0
 
     def record(self) -> dict[str, Any]:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
 
 
 #: A small fixed wing (the PPSwarm UAV: 20 m/s, 20 m turns, a 64 degree bank at cruise).
-SMALL_FIXED_WING = Airframe("small-fixed-wing", "fixed-wing", track_h=4.5, track_v=7.5)
+SMALL_FIXED_WING = Airframe("small-fixed-wing", "fixed-wing", track_h=6.0, track_v=8.0)
 #: A fast fixed wing (RSCDWOA's UAV: 50 m/s, 2 km turns): slower responses, gentle banks.
 FAST_FIXED_WING = Airframe("fast-fixed-wing", "fixed-wing", tau_speed=4.0, tau_bank=0.6,
                            max_bank_deg=35.0, tau_gamma=1.5, l1_period=17.0,
@@ -115,3 +119,13 @@ def airframe_of(uav: Any) -> Airframe:
 def bank_for(speed: float, radius: float) -> float:
     """The bank angle (degrees) of a coordinated turn of ``radius`` at ``speed``."""
     return math.degrees(math.atan(speed * speed / (9.80665 * radius))) if radius > 0 else 0.0
+
+
+def turn_radius_in_wind(af: Airframe, speed: float, wind: float | None = None) -> float:
+    """The tightest turn (m) a fixed wing of airframe ``af`` holds at airspeed ``speed`` with
+    ``wind`` (m/s, the airframe's ``turn_wind`` when None) behind it: the ground speed
+    ``speed + wind`` at the bank limit, ``(v + W)^2 / (g tan(bank))``. 0 for a multirotor."""
+    if af.kind != "fixed-wing":
+        return 0.0
+    w = af.turn_wind if wind is None else wind
+    return (speed + w) ** 2 / (9.80665 * math.tan(math.radians(af.max_bank_deg)))

@@ -169,6 +169,24 @@ def default_for(uav: Any) -> ExecutionModel:
                    "flight simulation")  # fmt: skip
 
 
+def flyable_turns(scenario: Scenario) -> tuple[Scenario, float]:
+    """``scenario`` with its UAV's turn radius raised to what its named fixed-wing airframe
+    can hold in the airframe's ``turn_wind`` (:func:`uavplan.world.airframes.turn_radius_in_wind`)
+    when that is larger, and the radius now planned (0 when unchanged). Turns planned at the
+    bank limit in still air swing wide downwind: flown in simulation, such turns carried the
+    largest tracking errors of uavplan's default fleets."""
+    from uavplan.world.airframes import AIRFRAMES, turn_radius_in_wind
+
+    uav = scenario.uav
+    af = AIRFRAMES.get(getattr(uav, "airframe", None) or "")
+    if af is None or float(uav.turn_radius) <= 0:
+        return scenario, 0.0
+    r = turn_radius_in_wind(af, float(uav.speed))
+    if r <= float(uav.turn_radius):
+        return scenario, 0.0
+    return replace(scenario, uav=replace(uav, turn_radius=r)), r
+
+
 def windows(t0: float, delta0: float, rho: float, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``T(tau)`` for a UAV taking off at ``t0``: the earliest and latest actual times it can be
     at its path's point ``tau`` (arrays like ``tau``)."""
