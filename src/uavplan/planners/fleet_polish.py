@@ -153,7 +153,7 @@ def _try(
                      wall_time=old.wall_time)  # fmt: skip
     f = fly(scenario, task, r0.waypoints, r0.times, table, opts.get("timing", "planned"),
             float(opts.get("step", 5.0)))  # fmt: skip
-    return _declared(scenario, task, old, path, table, opts, f, how) if f.ok else None
+    return _declared(scenario, task, old, path, table, opts, f, how, problem) if f.ok else None
 
 
 def _declared(
@@ -165,10 +165,13 @@ def _declared(
     opts: dict[str, Any],
     flight: Flight,
     how: str,
+    problem: Any = None,
 ) -> PlanResult:
     """``path`` as ``task``'s result against ``table``, ``flight`` declared as what it flies
-    (a flight that passed every check), saying it was repaired (``how``)."""
-    problem = separated_problem(scenario, task, table, opts.get("cost"), opts.get("weights"))
+    (a flight that passed every check), saying it was repaired (``how``); ``problem``: the
+    separated problem of ``task`` against ``table`` when the caller has made it."""
+    if problem is None:
+        problem = separated_problem(scenario, task, table, opts.get("cost"), opts.get("weights"))
     r = make_result(
         problem, path, algorithm=old.algorithm, history=old.history,
         evaluations=old.evaluations, evaluations_history=old.evaluations_history,

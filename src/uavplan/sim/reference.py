@@ -128,13 +128,38 @@ def _rotorpy_flight(legs: Legs, turbulence: str, seed: int, rate: float = 100.0)
     return x[::step]
 
 
+def _batched_flight(legs: Legs, kind: int, prm: tuple[float, ...], w20: float, dt: float,
+                    span: float, seed: int) -> FloatArray:  # fmt: skip
+    """The batched model flying ``legs`` alone (``kind`` 0 fixed wing, 1 multirotor) for up to
+    ``span`` seconds in Dryden gusts of wind ``w20`` at 20 ft, no steady wind; its positions
+    every ``REC_DT``."""
+    from uavplan.sim.fleet import DRAWS, init_state, step_fleet
+    from uavplan.sim.runs import REC_DT, pack
+
+    P, n, S, H = pack([legs])
+    t0 = np.array([legs.takeoff])
+    st = init_state(P, n, S, H, t0, np.zeros((1, 3)))
+    R = int(span / REC_DT) + 10
+    xyz, tt, nn = np.zeros((1, R, 3)), np.zeros((1, R)), np.zeros(1, dtype=np.int64)
+    rng = np.random.default_rng(seed)
+    steps = 400
+    t = legs.takeoff
+    while t < legs.takeoff + span:
+        noise = rng.standard_normal((1, steps, DRAWS))
+        done = step_fleet(st, P, n, S, H, t0, kind, prm, np.zeros(3), w20, 100.0, dt, t, steps,
+                          REC_DT, noise, xyz, tt, nn)  # fmt: skip
+        t += steps * dt
+        if done:
+            break
+    return np.column_stack([tt[0, : nn[0]], xyz[0, : nn[0]]])
+
+
 def compare_multirotor(
     legs: Legs, turbulence: str = "moderate", seeds: int = 4
 ) -> dict[str, FloatArray]:
     """Cross-track errors (m, pooled over ``seeds`` gust realizations) of rotorpy's quadrotor
     and of the batched model with the reference controller's gains on the same legs."""
-    from uavplan.sim.fleet import DRAWS, init_state, params, step_fleet
-    from uavplan.sim.runs import REC_DT, pack
+    from uavplan.sim.fleet import params
     from uavplan.world.airframes import QUADROTOR
     from uavplan.world.scenario import UAV
 
@@ -146,26 +171,13 @@ def compare_multirotor(
     af = dataclasses.replace(QUADROTOR, tau_vel=1 / 4.0, k_pos=6.5 / 4.0, drag=2 * 0.01 * v_leg,
                              lead=1e9, accept=0.5, max_accel=15.0)  # fmt: skip
     uav = UAV(speed=v_leg, max_climb_angle=45.0, max_descent_angle=45.0)
-    P, n, S, H = pack([legs])
-    dt = 0.01
+    prm = params(af, uav)
+    prm = (*prm[:14], 0.0, 0.0, *prm[16:])  # no navigation error
+    span = float(np.sum(np.linalg.norm(np.diff(legs.points, axis=0), axis=1)) / v_leg) * 2
     for sd in range(seeds):
         ref.append(cross_track(_rotorpy_flight(legs, turbulence, 1000 + sd), legs.points))
-        rng = np.random.default_rng(2000 + sd)
-        prm = (*params(af, uav)[:14], 0.0, 0.0, *params(af, uav)[16:])
-        st = init_state(P, n, S, H, np.array([legs.takeoff]), np.zeros((1, 3)))
-        span = float(np.sum(np.linalg.norm(np.diff(legs.points, axis=0), axis=1)) / v_leg) * 2
-        R = int(span / REC_DT) + 10
-        xyz, tt, nn = np.zeros((1, R, 3)), np.zeros((1, R)), np.zeros(1, dtype=np.int64)
-        t = legs.takeoff
-        while t < legs.takeoff + span:
-            noise = rng.standard_normal((1, 1000, DRAWS))
-            done = step_fleet(st, P, n, S, H, np.array([legs.takeoff]), 1, prm, np.zeros(3),
-                              INTENSITIES[turbulence], 100.0, dt, t, 1000, REC_DT, noise,
-                              xyz, tt, nn)  # fmt: skip
-            t += 1000 * dt
-            if done:
-                break
-        ours.append(cross_track(xyz[0, : nn[0]], legs.points))
+        flown = _batched_flight(legs, 1, prm, INTENSITIES[turbulence], 0.01, span, 2000 + sd)
+        ours.append(cross_track(flown[:, 1:], legs.points))
     return {"reference": np.concatenate(ref), "batched": np.concatenate(ours)}
 
 
@@ -225,11 +237,13 @@ def _jsbsim_flight(legs: Legs, speed: float, l1_period: float, l1_damping: float
         if t >= next_rec:
             out.append((t, x, y, z))
             next_rec += 0.5
-        while k < n - 1 and _leg_geometry(P, k, x, y)[3] >= _leg_geometry(P, k, x, y)[2] - 10:
+        _, _, L, along, cross = _leg_geometry(P, k, x, y)
+        while k < n - 1 and along >= L - 10.0:  # a waypoint is passed 10 m before it
             k += 1
+            if k < n - 1:
+                _, _, L, along, cross = _leg_geometry(P, k, x, y)
         if k >= n - 1:
             break
-        _, _, L, along, cross = _leg_geometry(P, k, x, y)
         # the batched model's L1 guidance: a lateral acceleration, as a bank (JSBSim's phi is
         # positive right wing down, a right turn; the L1 law's acceleration is positive left)
         L1 = max(l1_damping * l1_period * vg / math.pi, 1.0)
@@ -269,8 +283,8 @@ def compare_fixed_wing(
     and by the batched model (``fast-fixed-wing`` at a 30 degree bank limit, no navigation
     error): keys ``reference_h``, ``batched_h``, ``reference_v``, ``batched_v``."""
     from uavplan.io.plan_file import Trajectory
-    from uavplan.sim.fleet import DRAWS, init_state, params, step_fleet
-    from uavplan.sim.runs import REC_DT, errors_against, pack
+    from uavplan.sim.fleet import params
+    from uavplan.sim.runs import errors_against
     from uavplan.world.airframes import FAST_FIXED_WING
     from uavplan.world.scenario import UAV
 
@@ -284,28 +298,16 @@ def compare_fixed_wing(
     w20 = INTENSITIES[turbulence]
     out: dict[str, list[FloatArray]] = {k: [] for k in ("reference_h", "batched_h",
                                                         "reference_v", "batched_v")}  # fmt: skip
-    P, n, S, H = pack([legs])
     prm = params(af, uav)
-    prm = (*prm[:14], 0.0, 0.0, *prm[16:])
+    prm = (*prm[:14], 0.0, 0.0, *prm[16:])  # no navigation error
     for sd in range(seeds):
         ref = _jsbsim_flight(legs, v, af.l1_period, af.l1_damping, af.max_bank_deg,
                              af.k_height, w20, 1000 + sd)  # fmt: skip
         tr = Trajectory("ref", ref[:, 1:], ref[:, 0], True)
         out["reference_h"].append(cross_track(tr.points, legs.points))
         out["reference_v"].append(np.abs(errors_against(tr, path)[1]))
-        rng = np.random.default_rng(2000 + sd)
-        st = init_state(P, n, S, H, np.zeros(1), np.zeros((1, 3)))
-        R = int(2 * path.times[-1] / REC_DT) + 10
-        xyz, tt, nn = np.zeros((1, R, 3)), np.zeros((1, R)), np.zeros(1, dtype=np.int64)
-        t = 0.0
-        while t < 2 * path.times[-1]:
-            noise = rng.standard_normal((1, 400, DRAWS))
-            done = step_fleet(st, P, n, S, H, np.zeros(1), 0, prm, np.zeros(3), w20, 100.0,
-                              0.05, t, 400, REC_DT, noise, xyz, tt, nn)  # fmt: skip
-            t += 400 * 0.05
-            if done:
-                break
-        ours = Trajectory("ours", xyz[0, : nn[0]], tt[0, : nn[0]], True)
+        flown = _batched_flight(legs, 0, prm, w20, 0.05, 2 * float(path.times[-1]), 2000 + sd)
+        ours = Trajectory("ours", flown[:, 1:], flown[:, 0], True)
         out["batched_h"].append(cross_track(ours.points, legs.points))
         out["batched_v"].append(np.abs(errors_against(ours, path)[1]))
     return {k: np.concatenate(v_) for k, v_ in out.items()}
