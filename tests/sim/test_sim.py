@@ -16,7 +16,7 @@ from uavplan.bench.simulation import summarize, wilson
 from uavplan.cli import app
 from uavplan.io.plan_file import read_plan_file
 from uavplan.scenarios import resolve
-from uavplan.sim.runs import Conditions, errors_against, simulate_once
+from uavplan.sim.runs import Conditions, conformance, errors_against, simulate_once
 from uavplan.sim.turbulence import INTENSITIES, dryden_scales, gust_series
 from uavplan.world.airframes import QUADROTOR, SMALL_FIXED_WING, airframe_of
 
@@ -106,6 +106,64 @@ def test_turbulence_and_wind_move_the_flights_and_the_seed_decides(small_plan: P
     assert max(abs(e) for e in rough.takeoff_errors.values()) <= 2.0  # the plan's model
     other = simulate_once(plan, sc, 2, Conditions(wind_max=5.0, turbulence="moderate"))
     assert not np.array_equal(rough.tracks[0].points, other.tracks[0].points)
+
+
+def test_conformance_to_the_execution_model() -> None:
+    """A flight shifted in time within the model's allowance conforms, beyond it does not,
+    and one off its path by more than the tracking error never does."""
+    from uavplan.io.plan_file import Trajectory
+
+    t = np.arange(0.0, 100.01, 0.5)
+    planned = Trajectory("a", np.stack([20.0 * t, 0 * t, 100 + 0 * t], axis=1), t, True)
+
+    def flown(shift: float, rate: float = 0.0, dy: float = 0.0) -> Trajectory:
+        tau = shift + rate * t  # the flight's lag behind the plan at t
+        x = 20.0 * np.clip(t - tau, 0.0, 100.0)
+        return Trajectory("a", np.stack([x, dy + 0 * t, 100 + 0 * t], axis=1), t, True)
+
+    lag, excess = conformance(flown(1.5), planned, 2.0, 0.03, 3.0, 2.0)
+    assert np.median(lag) == pytest.approx(1.5, abs=0.06) and excess.max() <= 0
+    # 2 % slow over 100 s conforms to 3 %, 5 % slow does not (late in the flight)
+    assert conformance(flown(1.0, 0.02), planned, 2.0, 0.03, 3.0, 2.0)[1].max() <= 0
+    _, late = conformance(flown(1.0, 0.05), planned, 2.0, 0.03, 3.0, 2.0)
+    assert late.max() > 0 and late[:20].max() <= 0
+    # 4 m off the line with 3 m allowed: outside whatever the lag
+    assert np.isinf(conformance(flown(0.0, dy=4.0), planned, 2.0, 0.03, 3.0, 2.0)[1]).all()
+    # the tracking tolerance buys time: 3 m at 20 m/s is 0.15 s
+    assert conformance(flown(2.1), planned, 2.0, 0.0, 3.0, 2.0)[1].max() <= 0
+    assert conformance(flown(2.3), planned, 2.0, 0.0, 3.0, 2.0)[1].max() > 0
+
+
+def _straight_into_wind(margin: float, wind: float) -> float:
+    """When a small fixed wing reaches the end of a 2 km leg commanded at 20 m/s over the
+    ground, flown into a steady headwind (no gusts, no navigation error): 100 s planned."""
+    from dataclasses import replace
+
+    from uavplan.sim.fleet import DRAWS, init_state, params, step_fleet
+    from uavplan.sim.missions import Legs
+    from uavplan.sim.runs import pack
+    from uavplan.world.scenario import UAV
+
+    legs = Legs("a", np.array([[0.0, 0, 100], [2000.0, 0, 100]]), np.array([20.0]),
+                np.zeros(2), 0.0, 3)  # fmt: skip
+    prm = params(replace(SMALL_FIXED_WING, speed_margin=margin), UAV(speed=20.0, turn_radius=20))
+    prm = (*prm[:14], 0.0, 0.0, *prm[16:])
+    P, n, S, H = pack([legs])
+    w = np.array([-wind, 0.0, 0.0])
+    st = init_state(P, n, S, H, np.zeros(1), np.zeros((1, 3)), w, prm)
+    xyz, tt, nn = np.zeros((1, 400, 3)), np.zeros((1, 400)), np.zeros(1, dtype=np.int64)
+    noise = np.zeros((1, 4000, DRAWS))
+    step_fleet(st, P, n, S, H, np.zeros(1), 0, prm, w, 0.0, 100.0, 0.05, 0.0, 4000, 0.5, noise,
+               xyz, tt, nn)  # fmt: skip
+    return float(tt[0, nn[0] - 1])
+
+
+def test_a_fixed_wing_holds_its_ground_speed_into_a_headwind() -> None:
+    """With airspeed to spare (the airframe's ``speed_margin``) the speed loop keeps the
+    schedule into a headwind; without, the UAV is late by the wind's share of its speed."""
+    assert _straight_into_wind(0.3, 0.0) == pytest.approx(100.0, abs=1.0)
+    assert _straight_into_wind(0.3, 4.0) == pytest.approx(100.0, abs=1.0)
+    assert _straight_into_wind(0.0, 4.0) == pytest.approx(2000.0 / 16.0, abs=2.0)
 
 
 def test_airframes_by_name_or_by_the_uavs_limits() -> None:

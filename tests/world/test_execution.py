@@ -233,10 +233,38 @@ def test_the_default_takes_a_named_airframes_calibrated_tracking_error() -> None
 
     assert default_for(SimpleNamespace(airframe=None, turn_radius=20.0)) is DEFAULT
     for af in AIRFRAMES.values():
-        m = default_for(SimpleNamespace(airframe=af.name))
+        m = default_for(SimpleNamespace(airframe=af.name, speed=20.0, v_max=20.0))
         assert (m.takeoff_s, m.speed) == (DEFAULT.takeoff_s, DEFAULT.speed)
         assert m.track_h == max(3.0, af.track_h) and m.track_v == max(2.0, af.track_v)
         assert af.name in m.source or m is DEFAULT
+        assert m.wind == 0.0  # every built-in airframe has the speed to spare for the wind
+
+
+def test_a_fixed_wing_without_speed_to_spare_plans_for_the_wind(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The default model's wind is the calibration's wind the airframe cannot make up by
+    flying faster than planned: with none to spare, all of it (a headwind makes it late)."""
+    from dataclasses import replace
+    from types import SimpleNamespace
+
+    from uavplan.world.airframes import QUADROTOR, SMALL_FIXED_WING, top_speed
+    from uavplan.world.execution import default_for
+
+    uav = SimpleNamespace(airframe="small-fixed-wing", speed=20.0, v_max=20.0)
+    assert top_speed(SMALL_FIXED_WING, uav) == pytest.approx(26.0)
+    assert top_speed(SMALL_FIXED_WING, SimpleNamespace(speed=20.0, v_max=30.0)) == 30.0
+    from uavplan.world.airframes import AIRFRAMES
+
+    tight = replace(SMALL_FIXED_WING, speed_margin=0.05)  # 1 m/s to spare at 20 m/s
+    monkeypatch.setitem(AIRFRAMES, "small-fixed-wing", tight)
+    m = default_for(uav)
+    assert m.wind == pytest.approx(tight.turn_wind - 1.0)
+    assert m.rho(20.0) == pytest.approx(0.03 + 2.0 / 20.0)
+    monkeypatch.setitem(AIRFRAMES, "small-fixed-wing", replace(tight, speed_margin=0.0))
+    assert default_for(uav).wind == pytest.approx(tight.turn_wind)
+    # a multirotor's controller holds its ground velocity: no wind share
+    assert default_for(SimpleNamespace(airframe=QUADROTOR.name, speed=10.0, v_max=10.0)).wind == 0
 
 
 def test_default_plans_turn_no_tighter_than_the_airframe_flies_in_wind() -> None:

@@ -102,6 +102,10 @@ def run_simulation(spec: RunSpec) -> dict[str, Any]:
         "timing_p01": _q(te, 1),
         "timing_p99": _q(te, 99),
         "timing_max": float(te.max()) if te.size else math.nan,
+        "lag_min": min((lo for lo, _ in ex.lag.values()), default=math.nan),
+        "lag_max": max((hi for _, hi in ex.lag.values()), default=math.nan),
+        "nonconformant": sum(1 for e in ex.excess.values() if e > 0),
+        "excess_max": max(ex.excess.values(), default=math.nan),
         "mission_items_max": max(ex.items.values(), default=0),
     }
 
@@ -170,6 +174,10 @@ def summarize(rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
         "track_v_max": float(col("track_v_max").max()) if n else math.nan,
         "timing_min": float(col("timing_min").min()) if n else math.nan,
         "timing_max": float(col("timing_max").max()) if n else math.nan,
+        "lag_min": float(col("lag_min").min()) if col("lag_min").size else math.nan,
+        "lag_max": float(col("lag_max").max()) if col("lag_max").size else math.nan,
+        "nonconformant_runs": sum(1 for r in ok if (r.get("nonconformant") or 0) > 0),
+        "violated_conformant": sum(1 for r in ok if r["violated"] and r.get("nonconformant") == 0),
         "min_separation": float(worst["min_separation"]) if worst else math.nan,
         "worst_pair": worst["min_separation_pair"] if worst else None,
         "worst_pair_time": worst["min_separation_time"] if worst else None,

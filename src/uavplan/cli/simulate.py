@@ -149,6 +149,10 @@ def simulate(
               f"timing {s['timing_min']:+.2f} to {s['timing_max']:+.2f} s "
               f"(the plan tolerates {model.get('track_h', 0.0):g} m / "
               f"{model.get('track_v', 0.0):g} m)", markup=False)  # fmt: skip
+    if not _nominal(model):
+        out.print(f"schedule lag {s['lag_min']:+.2f} to {s['lag_max']:+.2f} s; runs with a UAV "
+                  f"outside the plan's execution model: {s['nonconformant_runs']} of "
+                  f"{s['runs']}", markup=False)  # fmt: skip
     if s["worst_pair"]:
         out.print(f"closest pair: {s['worst_pair']}, {s['min_separation']:.2f} m apart at "
                   f"t={s['worst_pair_time']:.1f} s (S2 {world.uav.separation_radius:g} m)",
@@ -162,9 +166,18 @@ def simulate(
                   markup=False)  # fmt: skip
         for m in s["first_violations"]:
             err.print(f"  {m}", markup=False, highlight=False)
+        if s["violated_conformant"]:
+            err.print(f"{s['violated_conformant']} violating run(s) had every UAV inside the "
+                      "plan's execution model: the plan's guarantee does not hold as stated",
+                      markup=False)  # fmt: skip
         raise typer.Exit(1)
     if s["errors"]:
         raise typer.Exit(1)
+
+
+def _nominal(model: dict[str, Any]) -> bool:
+    return not any(float(model.get(k) or 0.0)
+                   for k in ("takeoff_s", "speed", "track_h", "track_v", "wind"))  # fmt: skip
 
 
 def _figure(folder: Path, plan: Any, world: Any, rows: list[dict[str, Any]], seed: int,

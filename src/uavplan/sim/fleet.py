@@ -13,8 +13,9 @@ given to it (from the run's ``numpy.random.Generator``).
   within the airframe's limit, reached with ``tau_bank``; the heading turns at
   ``g tan(bank) / V_air``;
 * speed: the mission commands ground speeds; the autopilot holds an airspeed, set by a PI loop
-  on the ground-speed error (wind compensated by its integral) within the UAV's speed range,
-  reached with ``tau_speed``;
+  on the ground-speed error (wind compensated by its integral) from the UAV's minimum speed
+  to the airframe's top speed (its ``speed_margin`` above the plan's cruise: into a headwind
+  the airspeed must exceed the commanded ground speed), reached with ``tau_speed``;
 * height: the altitude commanded along the leg (interpolated between its ends, as both
   autopilots do), a climb rate ``k_height * error`` plus the path's slope ``tau_gamma`` ahead
   (the next leg's blended in near a leg's end), as a flight-path
@@ -101,21 +102,34 @@ DRAWS = 6
 
 
 def init_state(P: FloatArray, n_pts: NDArray[np.int64], speeds: FloatArray,
-               holds: FloatArray, t0: FloatArray, nav0: FloatArray) -> FloatArray:  # fmt: skip
+               holds: FloatArray, t0: FloatArray, nav0: FloatArray,
+               wind: FloatArray | None = None,
+               prm: tuple[float, ...] | None = None) -> FloatArray:  # fmt: skip
     """Every UAV at its first waypoint, heading along its first leg at its speed and climb
     angle (established on the climb that ended there), its navigation error ``nav0`` (U, 3)
-    drawn from the error's stationary distribution."""
+    drawn from the error's stationary distribution. With the steady ``wind`` (3,) and the
+    fixed wing's ``prm`` (:func:`params`), established in that wind as well: crabbed so that
+    its ground track runs along the leg, at the airspeed that gives the leg's ground speed
+    (within its speed range), the speed loop's integral holding it there."""
     U = P.shape[0]
     st = np.zeros((U, len(STATE)))
     d = P[:, 1] - P[:, 0] if P.shape[1] > 1 else np.zeros((U, 3))
     psi = np.arctan2(d[:, 1], d[:, 0])
     gam = np.arctan2(d[:, 2], np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9))
     va = np.where(n_pts > 1, speeds[:, 0], 0.0)
+    if wind is not None and prm is not None and np.any(wind[:2]):
+        ki_s, v_min, v_max = prm[8], prm[18], prm[19]
+        air = np.stack([va * np.cos(psi) - wind[0], va * np.sin(psi) - wind[1]], axis=1)
+        va_wind = np.clip(np.hypot(air[:, 0], air[:, 1]) / np.cos(gam), v_min, v_max)
+        moving = n_pts > 1
+        st[:, 10] = np.where(moving, (va_wind - va) / max(ki_s, 1e-9), 0.0)
+        psi = np.where(moving, np.arctan2(air[:, 1], air[:, 0]), psi)
+        va = np.where(moving, va_wind, va)
     st[:, 0:3] = P[:, 0]
     st[:, 3] = psi
     st[:, 4] = va
-    st[:, 5] = va * np.cos(gam) * np.cos(psi)
-    st[:, 6] = va * np.cos(gam) * np.sin(psi)
+    st[:, 5] = va * np.cos(gam) * np.cos(psi) + (wind[0] if wind is not None else 0.0)
+    st[:, 6] = va * np.cos(gam) * np.sin(psi) + (wind[1] if wind is not None else 0.0)
     st[:, 7] = va * np.sin(gam)
     st[:, 9] = gam
     st[:, 16:19] = nav0
@@ -246,7 +260,9 @@ def step_fleet(
                 # speed: the ground speed, held through the airspeed
                 vg_along = gx * ux + gy * uy
                 err = v_leg - vg
-                integ = min(max(integ + err * dt, -v_max), v_max)
+                # the integral's share bounded by the speed range (anti-windup)
+                i_max = (v_max - v_min) / max(ki_s, 1e-9)
+                integ = min(max(integ + err * dt, -i_max), i_max)
                 va_cmd = min(max(v_leg + k_s * err + ki_s * integ, v_min), v_max)
                 va += (va_cmd - va) * (1.0 - math.exp(-dt / tau_v))
                 # height: a climb rate as a flight-path angle within the limits; the climb
@@ -343,11 +359,14 @@ def step_fleet(
 
 
 def params(airframe: object, uav: object) -> tuple[float, ...]:
-    """The kernel's ``prm``: the airframe's numbers and the UAV's speed range and climb and
-    descent limits (radians; 90 degrees where the UAV has none)."""
+    """The kernel's ``prm``: the airframe's numbers, the UAV's speed range (up to the
+    airframe's :func:`~uavplan.world.airframes.top_speed`) and climb and descent limits
+    (radians; 60 degrees where the UAV has none)."""
+    from uavplan.world.airframes import top_speed
+
     a = airframe
     v_cruise = float(uav.speed)  # type: ignore[attr-defined]
-    v_max = float(uav.v_max)  # type: ignore[attr-defined]
+    v_max = top_speed(a, uav)  # type: ignore[arg-type]
     v_min = float(uav.min_speed)  # type: ignore[attr-defined]
     if a.kind == "fixed-wing":  # type: ignore[attr-defined]
         v_min = max(v_min, 0.5 * v_cruise)  # a wing needs air over it

@@ -54,7 +54,8 @@ class Execution:
     """One simulated execution: the tracks (as trajectories the verifier reads), the drawn
     conditions, per UAV the largest horizontal and vertical tracking errors and the timing
     error range (s, actual minus planned time at the same point of the path), and all samples'
-    errors pooled (for quantiles)."""
+    errors pooled (for quantiles); per UAV the range of its schedule lag and how far it went
+    outside the plan's execution model (:func:`conformance`: ``excess`` > 0 s: outside)."""
 
     tracks: list[Trajectory]
     wind: FloatArray
@@ -65,6 +66,8 @@ class Execution:
     samples_h: FloatArray = field(default_factory=lambda: np.zeros(0))
     samples_v: FloatArray = field(default_factory=lambda: np.zeros(0))
     samples_t: FloatArray = field(default_factory=lambda: np.zeros(0))
+    lag: dict[str, tuple[float, float]] = field(default_factory=dict)
+    excess: dict[str, float] = field(default_factory=dict)
     finished: int = 0
     items: dict[str, int] = field(default_factory=dict)
 
@@ -124,6 +127,44 @@ def errors_against(
     return h, v, te
 
 
+#: The schedule shifts :func:`conformance` tries, s (a flight more than this far off its
+#: schedule reads as never conforming).
+LAG_SPAN, LAG_STEP = 60.0, 0.05
+
+
+def conformance(
+    track: Trajectory, planned: Trajectory, delta0: float, rho: float, e_h: float, e_v: float
+) -> tuple[FloatArray, FloatArray]:
+    """How a flown ``track`` conforms to its ``planned`` trajectory under an execution model
+    (take-off error ``delta0`` s, speed fraction ``rho``, tracking errors ``e_h``, ``e_v`` m):
+    per sample at time ``t``, the schedule lag (the shift ``tau`` that brings the plan's
+    position at ``t - tau`` nearest, horizontal and vertical distances scaled by ``e_h`` and
+    ``e_v``) and the excess: the least ``|tau|`` that puts the sample within ``e_h`` and
+    ``e_v`` of the plan at ``t - tau``, minus the model's allowance
+    ``delta0 + rho * (t - planned take-off)``. The model holds for the flight where every
+    excess is at most 0: the flown position is always inside the 4-D volume the plan was
+    made and verified for (ASTM F3548's conformance of an operational intent). Unlike the
+    nearest-point timing error of :func:`errors_against`, a pass of the path near another
+    pass of itself cannot be mistaken for it: positions are compared at times."""
+    taus = np.arange(-LAG_SPAN, LAG_SPAN + LAG_STEP / 2, LAG_STEP)
+    t = track.times
+    tp, pp = planned.times, planned.points
+    lag = np.empty(len(t))
+    need = np.empty(len(t))
+    sh, sv = max(e_h, 1e-6), max(e_v, 1e-6)
+    for lo in range(0, len(t), 32):
+        tq = np.clip(t[lo : lo + 32, None] - taus[None], tp[0], tp[-1])
+        q = track.points[lo : lo + 32]
+        dz = np.interp(tq, tp, pp[:, 2]) - q[:, None, 2]
+        dx = np.interp(tq, tp, pp[:, 0]) - q[:, None, 0]
+        dy = np.interp(tq, tp, pp[:, 1]) - q[:, None, 1]
+        d = np.maximum(np.hypot(dx, dy) / sh, np.abs(dz) / sv)
+        lag[lo : lo + 32] = taus[np.argmin(d + 1e-9 * np.abs(taus)[None], axis=1)]
+        need[lo : lo + 32] = np.where(d <= 1.0, np.abs(taus)[None], np.inf).min(axis=1)
+    allowed = delta0 + rho * np.maximum(t - tp[0], 0.0)
+    return lag, need - allowed
+
+
 def simulate_once(
     plan: PlanFile,
     scenario: Any,
@@ -166,7 +207,7 @@ def simulate_once(
     out_n = np.zeros(U, dtype=np.int64)
     w20 = INTENSITIES[conditions.turbulence]
     nav0 = rng.standard_normal((U, 3)) * np.array([prm[14], prm[14], prm[15]])
-    st = init_state(P, n, S, H, t0, nav0)
+    st = init_state(P, n, S, H, t0, nav0, wind, prm if kind == 0 else None)
     t = float(t0.min())
     finished = 0
     while t < t_end and finished < U:
@@ -178,6 +219,10 @@ def simulate_once(
     ex = Execution([], wind, {lg.uav: float(e) for lg, e in zip(legs, errs, strict=True)},
                    finished=int(finished), items={lg.uav: lg.items for lg in legs})  # fmt: skip
     hs, vs, ts = [], [], []
+    from uavplan.world.execution import ExecutionModel
+
+    model = ExecutionModel.from_record(plan.execution) if plan.execution else None
+    delta0, rho = model.timing(float(scenario.uav.speed)) if model else (0.0, 0.0)
     for i, (lg, pl) in enumerate(zip(legs, planned, strict=True)):
         m = int(out_n[i])
         tr = Trajectory(lg.uav, out_xyz[i, :m].copy(), out_t[i, :m].copy(), True)
@@ -186,6 +231,11 @@ def simulate_once(
         ex.track_h[lg.uav] = float(h.max()) if m else math.nan
         ex.track_v[lg.uav] = float(np.abs(v).max()) if m else math.nan
         ex.timing[lg.uav] = (float(te.min()), float(te.max())) if m else (math.nan, math.nan)
+        if m:
+            lag, excess = conformance(tr, pl, delta0, rho, model.track_h if model else 0.0,
+                                      model.track_v if model else 0.0)  # fmt: skip
+            ex.lag[lg.uav] = (float(lag.min()), float(lag.max()))
+            ex.excess[lg.uav] = float(excess.max())
         hs.append(h)
         vs.append(v)
         ts.append(te)

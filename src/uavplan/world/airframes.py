@@ -55,6 +55,12 @@ class Airframe:
         turn_wind: the wind (m/s) a fixed wing's planned turns leave room for, the
             calibration's: uavplan's default plans its turns no tighter than the airframe can
             fly at its bank limit with this much wind behind it (:func:`turn_radius_in_wind`).
+        speed_margin: how much faster than the plan's cruise speed the airframe can fly, a
+            fraction of it (the airspeed a fixed wing may take to hold its commanded ground
+            speed into a headwind; a multirotor's velocity limit, whose controller holds
+            ground velocity in a steady wind); the scenario's ``max_speed`` when that is
+            larger (:func:`top_speed`). The quadrotor's is 0: its calibration flew it at
+            the plan's speed.
     """
 
     name: str
@@ -81,20 +87,31 @@ class Airframe:
     track_h: float = 3.0
     track_v: float = 2.0
     turn_wind: float = 3.0
+    speed_margin: float = 0.25
 
     def record(self) -> dict[str, Any]:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
 
 
-#: A small fixed wing (the PPSwarm UAV: 20 m/s, 20 m turns, a 64 degree bank at cruise).
-SMALL_FIXED_WING = Airframe("small-fixed-wing", "fixed-wing", track_h=6.0, track_v=8.0)
+#: A small fixed wing (the PPSwarm UAV: 20 m/s, 20 m turns, a 64 degree bank at cruise; up to
+#: 1.3 times its cruise airspeed, as small survey airframes fly 15-20 m/s and reach 25-30).
+SMALL_FIXED_WING = Airframe("small-fixed-wing", "fixed-wing", track_h=6.0, track_v=8.0,
+                            speed_margin=0.3)  # fmt: skip
 #: A fast fixed wing (RSCDWOA's UAV: 50 m/s, 2 km turns): slower responses, gentle banks.
 FAST_FIXED_WING = Airframe("fast-fixed-wing", "fixed-wing", tau_speed=4.0, tau_bank=0.6,
                            max_bank_deg=35.0, tau_gamma=1.5, l1_period=17.0,
-                           k_height=0.2, accept=10.0, track_h=8.5, track_v=12.5)  # fmt: skip
+                           k_height=0.2, accept=10.0, track_h=8.5, track_v=12.5,
+                           speed_margin=0.2)  # fmt: skip
 #: A quadrotor under a position and velocity controller (PX4's multicopter defaults).
 QUADROTOR = Airframe(
-    "quadrotor", "multirotor", nav_h=0.8, nav_v=1.0, accept=2.0, track_h=6.5, track_v=7.0
+    "quadrotor",
+    "multirotor",
+    nav_h=0.8,
+    nav_v=1.0,
+    accept=2.0,
+    track_h=6.5,
+    track_v=7.0,
+    speed_margin=0.0,
 )
 
 AIRFRAMES: dict[str, Airframe] = {a.name: a for a in (SMALL_FIXED_WING, FAST_FIXED_WING,
@@ -114,6 +131,15 @@ def airframe_of(uav: Any) -> Airframe:
     if float(getattr(uav, "turn_radius", 0.0)) > 0 or float(getattr(uav, "min_speed", 0.0)) > 0:
         return SMALL_FIXED_WING
     return QUADROTOR
+
+
+def top_speed(af: Airframe, uav: Any) -> float:
+    """The fastest the airframe flies a plan of ``uav`` (m/s): ``1 + speed_margin`` times the
+    UAV's cruise speed, or the scenario's ``max_speed`` when that is larger. The plan's own
+    speeds stay within the scenario's limits; the margin is what the autopilot may use to hold
+    them (a fixed wing holds a commanded ground speed into a headwind only with airspeed to
+    spare)."""
+    return max(float(uav.v_max), (1.0 + af.speed_margin) * float(uav.speed))
 
 
 def bank_for(speed: float, radius: float) -> float:

@@ -154,17 +154,23 @@ def default_for(uav: Any) -> ExecutionModel:
     """uavplan's default model for a scenario's UAV: :data:`DEFAULT`'s take-off and speed
     errors, and for a UAV that names its airframe (``uav.airframe``) the larger of its
     tracking error and the one calibrated in flight simulation for that airframe
-    (:attr:`uavplan.world.airframes.Airframe.track_h`, ``track_v``). A UAV that names none
-    gets :data:`DEFAULT` (its class is only a guess from its limits)."""
-    from uavplan.world.airframes import AIRFRAMES
+    (:attr:`uavplan.world.airframes.Airframe.track_h`, ``track_v``), and the part of the
+    calibration's wind (``turn_wind``) that the airframe has no speed to spare for
+    (:func:`~uavplan.world.airframes.top_speed`): a fixed wing that cannot fly faster than
+    it is planned to falls behind its schedule into a headwind (a multirotor's controller
+    holds its ground velocity). A UAV that names no airframe gets
+    :data:`DEFAULT` (its class is only a guess from its limits)."""
+    from uavplan.world.airframes import AIRFRAMES, top_speed
 
     if getattr(uav, "airframe", None) not in AIRFRAMES:
         return DEFAULT
     af = AIRFRAMES[uav.airframe]
     h, v = max(DEFAULT.track_h, af.track_h), max(DEFAULT.track_v, af.track_v)
-    if (h, v) == (DEFAULT.track_h, DEFAULT.track_v):
+    spare = top_speed(af, uav) - float(uav.speed)
+    wind = round(max(0.0, af.turn_wind - spare), 3) if af.kind == "fixed-wing" else 0.0
+    if (h, v, wind) == (DEFAULT.track_h, DEFAULT.track_v, 0.0):
         return DEFAULT
-    return replace(DEFAULT, track_h=h, track_v=v,
+    return replace(DEFAULT, track_h=h, track_v=v, wind=wind,
                    source=f"uavplan's default for a {af.name}, tracking calibrated in "
                    "flight simulation")  # fmt: skip
 
