@@ -138,3 +138,19 @@ def test_reference_syntax() -> None:
     for bad in ("f10", "f1:0", "f1:x", "f1:", "nosuch", "nosuch5", ":5", "sphere0", "f5:1"):
         with pytest.raises(OptimizerError):
             function_problem(bad)
+
+
+@pytest.mark.parametrize("name", [f"f{i}" for i in range(1, 10)])
+def test_shifted_functions_move_the_optimum_off_the_centre(name: str) -> None:
+    from uavplan.optimizers.functions import FUNCTIONS, function_problem, shift_vector
+
+    b = FUNCTIONS[name]
+    o = shift_vector(b, 30)
+    half = 0.5 * (b.upper - b.lower)
+    assert np.all(np.abs(o) >= 0.19 * half) and np.all(np.abs(o) <= 0.41 * half)
+    plain, shifted = function_problem(name, noise_seed=3), function_problem(f"{name}s", noise_seed=3)
+    x = b.minimizer(30)
+    assert shifted.evaluate((x + o)[None])[0] == pytest.approx(plain.evaluate(x[None])[0])
+    centre = np.zeros((1, 30))
+    if name not in ("f3", "f4"):  # Step is flat near 0; Quartic is nearly so
+        assert shifted.evaluate(centre)[0] > plain.evaluate(centre)[0] + 1e-6

@@ -447,3 +447,26 @@ def test_beats_random_search(name: str, f: Fn, half_width: float) -> None:
 def test_both_maps_solve_sphere(chaos: str) -> None:
     res = minimize(box(sphere, 5, 5.0), "rscdwoa", 300, seed=1, chaos=chaos)
     assert res.f < 1e-6
+
+
+def test_the_variants_draw_l_in_their_range_and_uniform_draws_are_not_chaotic() -> None:
+    """``l_range="symmetric"`` puts the spiral's l in (-1, 1) (Sect. 2.2's WOA), the default
+    in (0, 1) (Eq. 15); ``chaos="uniform"`` draws afresh each generation (no map orbit)."""
+    from uavplan.optimizers.rscdwoa import chaos_step
+
+    seen = {}
+    for rng_l in ("unit", "symmetric"):
+        opt = RSCDWOA(box(sphere, 5, 5.0), seed=3, S=10**6, pop_size=30, l_range=rng_l)
+        step(opt)
+        ls = []
+        for _ in range(10):
+            step(opt)
+            ls.append(np.asarray(opt.l).copy())
+        seen[rng_l] = np.concatenate(ls)
+    assert seen["unit"].min() > 0 and seen["unit"].max() < 1
+    assert seen["symmetric"].min() < -0.5 and seen["symmetric"].max() > 0.5
+    rng = np.random.default_rng(0)
+    w = np.full((3, 4), 0.3)
+    w1 = chaos_step(w, "uniform", 0.74, 4.0, rng)
+    assert w1.shape == w.shape and np.all((w1 > 0) & (w1 < 1)) and len(np.unique(w1)) == 12
+    assert not np.allclose(w1, chaos_step(w, "tent", 0.74, 4.0, rng))

@@ -5,6 +5,7 @@ straight line; other UAVs' flights as moving obstacles."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from uavplan.planners import get_planner
 from uavplan.planners.apf import field_params, fly_field
@@ -91,6 +92,43 @@ def test_fused_apf_escapes_the_cup_that_catches_the_classical_one() -> None:
     # flown as planned, within the turn radius everywhere
     assert r.flown_kind == "polyline"
     assert curvature(r.waypoints).max() <= 1.0 / sc.uav.turn_radius
+
+
+@pytest.mark.parametrize("name", ["woa-apf", "rscdwoa-apf"])
+def test_fused_apf_fits_the_optimizers_schedule_to_the_run(
+    name: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The sub-goal optimizer's schedule ends with the run: WOA's ``a`` reaches 0 at the
+    run's last iteration, not at the optimizer's default t_max of 100."""
+    import uavplan.planners.apf_fused as fused
+
+    made = []
+    real = fused.get_optimizer
+
+    def spy(opt_name: str) -> type:
+        cls = real(opt_name)
+
+        class Spy(cls):  # type: ignore[valid-type, misc]
+            def _ask(self) -> np.ndarray:
+                X = super()._ask()
+                made.append((self.config.max_iterations, float(self.a)))
+                return X
+
+        return Spy
+
+    monkeypatch.setattr(fused, "get_optimizer", spy)
+    sc = resolve("rscdwoa-static")
+    get_planner(name, pop_size=6).plan(sc, 0, budget=6, seed=0)
+    assert made and all(t_max == 6 for t_max, _ in made)
+    # the t-th move (from 0) has a = 2 - 2 t / 6; at the old t_max of 100 it stayed above 1.9
+    assert [a for _, a in made] == pytest.approx([2 - 2 * t / 6 for t in range(len(made))])
+    assert made[-1][1] < 1.0
+    # an explicit t_max is kept
+    made.clear()
+    get_planner(name, pop_size=6, optimizer_options={"max_iterations": 50}).plan(
+        sc, 0, budget=6, seed=0
+    )
+    assert made and all(t_max == 50 for t_max, _ in made)
 
 
 def test_kernel_force_matches_the_numpy_reference() -> None:

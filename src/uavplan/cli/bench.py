@@ -166,12 +166,52 @@ def run(
 
 def report(
     folder: Annotated[Path, typer.Argument(help="A results folder written by `bench run`.")],
+    claims: Annotated[
+        bool,
+        typer.Option(
+            "--claims",
+            help="FOLDER holds one results folder per plan: write the "
+            "papers' claims ledger judged from them.",
+        ),
+    ] = False,
+    out_file: Annotated[
+        Path | None, typer.Option("--out", help="The ledger's file [FOLDER/claims.md].")
+    ] = None,
 ) -> None:
-    """Write FOLDER/report.html (self-contained) and FOLDER/report.md, figures as PNG."""
+    """Write FOLDER/report.html (self-contained) and FOLDER/report.md, figures as PNG; with
+    --claims, the claims ledger: every headline claim of the four papers with our figures
+    under the paper's protocol and ours, the test and a verdict."""
+    if claims:
+        _write_claims(folder, out_file or folder / "claims.md")
+        return
+    if out_file is not None:
+        raise _fail("--out is for --claims (a plan's report is written into its folder)")
     if not (folder / "runs").is_dir():
         raise _fail(f"{folder}: not a results folder (no runs/ inside)")
     html_path, md_path = _write_report(folder)
     out.print(f"wrote {html_path} and {md_path}")
+
+
+def _write_claims(folder: Path, target: Path) -> None:
+    from uavplan.bench.claims.base import VERDICTS, build_ledger, render_markdown
+    from uavplan.bench.store import StoreError
+    from uavplan.io.atomic import write_bytes_atomic
+
+    if not folder.is_dir():
+        raise _fail(f"{folder}: no such folder (the results root, one folder per plan)")
+    try:
+        ledger = build_ledger(folder)
+    except StoreError as exc:
+        raise _fail(f"report --claims: {exc}") from None
+    try:
+        write_bytes_atomic(target, render_markdown(ledger, folder).encode())
+    except OSError as exc:
+        raise _fail(f"report --claims: cannot write {target}: {exc.strerror or exc}") from None
+    counts = {v: sum(1 for _, f in ledger if f.verdict == v) for v in VERDICTS}
+    out.print(f"{len(ledger)} claims: " + ", ".join(f"{v} {n}" for v, n in counts.items() if n))
+    for c, f in ledger:
+        out.print(f"  {c.id}: {f.verdict}", markup=False)
+    out.print(f"wrote {target}", markup=False)
 
 
 def _write_report(folder: Path) -> tuple[Path, Path]:

@@ -55,6 +55,7 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -197,6 +198,27 @@ FUNCTIONS: dict[str, Benchmark] = {
 }
 
 
+#: How far the shifted functions (``f1s`` - ``f9s``) move the optimum: this fraction of the
+#: box's half-width, per coordinate, with a fixed sign pattern (:func:`shift_vector`).
+SHIFT = 0.4
+
+
+def shift_vector(b: Benchmark, dim: int) -> FloatArray:
+    """The offset of a shifted function's optimum: ``SHIFT`` times the half-width, the signs and
+    magnitudes (0.5-1) fixed by a constant seed, so the optimum is off the box's centre in
+    every coordinate (reverse search towards the centre gains nothing by it)."""
+    g = np.random.default_rng(20_240_101).uniform(0.5, 1.0, dim)
+    sign = np.where(np.arange(dim) % 2 == 0, 1.0, -1.0)
+    return SHIFT * 0.5 * (b.upper - b.lower) * g * sign
+
+
+def _shifted(f: Callable[..., FloatArray], o: FloatArray) -> Callable[..., FloatArray]:
+    def g(X: FloatArray, **kw: Any) -> FloatArray:
+        return f(np.asarray(X, dtype=np.float64) - o, **kw)
+
+    return g
+
+
 def parse_ref(ref: str) -> tuple[str, int]:
     """``NAME`` (30-D), ``NAME:DIM``, or the legacy ``NAMEDIM`` for digit-free names
     (``sphere10``) -> ``(name, dim)``."""
@@ -231,8 +253,10 @@ def function_problem(ref: str, noise_seed: int | None = 0) -> FunctionProblem:
     dimension (``"f5:10"``), or the older ``NAMEDIM`` (``"sphere10"``) for names without digits.
     ``noise_seed`` seeds the noise of a noisy function (``f4``); each call gets a fresh generator.
     """
-    name, dim = parse_ref(ref)
+    shifted = bool(re.fullmatch(r"f[1-9]s(:\d+)?", ref.strip().lower()))
+    name, dim = parse_ref(ref.strip().lower().replace("s", "", 1) if shifted else ref)
     b = FUNCTIONS[name]
-    return FunctionProblem(
-        b.function(noise_seed), np.full(dim, b.lower), np.full(dim, b.upper), name=ref
-    )
+    f = b.function(noise_seed)
+    if shifted:  # the same function, its optimum moved off the box's centre
+        f = _shifted(f, shift_vector(b, dim))
+    return FunctionProblem(f, np.full(dim, b.lower), np.full(dim, b.upper), name=ref)

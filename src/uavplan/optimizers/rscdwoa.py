@@ -146,7 +146,8 @@ from uavplan.optimizers.base import (
 from uavplan.params import option
 
 IntArray = NDArray[np.int64]
-ChaosKind = Literal["tent", "logistic"]
+ChaosKind = Literal["tent", "logistic", "uniform"]
+LRange = Literal["unit", "symmetric"]
 
 #: Chaotic values closer than this to 0, 1 or an interior fixed point are re-seeded.
 CHAOS_EPS = 1e-12
@@ -167,6 +168,8 @@ def logistic_map(w: FloatArray, mu: float) -> FloatArray:
 
 def chaos_fixed_points(kind: ChaosKind, beta: float, mu: float) -> tuple[float, ...]:
     """Interior fixed points of the map (0 is guarded separately)."""
+    if kind == "uniform":
+        return ()
     if kind == "tent":
         return (1.0 / (2.0 - beta),)
     return (1.0 - 1.0 / mu,) if mu > 1.0 else ()
@@ -192,6 +195,8 @@ def chaos_step(
     """One step of the chosen map, guarded: values that left ``(eps, 1 - eps)``, landed within
     ``eps`` of an interior fixed point, or did not move, are re-seeded from ``rng``."""
     w = np.asarray(w, dtype=np.float64)
+    if kind == "uniform":  # the control: WOA's own uniform draws in place of the chaos
+        return chaos_seed(rng, w.shape)
     w_next = tent_map(w, beta) if kind == "tent" else logistic_map(w, mu)
     bad = ~((w_next > CHAOS_EPS) & (w_next < 1.0 - CHAOS_EPS)) | (w_next == w)
     for p in chaos_fixed_points(kind, beta, mu):
@@ -275,6 +280,9 @@ class RSCDWOAConfig(OptimizerConfig):
       (Table 2, smallest mean p-value; Theorem 2 case (2): the tent map never gives A = 0 with
       C = 1). ``mu = 4`` for the logistic map: Sect. 5.2 / Fig. 8 ("when mu = 4 the logistic map
       has a better distribution").
+    * ``l_range = "unit"``: l = w(t) in (0, 1) as Eq. 15 writes it; ``"symmetric"`` maps it to
+      WOA's (-1, 1) of Sect. 2.2 (the two sections disagree; the variant is tested in the
+      ``functions-variants`` experiment).
     * ``b = 1``: spiral shape constant, Sect. 2.2.
     * ``S = 10``: lifespan; Alg. 1 line 2 initializes it without giving a value. Our choice:
       10 % of the paper's 100 iterations (see the module docstring for its meaning).
@@ -298,8 +306,13 @@ class RSCDWOAConfig(OptimizerConfig):
                            low=3)  # fmt: skip
     max_iterations: int = option(100, "t_max of Eq. 6, in generations (a = 0 beyond it)", low=1)
     chaos: ChaosKind = option(
-        "tent", "the chaotic map replacing A's, C's and l's random numbers (Sect. 5.2)",
-        choices=("tent", "logistic"),
+        "tent", "the chaotic map replacing A's, C's and l's random numbers (Sect. 5.2); "
+        "uniform: plain uniform draws (a control, not the paper's)",
+        choices=("tent", "logistic", "uniform"),
+    )  # fmt: skip
+    l_range: LRange = option(
+        "unit", "l of the spiral: unit = w in (0, 1) as Eq. 15 writes it; symmetric = 2 w - 1 "
+        "in (-1, 1) as Sect. 2.2 (WOA) has it", choices=("unit", "symmetric"),
     )  # fmt: skip
     beta: float = option(0.74, "tent map parameter (Eq. 14, Sect. 5.2)", low=0, high=1,
                          low_open=True, high_open=True)  # fmt: skip
@@ -428,7 +441,8 @@ class RSCDWOA(Optimizer):
         w_A, w_C, w_l = self.w
         A = self.A = 2.0 * a * w_A - a  # Eq. 11
         C = self.C = 2.0 * w_C  # Eq. 12
-        l = self.l = w_l.copy()  # Eq. 15: l replaced by w(t)
+        # Eq. 15: l replaced by w(t); or WOA's range (-1, 1) of Sect. 2.2
+        l = self.l = w_l.copy() if cfg.l_range == "unit" else 2.0 * w_l - 1.0
         q = self.q = np.asarray(rng.random(n), dtype=np.float64)
 
         encircle = q < 0.5  # Eq. 8

@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from uavplan.optimizers.base import FunctionProblem
+from uavplan.optimizers.base import FunctionProblem, fit_schedule
 from uavplan.optimizers.base import get as get_optimizer
 from uavplan.optimizers.constraints import feasibility_first
 from uavplan.planners.apf import APFConfig, FieldParams, field_params, fly_field
@@ -133,7 +133,12 @@ class FusedAPFPlanner(Planner):
         )
         try:
             cls = get_optimizer(cfg.optimizer)
-            opt = cls(problem, self.optimizer_config, seed=np.random.SeedSequence(run.seed),
+            # the optimizer's schedule (WOA's and RSCDWOA's a, PSO's inertia) fitted to the
+            # run's iterations, as the optimizer planner does: left at the optimizer's own
+            # t_max, a 40-iteration run ended with WOA's a near 1.2 instead of 0
+            assert self.optimizer_config is not None  # a fused planner has an optimizer
+            config = fit_schedule(self.optimizer_config, run.budget, cfg.optimizer_options)
+            opt = cls(problem, config, seed=np.random.SeedSequence(run.seed),
                       pop_size=cfg.pop_size)  # fmt: skip
         except Exception as exc:  # an optimizer that does not take this size, an unknown name
             raise PlannerError(f"{self.name}: optimizer {cfg.optimizer!r}: {exc}") from None

@@ -81,6 +81,37 @@ _functions_plan(
 )
 
 
+#: RSCDWOA's decisions where the paper is silent or inconsistent, each changed alone
+#: (``functions-variants``): the lifespan S (no value in Alg. 1; ours 10), l's range ((0, 1) as
+#: Eq. 15 writes w(t); (-1, 1) as Sect. 2.2's WOA), the chaotic draws against plain uniform
+#: ones, and WOA beside them; on f1-f9 and on the same functions with the optimum moved off
+#: the box's centre (``f1s``-``f9s``), where the reverse search's pull towards the centre
+#: gains nothing.
+VARIANT_ALGORITHMS = (
+    Algorithm("rscdwoa", "rscdwoa", {"max_iterations": 100}),
+    Algorithm("rscdwoa-S0", "rscdwoa", {"max_iterations": 100, "S": 0}),
+    Algorithm("rscdwoa-S1", "rscdwoa", {"max_iterations": 100, "S": 1}),
+    Algorithm("rscdwoa-S3", "rscdwoa", {"max_iterations": 100, "S": 3}),
+    Algorithm("rscdwoa-l-symmetric", "rscdwoa", {"max_iterations": 100, "l_range": "symmetric"}),
+    Algorithm("rscdwoa-uniform", "rscdwoa", {"max_iterations": 100, "chaos": "uniform"}),
+    Algorithm("woa", "woa", {"max_iterations": 100}),
+)
+register_plan(
+    ExperimentPlan(
+        name="functions-variants",
+        description="RSCDWOA's undecided choices as variants (lifespan S 0/1/3/10, l in (0, 1) "
+        "or (-1, 1), chaotic or uniform draws) and WOA, on f1-f9 and on f1s-f9s (the optimum "
+        "moved off the box's centre), 30-D, 30 agents, the evaluations of 100 iterations",
+        scenarios=tuple(f"f{i}" for i in range(1, 10)) + tuple(f"f{i}s" for i in range(1, 10)),
+        algorithms=VARIANT_ALGORITHMS,
+        scales={"smoke": Scale(runs=2, iterations=10, pop_size=30, evaluations=330),
+                "paper": Scale(runs=30, iterations=100, pop_size=30, evaluations=3030)},
+        kind="function",
+        reference="rscdwoa",
+    )
+)  # fmt: skip
+
+
 # ---------------------------------------------------------------------- the APF application
 APF_FAMILY = ("apf", "woa-apf", "rscdwoa-apf", "pso-apf", "ga-apf")
 
