@@ -148,7 +148,10 @@ def test_shifted_functions_move_the_optimum_off_the_centre(name: str) -> None:
     o = shift_vector(b, 30)
     half = 0.5 * (b.upper - b.lower)
     assert np.all(np.abs(o) >= 0.19 * half) and np.all(np.abs(o) <= 0.41 * half)
-    plain, shifted = function_problem(name, noise_seed=3), function_problem(f"{name}s", noise_seed=3)
+    plain, shifted = (
+        function_problem(name, noise_seed=3),
+        function_problem(f"{name}s", noise_seed=3),
+    )
     x = b.minimizer(30)
     assert shifted.evaluate((x + o)[None])[0] == pytest.approx(plain.evaluate(x[None])[0])
     centre = np.zeros((1, 30))

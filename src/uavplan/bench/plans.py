@@ -49,11 +49,15 @@ class RunSpec:
 
 @dataclass(frozen=True)
 class Algorithm:
-    """An algorithm configuration in a plan: a label, a registered planner name, its options."""
+    """An algorithm configuration in a plan: a label, a registered planner name, its options,
+    and per scale an iteration budget of its own (``iterations``, e.g. a paper's protocol
+    that gives each algorithm its own generations; the scale's evaluation budget then does not
+    apply to it), else the scale's."""
 
     label: str
     planner: str
     options: Mapping[str, Any] = field(default_factory=dict)
+    iterations: Mapping[str, int] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -129,6 +133,7 @@ class ExperimentPlan:
                 if sc.pop_size is not None and "pop_size" not in options:
                     options["pop_size"] = sc.pop_size
                 options.update(sc.options)
+                own = alg.iterations.get(scale) if iterations is None else None
                 for i in range(n_runs):
                     out.append(
                         RunSpec(
@@ -143,8 +148,10 @@ class ExperimentPlan:
                             params={
                                 "planner": alg.planner,
                                 "options": options,
-                                "iterations": n_iter,
-                                "evaluations": None if iterations is not None else sc.evaluations,
+                                "iterations": n_iter if own is None else own,
+                                "evaluations": None
+                                if iterations is not None or own is not None
+                                else sc.evaluations,
                             },
                         )
                     )

@@ -1,5 +1,5 @@
 """An obstacle index: a uniform grid over the obstacles' bounding boxes, so that a segment is
-tested only against the obstacles near it (issue 18 item 2).
+tested only against the obstacles near it.
 
 One structure serves every obstacle kind: whatever a check needs of an obstacle (a disc of
 threat, a circle, a polygon grown by its margin) is given to :func:`box_grid` as an

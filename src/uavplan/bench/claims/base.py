@@ -13,6 +13,7 @@ reported as such ("not run"), never guessed.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -131,7 +132,19 @@ def judge(claim: Claim, results: Results) -> Finding:
             NOT_RUN,
             f"the runs of {', '.join(missing)} are not stored: {cmd}",
         )
-    return claim.judge(results)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # means of empty cells: NaN, shown "-"
+        try:
+            return claim.judge(results)  # a plan stored without some of its runs: below
+        except (KeyError, ValueError, IndexError, StopIteration, ZeroDivisionError) as exc:
+            return Finding(
+                "incomplete runs",
+                "incomplete runs",
+                "-",
+                NOT_RUN,
+                f"the stored runs of {', '.join(claim.needs)} lack what this claim reads "
+                f"({type(exc).__name__}: {exc}); run the plans to the end",
+            )
 
 
 def build_ledger(root: str | Path) -> list[tuple[Claim, Finding]]:

@@ -1,4 +1,4 @@
-"""Not a paper's: how far the flown-fleet guarantee scales (issue 13). PPSwarm's engine in our
+"""Not a paper's: how far the flown-fleet guarantee scales. PPSwarm's engine in our
 default mode (each UAV's Dubins-smoothed, timed flight checked while planning, reserved and
 declared; the rescues of :mod:`uavplan.planners.prioritized`) with ``N_restart = 1`` on 40 to
 1,000 UAVs: the four PPSwarm maps, the flat open map (``open``, the crowd alone) and the dense

@@ -171,6 +171,33 @@ register_plan(
 )
 
 
+register_plan(
+    ExperimentPlan(
+        name="hrmaga-compare-paper",
+        description=(
+            "HR-MAGA Fig. 8 under the paper's protocol: every P-MAGA call of HR-MAGA runs G = 200 "
+            "generations (Table I's schedule, 6,600 iterations), P-MAGA alone 200 generations "
+            "(2,200 iterations: 1 + sGen batches each), GA 200 generations of 256; no common "
+            "evaluation budget"
+        ),
+        scenarios=MAPS,
+        algorithms=(
+            Algorithm("hr-maga", "hr-maga", iterations={"paper": 6600, "smoke": 66}),
+            Algorithm("p-maga", "p-maga", iterations={"paper": 2200, "smoke": 22}),
+            Algorithm("ga", "ga", {**FF, "pop_size": 256, "n_waypoints": WAYPOINTS},
+                      iterations={"paper": 200, "smoke": 2}),
+        ),
+        scales={
+            "smoke": Scale(runs=1, iterations=30, scenarios=("hrmaga-virtual",)),
+            "paper": Scale(runs=40, iterations=300),
+        },
+        kind="planner",
+        reference="hr-maga",
+        report=compare_sections,
+    )
+)  # fmt: skip
+
+
 # ---------------------------------------------------------------------- waypoints
 def waypoints_sections(df: pd.DataFrame, plan: str) -> Sections:
     import matplotlib.pyplot as plt

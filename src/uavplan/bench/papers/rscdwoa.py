@@ -96,20 +96,28 @@ VARIANT_ALGORITHMS = (
     Algorithm("rscdwoa-uniform", "rscdwoa", {"max_iterations": 100, "chaos": "uniform"}),
     Algorithm("woa", "woa", {"max_iterations": 100}),
 )
-register_plan(
-    ExperimentPlan(
-        name="functions-variants",
-        description="RSCDWOA's undecided choices as variants (lifespan S 0/1/3/10, l in (0, 1) "
-        "or (-1, 1), chaotic or uniform draws) and WOA, on f1-f9 and on f1s-f9s (the optimum "
-        "moved off the box's centre), 30-D, 30 agents, the evaluations of 100 iterations",
-        scenarios=tuple(f"f{i}" for i in range(1, 10)) + tuple(f"f{i}s" for i in range(1, 10)),
-        algorithms=VARIANT_ALGORITHMS,
-        scales={"smoke": Scale(runs=2, iterations=10, pop_size=30, evaluations=330),
-                "paper": Scale(runs=30, iterations=100, pop_size=30, evaluations=3030)},
-        kind="function",
-        reference="rscdwoa",
-    )
-)  # fmt: skip
+for _name, _which, _scenarios in (
+    ("functions-variants", "on f1-f9", tuple(f"f{i}" for i in range(1, 10))),
+    (
+        "functions-shifted",
+        "on f1s-f9s (f1-f9 with the optimum moved off the box's centre)",
+        tuple(f"f{i}s" for i in range(1, 10)),
+    ),
+):
+    register_plan(
+        ExperimentPlan(
+            name=_name,
+            description="RSCDWOA's undecided choices as variants (lifespan S 0/1/3/10, l in "
+            f"(0, 1) or (-1, 1), chaotic or uniform draws) and WOA {_which}, 30-D, 30 agents, "
+            "the evaluations of 100 iterations",
+            scenarios=_scenarios,
+            algorithms=VARIANT_ALGORITHMS,
+            scales={"smoke": Scale(runs=2, iterations=10, pop_size=30, evaluations=330),
+                    "paper": Scale(runs=30, iterations=100, pop_size=30, evaluations=3030)},
+            kind="function",
+            reference="rscdwoa",
+        )
+    )  # fmt: skip
 
 
 # ---------------------------------------------------------------------- the APF application
