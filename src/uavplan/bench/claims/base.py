@@ -28,9 +28,10 @@ from uavplan.bench.simulation import wilson  # noqa: F401  (for the papers' clai
 REPRODUCED = "reproduced"
 NOT_REPRODUCED = "not reproduced"
 PAPER_ONLY = "reproduced only under the paper's protocol"
+OURS_ONLY = "reproduced only under uavplan's protocol"
 NOT_TESTABLE = "not testable as written"
 NOT_RUN = "not run"
-VERDICTS = (REPRODUCED, NOT_REPRODUCED, PAPER_ONLY, NOT_TESTABLE, NOT_RUN)
+VERDICTS = (REPRODUCED, NOT_REPRODUCED, PAPER_ONLY, OURS_ONLY, NOT_TESTABLE, NOT_RUN)
 
 
 @dataclass(frozen=True)
@@ -167,9 +168,10 @@ def render_markdown(ledger: list[tuple[Claim, Finding]], root: str | Path) -> st
         "",
         "Every headline claim of the four papers, judged from the runs stored under "
         f"`{Path(root).as_posix()}/` (rebuilt by `uavplan report {Path(root).as_posix()} "
-        "--claims`). \"Paper's protocol\" is our figure under the paper's own experiment "
-        '(its generations, restarts or budget split); "ours" is uavplan\'s protocol (equal '
-        "evaluations) where the two differ. The test decides the verdict.",
+        '--claims --out docs/claims.md`). "Paper\'s protocol" is our figure under the '
+        "paper's own experiment (its generations, restarts or budget split); \"uavplan's "
+        'protocol" is ours (equal evaluations, or the variant that isolates the claim) where '
+        "the two differ. The test decides the verdict.",
         "",
         "Verdicts: " + ", ".join(f"{v} {counts[v]}" for v in VERDICTS if counts[v]) + ".",
         "",

@@ -137,11 +137,12 @@ def _lh_best(r: Results) -> Finding:
         f"finite {pvalue(p)}"
     )
     ours = "not run (one restart per run: `uavplan bench run ppswarm-table5-r1 --scale paper`)"
-    ours_ok = None
+    ours_ok, also = None, ""
     if r.has("ppswarm-table5-r1"):
         w1, lh1, n1, p1, _ = count(r.frame("ppswarm-table5-r1"))
         ours = f"one restart: lowest mean in: {w1} of {n1} cells; Friedman {pvalue(p1)}"
         ours_ok = lh1 >= 0.75 * n1 and p1 < 0.05
+        also = f"; with one restart, where the order decides, LH is lowest in {lh1} of {n1}"
     paper_ok = lh >= 0.75 * n and p < 0.05
     verdict = (
         REPRODUCED
@@ -155,7 +156,7 @@ def _lh_best(r: Results) -> Finding:
         f"significantly across cells ({pvalue(p)})"
         if not paper_ok
         else f"LH lowest in {lh} of {n} cells, the orders differ ({pvalue(p)})"
-    )
+    ) + also
     return Finding(
         paper,
         ours,

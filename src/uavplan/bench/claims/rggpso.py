@@ -115,7 +115,7 @@ def _table1(r: Results) -> Finding:
         )
     )
     return Finding(
-        f"{fm}; {ta}; {tb}",
+        f"{fm}; F-Measure: {ta}; first feasible length: {tb}",
         "as the paper's",
         "one-sided Wilcoxon signed-rank "
         "over the per-scene means, 5 % (F-Measure: iterations before the first "
