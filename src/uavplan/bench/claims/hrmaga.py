@@ -124,7 +124,7 @@ def _faster(ref: str, other: str, fig: str) -> Claim:
         )
 
     return Claim(
-        f"{ref}-converges-faster-than-{other}",
+        f"hrmaga-{ref}-faster-than-{other}",
         PAPER,
         "Fig. 8a",
         f"{ref.upper()} converges faster than {other.upper()}",

@@ -400,7 +400,13 @@ def _table3(r: Results) -> Finding:
             continue
         M = np.asarray([np.asarray(v, float) for v in g["uav_mae_km"]])
         med[a] = np.nanmedian(M, axis=0)
-    best = {i: min(med, key=lambda a: med[a][i]) for i in range(len(next(iter(med.values()))))}
+    best = {}
+    for i in range(len(next(iter(med.values())))):
+        low = min(float(med[a][i]) for a in med)
+        tied = [a for a in med if float(med[a][i]) <= low + 1e-9]
+        best[i] = (
+            tied[0] if len(tied) == 1 else "all level" if len(tied) == len(med) else "/".join(tied)
+        )
     return Finding(
         "median MAE per UAV, km: "
         + "; ".join(f"{a} " + "/".join(fmt(x, 2) for x in v) for a, v in med.items())
