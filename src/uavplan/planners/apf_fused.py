@@ -6,8 +6,11 @@ the UAV escapes the field's local minima (Sect. 5.3, Fig. 12) and its trajectory
 (Sect. 5.4, Figs. 14 and 16), and leaves open what the optimizer decides. Ours:
 
 * **decision variables**: ``n_subgoals`` sub-goals (x, y, and z in 3-D) inside the scenario's
-  box; the UAV flies the field of :mod:`uavplan.planners.apf` (same gains, kinematics and
-  obstacles, other UAVs' flights included) with its attraction towards the first sub-goal, then,
+  box, or, with ``subgoal_corridor``, inside the start-goal box widened horizontally by that
+  fraction of the start-goal distance (ours, a control: over the whole box of the RSCDWOA
+  layouts most random sub-goal pairs already lead around a trap a few kilometres wide, so
+  leading out cannot tell optimizers apart; near the straight line the trap is in the way);
+  the UAV flies the field of :mod:`uavplan.planners.apf` (same gains, kinematics and obstacles, other UAVs' flights included) with its attraction towards the first sub-goal, then,
   once within ``subgoal_radius`` of it, the next, and last the goal;
 * **fitness**: the flight's length plus ``curvature_weight`` times the start-goal distance
   times the mean squared curvature of the horizontal track relative to the largest allowed one
@@ -58,6 +61,10 @@ class FusedAPFConfig(APFConfig):
         None, "a sub-goal is passed within this distance, m (None: the goal radius)", low=0
     )
     curvature_weight: float = option(1.0, "weight of the mean squared curvature", low=0.0)
+    subgoal_corridor: float | None = option(
+        None, "sub-goals within the start-goal box widened horizontally by this fraction of "
+        "the start-goal distance (None: the scenario's whole box)", low=0.0,
+    )  # fmt: skip
     max_steps: int | None = option(
         None, "steps per flight at most (None: four times the straight line's)", low=1
     )
@@ -92,6 +99,11 @@ class FusedAPFPlanner(Planner):
         others = res.trajectories() if res is not None else []
         sep = res.radius if res is not None else 0.0
         lo, hi = sc.bounds.lo.astype(float), sc.bounds.hi.astype(float)
+        if cfg.subgoal_corridor is not None:  # the start-goal box, widened horizontally
+            w = float(cfg.subgoal_corridor) * float(np.linalg.norm((goal - start)[:2]))
+            lo, hi = lo.copy(), hi.copy()
+            lo[:2] = np.maximum(lo[:2], np.minimum(start, goal)[:2] - w)
+            hi[:2] = np.minimum(hi[:2], np.maximum(start, goal)[:2] + w)
         K, dim = int(cfg.n_subgoals), sc.dim
         best: dict[str, Any] = {"f": np.inf, "path": None, "status": None}
 
@@ -114,11 +126,15 @@ class FusedAPFPlanner(Planner):
                 v += 1.0 + float(np.linalg.norm(P[-1] - goal)) / L0
             return f, v, P, traj.status
 
+        arrived: list[float] = []  # per evaluated batch: the share of flights that arrive
+
         def batch(X: FloatArray) -> FloatArray:
             fs, vs = np.empty(len(X)), np.empty(len(X))
+            n_in = 0
             for i, x in enumerate(X):
                 f, v, P, status = one(x)
                 fs[i], vs[i] = f, v
+                n_in += status == "arrived"
                 num = float(feasibility_first(np.array([f]), np.array([v]))[0])
                 if num < best["f"]:
                     best.update(f=num, path=P, status=status)
@@ -126,6 +142,7 @@ class FusedAPFPlanner(Planner):
                         ev = run.problem.evaluate(P[None])
                         tr.offer(P, float(ev.cost[0]), bool(ev.feasible[0]))
             tr.evaluations += len(X)
+            arrived.append(n_in / max(len(X), 1))
             return np.asarray(feasibility_first(fs, vs))
 
         problem = FunctionProblem(
@@ -166,6 +183,9 @@ class FusedAPFPlanner(Planner):
                 "max_curvature_per_km": float(kappa.max() * 1000) if kappa.size else 0.0,
                 "optimizer": cfg.optimizer,
                 "fitness_history": fitness,  # best feasibility-first number per iteration
+                # per iteration the share of the candidates whose flight arrives (the first
+                # entry is the classical APF's flight alone)
+                "arrived_history": arrived,
             },
         )
 

@@ -221,6 +221,7 @@ def run_rscdwoa(spec: RunSpec) -> dict[str, Any]:
             "dcurv_profile",
             "plan_s",
             "fitness_history",
+            "arrived_history",
         )
     }
     for task, r in zip(plan.scenario.tasks, plan.results, strict=True):
@@ -246,6 +247,7 @@ def run_rscdwoa(spec: RunSpec) -> dict[str, Any]:
         per["curv_profile"].append(kp)
         per["dcurv_profile"].append(dp)
         per["fitness_history"].append(list(r.info.get("fitness_history") or []))
+        per["arrived_history"].append(list(r.info.get("arrived_history") or []))
     feasible = bool(plan.feasible)
     return {
         "best_cost": float(sum(r.cost for r in plan.results)),
@@ -260,7 +262,13 @@ def run_rscdwoa(spec: RunSpec) -> dict[str, Any]:
         "feasible_but_failed": int(feasible and not rep.ok),
         **gate([("flown", rep, False)] if feasible else []),
         "min_separation": float(rep.min_separation),
-        **{f"uav_{k}": v for k, v in per.items() if k != "fitness_history"},
+        **{f"uav_{k}": v for k, v in per.items() if not k.endswith("_history")},
+        # per iteration, over the run's UAVs, the share of candidates whose flight arrives
+        "arrived_history": [
+            float(np.mean(col)) for col in zip(*per["arrived_history"], strict=False)
+        ]
+        if all(per["arrived_history"])
+        else [],
         "fitness_history": [
             float(np.mean(col)) for col in zip(*per["fitness_history"], strict=False)
         ]
@@ -458,6 +466,15 @@ _apf_plan(
     "rscdwoa-static",
     (Algorithm("apf", "apf", _APF), *(Algorithm(a, a) for a in APF_FAMILY[1:])),
     100,
+    apf_sections,
+)
+_apf_plan(
+    "rscdwoa-static-corridor",
+    "Fig. 12's trap with the fused planners' sub-goals near the straight line (the start-goal "
+    "box widened by a quarter of the distance; ours): can leading out tell the optimizers apart",
+    "rscdwoa-static",
+    tuple(Algorithm(a, a, {"subgoal_corridor": 0.25}) for a in APF_FAMILY[1:]),
+    20,
     apf_sections,
 )
 _apf_plan(
