@@ -131,6 +131,36 @@ def test_fused_apf_fits_the_optimizers_schedule_to_the_run(
     assert made and all(t_max == 50 for t_max, _ in made)
 
 
+def test_fused_apf_sub_goals_in_a_corridor_and_the_share_that_arrives(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import uavplan.planners.apf_fused as fused
+
+    sc = resolve("rscdwoa-static")
+    task = sc.tasks[0]
+    a, b = np.asarray(task.start, float), np.asarray(task.goal, float)
+    L_h = float(np.linalg.norm((b - a)[:2]))
+    seen: list[np.ndarray] = []
+    real = fused.fly_field
+
+    def spy(*args: object, **kw: object) -> object:
+        seen.append(np.asarray(kw["via"]))
+        return real(*args, **kw)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(fused, "fly_field", spy)
+    r = get_planner("rscdwoa-apf", pop_size=6, subgoal_corridor=0.1).plan(sc, 0, budget=4, seed=0)
+    assert r.info["subgoal_corridor_m"] == pytest.approx(0.1 * L_h)
+    V = np.concatenate(seen)[:, :2]
+    u = (b - a)[:2] / L_h
+    off = (V - a[:2]) @ np.array([-u[1], u[0]])  # across the line
+    t = (V - a[:2]) @ u / L_h  # along it
+    assert np.abs(off).max() <= 0.1 * L_h + 1e-6 and np.abs(off).max() > 0.05 * L_h
+    assert t.min() >= -1e-9 and t.max() <= 1 + 1e-9
+    shares = r.info["arrived_history"]
+    assert shares[0] == 0.0  # the classical APF's own flight: caught in the trap
+    assert len(shares) == 1 + len(r.info["fitness_history"]) and all(0 <= x <= 1 for x in shares)
+
+
 def test_kernel_force_matches_the_numpy_reference() -> None:
     import dataclasses
 

@@ -6,12 +6,15 @@ the UAV escapes the field's local minima (Sect. 5.3, Fig. 12) and its trajectory
 (Sect. 5.4, Figs. 14 and 16), and leaves open what the optimizer decides. Ours:
 
 * **decision variables**: ``n_subgoals`` sub-goals (x, y, and z in 3-D) inside the scenario's
-  box, or, with ``subgoal_corridor``, inside the start-goal box widened horizontally by that
-  fraction of the start-goal distance (ours, a control: over the whole box of the RSCDWOA
-  layouts most random sub-goal pairs already lead around a trap a few kilometres wide, so
-  leading out cannot tell optimizers apart; near the straight line the trap is in the way);
-  the UAV flies the field of :mod:`uavplan.planners.apf` (same gains, kinematics and obstacles, other UAVs' flights included) with its attraction towards the first sub-goal, then,
-  once within ``subgoal_radius`` of it, the next, and last the goal;
+  box, or, with ``subgoal_corridor``, within that fraction of the horizontal start-goal
+  distance of the straight line (each sub-goal then a fraction along the line, an offset
+  across it and a height; ours, a control: over the whole box of the RSCDWOA layouts most
+  random sub-goal pairs already lead around a trap a few kilometres wide, so leading out cannot
+  tell optimizers apart; within about one obstacle's radius of influence of the line the trap
+  is in the way);
+  the UAV flies the field of :mod:`uavplan.planners.apf` (same gains, kinematics and
+  obstacles, other UAVs' flights included) with its attraction towards the first sub-goal,
+  then, once within ``subgoal_radius`` of it, the next, and last the goal;
 * **fitness**: the flight's length plus ``curvature_weight`` times the start-goal distance
   times the mean squared curvature of the horizontal track relative to the largest allowed one
   (``1 / turn_radius``; without a turn radius ``1 / (v dt)``), so that 1 means "always at the
@@ -62,8 +65,8 @@ class FusedAPFConfig(APFConfig):
     )
     curvature_weight: float = option(1.0, "weight of the mean squared curvature", low=0.0)
     subgoal_corridor: float | None = option(
-        None, "sub-goals within the start-goal box widened horizontally by this fraction of "
-        "the start-goal distance (None: the scenario's whole box)", low=0.0,
+        None, "sub-goals within this fraction of the horizontal start-goal distance of the "
+        "straight line (None: anywhere in the scenario's box)", low=0.0,
     )  # fmt: skip
     max_steps: int | None = option(
         None, "steps per flight at most (None: four times the straight line's)", low=1
@@ -99,18 +102,31 @@ class FusedAPFPlanner(Planner):
         others = res.trajectories() if res is not None else []
         sep = res.radius if res is not None else 0.0
         lo, hi = sc.bounds.lo.astype(float), sc.bounds.hi.astype(float)
-        if cfg.subgoal_corridor is not None:  # the start-goal box, widened horizontally
-            w = float(cfg.subgoal_corridor) * float(np.linalg.norm((goal - start)[:2]))
-            lo, hi = lo.copy(), hi.copy()
-            lo[:2] = np.maximum(lo[:2], np.minimum(start, goal)[:2] - w)
-            hi[:2] = np.minimum(hi[:2], np.maximum(start, goal)[:2] + w)
+        # the sub-goals' variables: points of the box, or per sub-goal (fraction along the line,
+        # offset across it in units of the corridor's half-width, height) in a corridor
+        along = (goal - start)[:2]
+        L_h = float(np.linalg.norm(along)) or 1.0
+        across = np.array([-along[1], along[0]]) / L_h
+        w = float(cfg.subgoal_corridor or 0.0) * L_h
+
+        def subgoals(x: FloatArray) -> FloatArray:
+            V = x.reshape(K, dim)
+            if cfg.subgoal_corridor is None:
+                return V
+            P = np.empty_like(V)
+            P[:, :2] = start[:2] + V[:, :1] * along + V[:, 1:2] * w * across
+            P[:, :2] = np.clip(P[:, :2], sc.bounds.lo[:2], sc.bounds.hi[:2])
+            if dim > 2:
+                P[:, 2:] = V[:, 2:]
+            return P
+
         K, dim = int(cfg.n_subgoals), sc.dim
         best: dict[str, Any] = {"f": np.inf, "path": None, "status": None}
 
         def one(x: FloatArray) -> tuple[float, float, FloatArray, str]:
             traj = fly_field(
                 sc, start, goal, prm, steps, float(task.start_time), others=others,
-                separation=sep, via=x.reshape(K, dim), via_radius=cfg.subgoal_radius,
+                separation=sep, via=subgoals(x), via_radius=cfg.subgoal_radius,
             )  # fmt: skip
             P = traj.points
             val = run.problem.validator
@@ -145,8 +161,11 @@ class FusedAPFPlanner(Planner):
             arrived.append(n_in / max(len(X), 1))
             return np.asarray(feasibility_first(fs, vs))
 
+        v_lo, v_hi = lo[:dim].copy(), hi[:dim].copy()
+        if cfg.subgoal_corridor is not None:
+            v_lo[:2], v_hi[:2] = (0.0, -1.0), (1.0, 1.0)
         problem = FunctionProblem(
-            batch, np.tile(lo[:dim], K), np.tile(hi[:dim], K), block=dim, name="apf-subgoals"
+            batch, np.tile(v_lo, K), np.tile(v_hi, K), block=dim, name="apf-subgoals"
         )
         try:
             cls = get_optimizer(cfg.optimizer)
@@ -161,6 +180,9 @@ class FusedAPFPlanner(Planner):
             raise PlannerError(f"{self.name}: optimizer {cfg.optimizer!r}: {exc}") from None
         # the classical APF's flight first: sub-goals evenly on the straight line
         line = np.concatenate([start + (goal - start) * (k + 1) / (K + 1) for k in range(K)])
+        if cfg.subgoal_corridor is not None:
+            line = np.concatenate([np.r_[(k + 1) / (K + 1), 0.0, line[k * dim + 2 : k * dim + dim]]
+                                   for k in range(K)])  # fmt: skip
         batch(line[None])
         fitness: list[float] = []
         while True:
@@ -186,6 +208,7 @@ class FusedAPFPlanner(Planner):
                 # per iteration the share of the candidates whose flight arrives (the first
                 # entry is the classical APF's flight alone)
                 "arrived_history": arrived,
+                "subgoal_corridor_m": w,  # the corridor's half-width (0: the whole box)
             },
         )
 

@@ -470,10 +470,10 @@ _apf_plan(
 )
 _apf_plan(
     "rscdwoa-static-corridor",
-    "Fig. 12's trap with the fused planners' sub-goals near the straight line (the start-goal "
-    "box widened by a quarter of the distance; ours): can leading out tell the optimizers apart",
+    "Fig. 12's trap with the fused planners' sub-goals within 10 % of the start-goal distance "
+    "of the straight line (ours): can leading out tell the optimizers apart",
     "rscdwoa-static",
-    tuple(Algorithm(a, a, {"subgoal_corridor": 0.25}) for a in APF_FAMILY[1:]),
+    tuple(Algorithm(a, a, {"subgoal_corridor": 0.1}) for a in APF_FAMILY[1:]),
     20,
     apf_sections,
 )
