@@ -34,6 +34,16 @@ NOT_RUN = "not run"
 VERDICTS = (REPRODUCED, NOT_REPRODUCED, PAPER_ONLY, OURS_ONLY, NOT_TESTABLE, NOT_RUN)
 
 
+def combine(paper_ok: bool, ours_ok: bool | None) -> str:
+    """The verdict from whether the claim holds under the paper's protocol and under ours
+    (None: ours not run, or the same as the paper's)."""
+    if paper_ok and ours_ok is not False:
+        return REPRODUCED
+    if paper_ok:
+        return PAPER_ONLY
+    return OURS_ONLY if ours_ok else NOT_REPRODUCED
+
+
 @dataclass(frozen=True)
 class Finding:
     """What the stored results say about a claim.

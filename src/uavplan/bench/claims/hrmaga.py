@@ -18,12 +18,11 @@ from scipy import stats as sps
 
 from uavplan.bench.claims.base import (
     NOT_REPRODUCED,
-    OURS_ONLY,
-    PAPER_ONLY,
     REPRODUCED,
     Claim,
     Finding,
     Results,
+    combine,
     fmt,
     pvalue,
     register_claim,
@@ -84,11 +83,8 @@ def _runs(r: Results, algs: tuple[str, ...]) -> str:
 
 
 def _verdict(ours_ok: bool, paper_ok: bool | None) -> str:
-    if ours_ok and paper_ok is not False:
-        return REPRODUCED
-    if paper_ok:
-        return PAPER_ONLY
-    return OURS_ONLY if ours_ok else NOT_REPRODUCED
+    """Here the paper's protocol is the optional one: not run, ours decides alone."""
+    return combine(ours_ok, None) if paper_ok is None else combine(paper_ok, ours_ok)
 
 
 def _paper_runs(r: Results, ref: str, other: str, value: Any) -> tuple[str, bool | None]:

@@ -18,11 +18,11 @@ from scipy import stats as sps
 
 from uavplan.bench.claims.base import (
     NOT_REPRODUCED,
-    PAPER_ONLY,
     REPRODUCED,
     Claim,
     Finding,
     Results,
+    combine,
     fmt,
     pvalue,
     register_claim,
@@ -144,13 +144,7 @@ def _lh_best(r: Results) -> Finding:
         ours_ok = lh1 >= 0.75 * n1 and p1 < 0.05
         also = f"; with one restart, where the order decides, LH is lowest in {lh1} of {n1}"
     paper_ok = lh >= 0.75 * n and p < 0.05
-    verdict = (
-        REPRODUCED
-        if paper_ok and ours_ok is not False
-        else PAPER_ONLY
-        if paper_ok
-        else NOT_REPRODUCED
-    )
+    verdict = combine(paper_ok, ours_ok)
     why = (
         f"LH has the lowest mean in {lh} of {n} cells, and the three orders do not differ "
         f"significantly across cells ({pvalue(p)})"

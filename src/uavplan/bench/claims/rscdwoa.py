@@ -16,12 +16,12 @@ from scipy import stats as sps
 from uavplan.bench.claims.base import (
     NOT_REPRODUCED,
     NOT_TESTABLE,
-    OURS_ONLY,
     PAPER_ONLY,
     REPRODUCED,
     Claim,
     Finding,
     Results,
+    combine,
     fmt,
     pvalue,
     register_claim,
@@ -115,7 +115,7 @@ def _others(r: Results) -> Finding:
         cells_b.append(f"{other} {b[0]}/{b[1]}/{b[2]}")
         ok_a &= a[0] >= 5 and a[2] == 0
         ok_b &= b[0] >= 5 and b[2] == 0
-    verdict = REPRODUCED if ok_a and ok_b else (PAPER_ONLY if ok_a else NOT_REPRODUCED)
+    verdict = combine(ok_a, ok_b)
     return Finding(
         "+/~/- " + ", ".join(cells_a),
         "+/~/- " + ", ".join(cells_b),
@@ -148,7 +148,7 @@ def _chaos(r: Results) -> Finding:
     a = _wtl(r.frame("functions-iterations"), "rscdwoa", "rscdwoa-logistic")
     b = _wtl(r.frame("functions"), "rscdwoa", "rscdwoa-logistic")
     ok_a, ok_b = a[0] >= a[2], b[0] >= b[2]
-    verdict = REPRODUCED if ok_a and ok_b else (PAPER_ONLY if ok_a else NOT_REPRODUCED)
+    verdict = combine(ok_a, ok_b)
     return Finding(
         f"tent against logistic +/~/- {a[0]}/{a[1]}/{a[2]} ({' '.join(a[3])})",
         f"+/~/- {b[0]}/{b[1]}/{b[2]} ({' '.join(b[3])})",
@@ -285,8 +285,7 @@ def _pass_through(r: Results) -> Finding:
             f"; with the sub-goals near the line RSCDWOA-APF passes "
             f"{'significantly more' if ours_ok else 'no more'} often than WOA-APF"
         )
-    verdict = (REPRODUCED if paper_ok and ours_ok is not False else PAPER_ONLY if paper_ok
-               else OURS_ONLY if ours_ok else NOT_REPRODUCED)  # fmt: skip
+    verdict = combine(paper_ok, ours_ok)
     why = (
         "RSCDWOA-APF passes significantly more often than WOA-APF and the APF is caught"
         if paper_ok
