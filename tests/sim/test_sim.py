@@ -166,6 +166,46 @@ def test_a_fixed_wing_holds_its_ground_speed_into_a_headwind() -> None:
     assert _straight_into_wind(0.0, 4.0) == pytest.approx(2000.0 / 16.0, abs=2.0)
 
 
+def _fly_quadrotor(points: np.ndarray, holds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A quadrotor's flight of ``points`` at 10 m/s in calm air without navigation error:
+    its positions and times every 0.5 s."""
+    from uavplan.sim.fleet import DRAWS, init_state, params, step_fleet
+    from uavplan.sim.missions import Legs
+    from uavplan.sim.runs import pack
+    from uavplan.world.scenario import UAV
+
+    legs = Legs("a", points, np.full(len(points) - 1, 10.0), holds, 0.0, len(points))
+    prm = params(QUADROTOR, UAV(speed=10.0, turn_radius=0, min_speed=0))
+    prm = (*prm[:14], 0.0, 0.0, *prm[16:])
+    P, n, S, H = pack([legs])
+    st = init_state(P, n, S, H, np.zeros(1), np.zeros((1, 3)))
+    xyz, tt, nn = np.zeros((1, 800, 3)), np.zeros((1, 800)), np.zeros(1, dtype=np.int64)
+    step_fleet(st, P, n, S, H, np.zeros(1), 1, prm, np.zeros(3), 0.0, 100.0, 0.05, 0.0, 8000,
+               0.5, np.zeros((1, 8000, DRAWS)), xyz, tt, nn)  # fmt: skip
+    return xyz[0, : nn[0]], tt[0, : nn[0]]
+
+
+def test_a_quadrotor_flies_a_curve_at_speed_and_holds_where_the_mission_says() -> None:
+    """A multicopter's mission flies on across a waypoint whose turn is gentle (a curve as
+    uavplan plans a multirotor's corners, 5 m legs, keeps to its schedule) and stops where
+    the mission holds: at that waypoint, for the hold time."""
+    r = 10.0**2 / QUADROTOR.turn_accel
+    phi = np.linspace(0.0, np.pi / 2, int(np.ceil(r * np.pi / 2 / 5.0)) + 1)
+    arc = np.stack([r * np.sin(phi), r * (1 - np.cos(phi)), np.full_like(phi, 100.0)], 1)
+    path = np.vstack([[[-200.0, 0, 100]], arc, [[r, r + 200.0, 100]]])
+    length = float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1)))
+    _, t = _fly_quadrotor(path, np.zeros(len(path)))
+    # on time but for the stop at the last waypoint (braking from 10 m/s at half its 5 m/s^2)
+    assert t[-1] == pytest.approx(length / 10.0 + 1.0, abs=1.0)
+    # a 6 s hold at the middle waypoint of a straight line: there, and 6 s (plus the stop) later
+    line = np.array([[0.0, 0, 100], [200.0, 0, 100], [400.0, 0, 100]])
+    xyz, t2 = _fly_quadrotor(line, np.array([0.0, 6.0, 0.0]))
+    near = np.linalg.norm(xyz - line[1], axis=1) < 2.0
+    assert t2[near].max() - t2[near].min() >= 6.0
+    assert np.linalg.norm(xyz[t2 < 8.0] - line[1], axis=1).min() > 100.0  # no hold at the start
+    assert t2[-1] == pytest.approx(40.0 + 6.0 + 4.0, abs=2.5)
+
+
 def test_airframes_by_name_or_by_the_uavs_limits() -> None:
     from typing import get_args
 

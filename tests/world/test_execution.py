@@ -5,6 +5,8 @@ bound is attained)."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -279,6 +281,25 @@ def test_default_plans_turn_no_tighter_than_the_airframe_flies_in_wind() -> None
     wider, planned = flyable_turns(sc)
     assert planned == pytest.approx(r) and wider.uav.turn_radius == pytest.approx(r) and r > 20.0
     assert wider.uav.speed == sc.uav.speed and wider.tasks == sc.tasks
-    # a multirotor, or a UAV that names no airframe, keeps its turns
-    assert flyable_turns(resolve("quadrotors@4"))[1] == 0.0
+    # a UAV that names no airframe keeps its turns
+    unnamed = dataclasses.replace(sc, uav=dataclasses.replace(sc.uav, airframe=None))
+    assert flyable_turns(unnamed) == (unnamed, 0.0)
     assert turn_radius_in_wind(SMALL_FIXED_WING, 20.0, wind=0.0) < 20.0
+
+
+def test_a_multirotor_plans_its_corners_as_curves_it_flies_at_speed() -> None:
+    """A multicopter's mission slows down for a corner; uavplan's default plans its corners as
+    curves of radius v^2 / turn_accel, which it flies at its cruise speed."""
+    from uavplan.scenarios import resolve
+    from uavplan.world.airframes import QUADROTOR, planned_turn_radius
+    from uavplan.world.execution import flyable_turns
+
+    sc = resolve("quadrotors@4")
+    assert float(sc.uav.turn_radius) == 0.0 and sc.uav.airframe == "quadrotor"
+    wider, r = flyable_turns(sc)
+    assert r == pytest.approx(10.0**2 / QUADROTOR.turn_accel)
+    assert wider.uav.turn_radius == pytest.approx(r) and wider.uav.speed == sc.uav.speed
+    assert planned_turn_radius(dataclasses.replace(QUADROTOR, turn_accel=0.0), 10.0) == 0.0
+    # a fixed wing whose scenario sets no turn radius keeps none
+    fw = dataclasses.replace(sc, uav=dataclasses.replace(sc.uav, airframe="small-fixed-wing"))
+    assert flyable_turns(fw) == (fw, 0.0)

@@ -23,9 +23,12 @@ given to it (from the run's ``numpy.random.Generator``).
   controller's closed loop, first order).
 
 **Multirotor**: a setpoint moves along the legs at the commanded speed (at most ``lead`` ahead
-of the vehicle, as PX4's mission setpoints wait for it; never waiting for a vehicle ahead of
-it), slowed before a corner to the speed
-the turn allows, holds at a waypoint for its hold time; the velocity command is the
+of the vehicle, as PX4's mission setpoints and ArduCopter's leashed waypoint target wait for
+it; never waiting for a vehicle ahead of it), slowed before a corner to the speed the turn
+allows and on across the waypoint (ArduCopter's waypoint navigation blends into the next leg
+when it is known, PX4's mission trajectory plans through it); it stops only where the mission
+does: at a waypoint with a hold, reached within the acceptance radius, for its hold time, and
+at the last one. The velocity command is the
 setpoint's velocity plus ``k_pos`` times the position error, within the speed limit; the
 velocity follows with ``tau_vel`` within ``max_accel``, through the attitude's and rotors'
 response (``tau_att``);
@@ -217,16 +220,27 @@ def step_fleet(
             while k < n - 1:
                 ux, uy, L, along, cross = _leg_geometry(P[u], k, xe, ye)
                 if kind == 1:
-                    end_reached = s_sp >= L and hold_left <= 0.0 and (
+                    # the setpoint moves on across a waypoint (what it ran past the leg's end
+                    # carried over) unless the mission stops there: a hold, or the last
+                    # waypoint, reached when the vehicle is within the acceptance radius
+                    if s_sp < L:
+                        break
+                    if k + 2 < n and holds[u, k + 1] <= 0.0:
+                        k += 1
+                        s_sp -= L
+                        continue
+                    end_reached = (
                         (xe - P[u, k + 1, 0]) ** 2 + (ye - P[u, k + 1, 1]) ** 2
                         + (ze - P[u, k + 1, 2]) ** 2 <= accept * accept)  # fmt: skip
-                else:
-                    end_reached = along >= L - accept
-                if not end_reached:
+                    if not end_reached:
+                        break
+                    k += 1
+                    s_sp = 0.0
+                    hold_left = holds[u, k]
+                    continue
+                if along < L - accept:
                     break
                 k += 1
-                s_sp = 0.0
-                hold_left = holds[u, k]
             if k >= n - 1:
                 done = True
                 next_rec = t  # the last waypoint: recorded at the next step
@@ -286,13 +300,15 @@ def step_fleet(
                 vz = va * math.sin(gam) + wz
             else:
                 # ---------------------------------------------------------- multirotor
-                d_sp = math.sqrt((P[u, k, 0] + ux * s_sp - xe) ** 2
-                                 + (P[u, k, 1] + uy * s_sp - ye) ** 2)  # fmt: skip
+                d_sp = math.sqrt((P[u, k, 0] + ux * min(s_sp, L) - xe) ** 2
+                                 + (P[u, k, 1] + uy * min(s_sp, L) - ye) ** 2)  # fmt: skip
                 # the setpoint's speed: the leg's, slowed before a corner so that the vehicle
                 # can turn (to the leg's speed times the cosine of the turn, braking at half
-                # its acceleration), as a multicopter's mission trajectory does
+                # its acceleration; to a stop where the mission stops), as a multicopter's
+                # mission trajectory does
+                stops = k + 2 >= n or holds[u, k + 1] > 0.0
                 v_corner = 0.0
-                if k + 2 < n and hold_left <= 0.0:
+                if not stops:
                     nx_ = P[u, k + 2, 0] - P[u, k + 1, 0]
                     ny_ = P[u, k + 2, 1] - P[u, k + 1, 1]
                     nl = math.sqrt(nx_ * nx_ + ny_ * ny_)
@@ -302,17 +318,22 @@ def step_fleet(
                 # the setpoint runs on while the vehicle is within ``lead`` of it or ahead of
                 # it along the leg (waiting for a vehicle ahead, with the velocity fed forward,
                 # would hold it ``v / k_pos`` ahead for ever), and its velocity is fed forward
-                # only while it runs
-                runs = d_sp < lead or along >= s_sp
-                if s_sp < L:
-                    if runs:
-                        s_sp = min(s_sp + v_sp * dt, L)
-                elif hold_left > 0.0:
-                    hold_left -= dt
-                moving = s_sp < L and runs
-                sx = P[u, k, 0] + ux * s_sp
-                sy = P[u, k, 1] + uy * s_sp
-                sz = P[u, k, 2] + (min(s_sp / L, 1.0) if L > 0 else 1.0) * dz_leg
+                # only while it runs; at a waypoint with a hold it waits for the vehicle to
+                # come within the acceptance radius and holds there for the hold time
+                runs = (d_sp < lead or along >= s_sp) and hold_left <= 0.0
+                if hold_left > 0.0:
+                    if ((xe - P[u, k, 0]) ** 2 + (ye - P[u, k, 1]) ** 2
+                            + (ze - P[u, k, 2]) ** 2 <= accept * accept):  # fmt: skip
+                        hold_left -= dt
+                elif runs and s_sp < L:
+                    s_sp += v_sp * dt
+                    if stops:
+                        s_sp = min(s_sp, L)
+                moving = runs and (s_sp < L or not stops)
+                s_at = min(s_sp, L)
+                sx = P[u, k, 0] + ux * s_at
+                sy = P[u, k, 1] + uy * s_at
+                sz = P[u, k, 2] + (s_at / L if L > 0 else 1.0) * dz_leg
                 ff = v_sp if moving else 0.0
                 cx = ff * ux + k_pos * (sx - xe)
                 cy = ff * uy + k_pos * (sy - ye)

@@ -139,8 +139,10 @@ def conformance(
     (take-off error ``delta0`` s, speed fraction ``rho``, tracking errors ``e_h``, ``e_v`` m):
     per sample at time ``t``, the schedule lag (the shift ``tau`` that brings the plan's
     position at ``t - tau`` nearest, horizontal and vertical distances scaled by ``e_h`` and
-    ``e_v``) and the excess: the least ``|tau|`` that puts the sample within ``e_h`` and
-    ``e_v`` of the plan at ``t - tau``, minus the model's allowance
+    ``e_v``, among the shifts in tolerance joined to the least one: on a loop, another pass
+    is not taken for a lag; where no shift is in tolerance, the nearest) and the excess: the
+    least ``|tau|`` that puts the sample within ``e_h`` and ``e_v`` of the plan at
+    ``t - tau``, minus the model's allowance
     ``delta0 + rho * (t - planned take-off)``. The model holds for the flight where every
     excess is at most 0: the flown position is always inside the 4-D volume the plan was
     made and verified for (ASTM F3548's conformance of an operational intent). Unlike the
@@ -159,8 +161,18 @@ def conformance(
         dx = np.interp(tq, tp, pp[:, 0]) - q[:, None, 0]
         dy = np.interp(tq, tp, pp[:, 1]) - q[:, None, 1]
         d = np.maximum(np.hypot(dx, dy) / sh, np.abs(dz) / sv)
-        lag[lo : lo + 32] = taus[np.argmin(d + 1e-9 * np.abs(taus)[None], axis=1)]
-        need[lo : lo + 32] = np.where(d <= 1.0, np.abs(taus)[None], np.inf).min(axis=1)
+        ok = d <= 1.0
+        within = np.where(ok, np.abs(taus)[None], np.inf)
+        least = np.argmin(within, axis=1)
+        rows = np.arange(len(q))
+        need[lo : lo + 32] = within[rows, least]
+        # the best-aligned shift among the admissible ones joined to the least (a run of
+        # shifts in tolerance; another pass of a loop is another run)
+        run = np.cumsum(~ok, axis=1)
+        mine = ok & (run == run[rows, least][:, None])
+        best = np.argmin(np.where(mine, d, np.inf) + 1e-9 * np.abs(taus)[None], axis=1)
+        nearest = np.argmin(d + 1e-9 * np.abs(taus)[None], axis=1)
+        lag[lo : lo + 32] = taus[np.where(np.isfinite(need[lo : lo + 32]), best, nearest)]
     allowed = delta0 + rho * np.maximum(t - tp[0], 0.0)
     return lag, need - allowed
 

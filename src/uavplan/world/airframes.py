@@ -61,6 +61,12 @@ class Airframe:
             ground velocity in a steady wind); the scenario's ``max_speed`` when that is
             larger (:func:`top_speed`). The quadrotor's is 0: its calibration flew it at
             the plan's speed.
+        turn_accel: the horizontal acceleration a multirotor's planned turns take at its
+            cruise speed, m/s^2 (uavplan's default plans its corners as curves of radius
+            ``v^2 / turn_accel``, :func:`planned_turn_radius`; 0: corners as given). A
+            multicopter's mission slows down for a sharp corner, so a polyline timed at a
+            constant speed is flown late by seconds per corner; a curve it can fly at its
+            cruise speed keeps its schedule.
     """
 
     name: str
@@ -88,6 +94,7 @@ class Airframe:
     track_v: float = 2.0
     turn_wind: float = 3.0
     speed_margin: float = 0.25
+    turn_accel: float = 0.0
 
     def record(self) -> dict[str, Any]:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
@@ -102,7 +109,9 @@ FAST_FIXED_WING = Airframe("fast-fixed-wing", "fixed-wing", tau_speed=4.0, tau_b
                            max_bank_deg=35.0, tau_gamma=1.5, l1_period=17.0,
                            k_height=0.2, accept=10.0, track_h=8.5, track_v=12.5,
                            speed_margin=0.2)  # fmt: skip
-#: A quadrotor under a position and velocity controller (PX4's multicopter defaults).
+#: A quadrotor under a position and velocity controller (PX4's multicopter defaults; its
+#: planned turns at PX4's default horizontal acceleration in missions, MPC_ACC_HOR 3 m/s^2,
+#: within the 5 m/s^2 it can take, MPC_ACC_HOR_MAX, leaving the rest for gusts).
 QUADROTOR = Airframe(
     "quadrotor",
     "multirotor",
@@ -112,6 +121,7 @@ QUADROTOR = Airframe(
     track_h=6.5,
     track_v=7.0,
     speed_margin=0.0,
+    turn_accel=3.0,
 )
 
 AIRFRAMES: dict[str, Airframe] = {a.name: a for a in (SMALL_FIXED_WING, FAST_FIXED_WING,
@@ -145,6 +155,16 @@ def top_speed(af: Airframe, uav: Any) -> float:
 def bank_for(speed: float, radius: float) -> float:
     """The bank angle (degrees) of a coordinated turn of ``radius`` at ``speed``."""
     return math.degrees(math.atan(speed * speed / (9.80665 * radius))) if radius > 0 else 0.0
+
+
+def planned_turn_radius(af: Airframe, speed: float) -> float:
+    """The tightest turn (m) uavplan's default plans for airframe ``af`` at ``speed``: a fixed
+    wing's at its bank limit with its ``turn_wind`` behind it (:func:`turn_radius_in_wind`); a
+    multirotor's at its ``turn_accel`` (``v^2 / a``: a turn it flies at the planned speed,
+    where its mission would slow down for a corner); 0 for none."""
+    if af.kind == "fixed-wing":
+        return turn_radius_in_wind(af, speed)
+    return speed * speed / af.turn_accel if af.turn_accel > 0 else 0.0
 
 
 def turn_radius_in_wind(af: Airframe, speed: float, wind: float | None = None) -> float:

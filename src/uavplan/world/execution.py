@@ -176,18 +176,21 @@ def default_for(uav: Any) -> ExecutionModel:
 
 
 def flyable_turns(scenario: Scenario) -> tuple[Scenario, float]:
-    """``scenario`` with its UAV's turn radius raised to what its named fixed-wing airframe
-    can hold in the airframe's ``turn_wind`` (:func:`uavplan.world.airframes.turn_radius_in_wind`)
-    when that is larger, and the radius now planned (0 when unchanged). Turns planned at the
-    bank limit in still air swing wide downwind: flown in simulation, such turns carried the
-    largest tracking errors of uavplan's default fleets."""
-    from uavplan.world.airframes import AIRFRAMES, turn_radius_in_wind
+    """``scenario`` with its UAV's turn radius raised to what its named airframe flies
+    (:func:`uavplan.world.airframes.planned_turn_radius`) when that is larger, and the radius
+    now planned (0 when unchanged). A fixed wing's turns planned at the bank limit in still
+    air swing wide downwind (flown in simulation, such turns carried the largest tracking
+    errors of uavplan's default fleets); a multirotor's polyline corners are flown slower
+    than the plan's constant speed (its mission slows down for each), late by tens of seconds
+    over a flight, so its corners are planned as curves it flies at speed. A fixed wing
+    without a turn radius in the scenario keeps it (its limits are the scenario's)."""
+    from uavplan.world.airframes import AIRFRAMES, planned_turn_radius
 
     uav = scenario.uav
     af = AIRFRAMES.get(getattr(uav, "airframe", None) or "")
-    if af is None or float(uav.turn_radius) <= 0:
+    if af is None or (af.kind == "fixed-wing" and float(uav.turn_radius) <= 0):
         return scenario, 0.0
-    r = turn_radius_in_wind(af, float(uav.speed))
+    r = planned_turn_radius(af, float(uav.speed))
     if r <= float(uav.turn_radius):
         return scenario, 0.0
     return replace(scenario, uav=replace(uav, turn_radius=r)), r

@@ -268,7 +268,11 @@ class Mission:
     def is_fixed_wing(self) -> bool:
         if self.options.vehicle != "auto":
             return self.options.vehicle == "fixed-wing"
-        return self.scenario is not None and self.scenario.uav.turn_radius > 0
+        if self.scenario is None:
+            return False
+        from uavplan.world.airframes import airframe_of
+
+        return airframe_of(self.scenario.uav).kind == "fixed-wing"
 
 
 @dataclass(frozen=True)
