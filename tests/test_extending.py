@@ -43,3 +43,17 @@ def test_the_example_planner_behaves(detour: str) -> None:
     contract.test_out_of_range_options_are_refused(detour)
     contract.test_malformed_tasks_and_budgets_are_refused(detour)
     assert get_planner(detour, samples=8).config.samples == 8
+
+
+def test_the_strategy_example_runs() -> None:
+    """The worked example of changing the default: a table of one's own, executed."""
+    code = next(c for c in re.findall(r"```python\n(.*?)```", DOC.read_text(), flags=re.S)
+                if "strategy_for(scenario, mine)" in c)  # fmt: skip
+    ns: dict[str, object] = {}
+    exec(compile(code, str(DOC), "exec"), ns)
+    attempts = ns["attempts"]
+    assert [a[:2] for a in attempts[:3]] == [("run", "rrt-star"), ("run", "rrt-star"),
+                                             ("also", "spso")]  # fmt: skip
+    assert attempts[0][2] == 0 and attempts[2][2] == 0 and attempts[1][2] != 0
+    assert all(a[0] == "fallback" for a in attempts[3:])
+    assert ns["kept"].plan.results is ns["outcome"].plan.results  # type: ignore[attr-defined]

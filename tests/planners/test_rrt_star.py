@@ -14,7 +14,6 @@ from uavplan.planners.rrt_star import (
     RRTStarPlanner,
     RRTStarTree,
     rrt_star,
-    shortcut_path,
     validity_problem,
 )
 from uavplan.problems import PathProblem
@@ -223,11 +222,13 @@ def test_anytime_paths_get_shorter(spso: Scenario) -> None:
     assert len(lengths) >= 3 and np.all(np.diff(lengths) <= 1e-9)
 
 
-def test_shortcut_path(spso: Scenario) -> None:
+def test_greedy_shortcut_of_a_tree_path(spso: Scenario) -> None:
+    from uavplan.problems.validity import greedy_shortcut
+
     r = rrt_star(spso, None, RRTStarConfig(), np.random.default_rng(2))
     assert r.path is not None
     problem = validity_problem(spso)
-    s = shortcut_path(problem, r.path)
+    s = greedy_shortcut(problem, r.path)[0]
     assert len(s) <= len(r.path)
     assert_valid_path(spso, s)
     length = float(np.sum(np.linalg.norm(np.diff(s, axis=0), axis=1)))

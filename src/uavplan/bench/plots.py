@@ -64,7 +64,8 @@ def convergence_figure(
         sub = ok[ok["scenario"] == sc]
         positive = False
         if normalized:
-            finals = [_stack(g[history])[:, -1] for _, g in sub.groupby("algorithm")]
+            stacks = [_stack(g[history]) for _, g in sub.groupby("algorithm")]
+            finals = [H[:, -1] for H in stacks if H.size]
             lo, hi = normalization_bounds(np.concatenate(finals) if finals else np.zeros(0))
         for alg, g in sub.groupby("algorithm", sort=True):
             H = _stack(g[history])

@@ -1,9 +1,10 @@
-"""Command line: ``uavplan plan | demo | verify | fly | export | simulate | view | planners |
-schema | scenario ... | bench ... | report``.
+"""Command line: ``uavplan plan | demo | verify | explain | fly | export | simulate | view |
+planners | schema | scenario ... | bench ... | report``.
 
 One module per command group: :mod:`uavplan.cli.plan` (``plan``, ``demo``),
 :mod:`uavplan.cli.scenario`, :mod:`uavplan.cli.bench` (``bench``, ``report``),
-:mod:`uavplan.cli.verify`, :mod:`uavplan.cli.export`, :mod:`uavplan.cli.simulate`,
+:mod:`uavplan.cli.verify`, :mod:`uavplan.cli.explain`, :mod:`uavplan.cli.export`,
+:mod:`uavplan.cli.simulate`,
 :mod:`uavplan.cli.view`,
 :mod:`uavplan.cli.planners`,
 :mod:`uavplan.cli.schema`.
@@ -15,6 +16,7 @@ import typer
 
 from uavplan.cli.bench import bench_app
 from uavplan.cli.bench import report as report_command
+from uavplan.cli.explain import explain as explain_command
 from uavplan.cli.export import export as export_command
 from uavplan.cli.fly import fly as fly_command
 from uavplan.cli.plan import demo as demo_command
@@ -40,6 +42,7 @@ app.add_typer(scenario_app, name="scenario")
 app.add_typer(bench_app, name="bench")
 app.command("report")(report_command)
 app.command("verify")(verify_command)
+app.command("explain")(explain_command)
 app.command("fly")(fly_command)
 app.command("export")(export_command)
 app.command("simulate")(simulate_command)

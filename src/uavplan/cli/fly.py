@@ -168,7 +168,9 @@ def fly(
             sc = resolve(scenario)
         except ScenarioFileError as exc:
             raise fail(getattr(exc, "problems", None) or [str(exc)]) from None
-        algorithm, options = algorithm or "hr-maga", {}
+        from uavplan.strategy import strategy_for
+
+        algorithm, options = algorithm or strategy_for(sc).replanner, {}
     seed = 0 if seed is None else seed
     options = {**options, **parse_params(param or [])}
     given = sc

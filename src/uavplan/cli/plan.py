@@ -56,7 +56,6 @@ def _run_plan(
     from uavplan.io.scenario_file.schema import MAX_PATH_POINTS, MAX_WAYPOINTS
     from uavplan.optimizers.base import Budget, OptimizerError
     from uavplan.planners import PlannerError, get_planner
-    from uavplan.planners.fleet_plan import plan_all
     from uavplan.scenarios import resolve
 
     for flag, value in (("--iterations", iterations), ("--pop-size", pop_size),
@@ -93,30 +92,6 @@ def _run_plan(
             f"points exceeds the {MAX_PATH_POINTS:,} path points a run may hold; use a smaller "
             "population"
         )
-    fallbacks: list[tuple[str, dict[str, Any]]] = []
-    seeds = [seed]
-    also: tuple[str, ...] = ()
-    if algorithm is None:
-        from uavplan.planners.defaults import (
-            DEFAULTS,
-            default_planner,
-            fallback_planners,
-            run_seeds,
-        )
-
-        algorithm, kind, why = default_planner(scenario)
-        d = DEFAULTS[kind]
-        seeds = run_seeds(seed, d.runs)
-        if not (params or pop_size or waypoints or block.get("options")):  # for the default
-            fallbacks = fallback_planners(scenario)
-            also = d.also
-        best_of = (f"; the best of {d.runs} runs" if d.runs > 1 else "") + (
-            f" and of {', '.join(also)} once" if also else ""
-        )
-        out.print(f"planner: {algorithm} (the default for a {kind}: {why}{best_of}; "
-                  "docs/results.md; -a NAME for another)")  # fmt: skip
-    elif from_file:
-        out.print(f"planner: {algorithm} (the scenario's planning block; -a NAME for another)")
     given = parse_params(params)
     options: dict[str, Any] = {**(block.get("options") or {}), **given}
     if pop_size is not None:
@@ -125,10 +100,24 @@ def _run_plan(
         options["n_waypoints"] = waypoints
     if cost is not None:
         options["cost"] = cost
+    from uavplan.strategy import chosen, execute, strategy_for
+
+    if algorithm is None:
+        strategy = strategy_for(scenario).with_options(options, repair=not raw)
+        if params or pop_size or waypoints or block.get("options"):  # for the default
+            strategy = strategy.plain()
+        kind = strategy.kind.value if strategy.kind else ""
+        out.print(f"planner: {strategy.planner} (the default for a {kind}: {strategy.why}"
+                  f"{strategy.describe()}; docs/results.md; -a NAME for another)")  # fmt: skip
+    else:
+        if from_file:
+            out.print(f"planner: {algorithm} (the scenario's planning block; -a NAME for "
+                      "another)")  # fmt: skip
+        strategy = chosen(algorithm, options, repair=not raw)
     try:
-        planner = get_planner(algorithm, **options)
+        planner = get_planner(strategy.planner, **options)
     except (PlannerError, OptimizerError, TypeError, ValueError) as exc:
-        raise fail(_option_problem(algorithm, options, given, params, exc)) from None
+        raise fail(_option_problem(strategy.planner, options, given, params, exc)) from None
     from uavplan.planners.memory import estimate_run, memory_problem
 
     why = memory_problem(estimate_run(scenario, planner, pop_size, waypoints))
@@ -148,8 +137,8 @@ def _run_plan(
         transient=True,
     ) as progress:
 
-        def make_cb(uav: str) -> Any:
-            tid = progress.add_task(f"{uav} {algorithm}", total=n_iter, best="")
+        def make_cb(uav: str, name: str) -> Any:
+            tid = progress.add_task(f"{uav} {name}", total=n_iter, best="")
 
             def cb(it: int, best: float) -> bool:
                 progress.update(tid, completed=it, best=f"best {best:.6g}")
@@ -158,44 +147,12 @@ def _run_plan(
             return cb
 
         clock = Stopwatch()
-        n_runs = 1
         try:
-            plan = plan_all(scenario, planner, budget, seed, make_cb, polish=not raw)
-            if len(seeds) > 1 or also:
-                from uavplan.planners.defaults import best_plan
-
-                plans = [plan] + [plan_all(scenario, planner, budget, s, make_cb,
-                                           polish=not raw) for s in seeds[1:]]  # fmt: skip
-                plans += [plan_all(scenario, get_planner(name), budget, seed, make_cb,
-                                   polish=not raw) for name in also]  # fmt: skip
-                plan = best_plan(plans)
-                costs = ", ".join(
-                    f"{p.algorithm} seed {p.seed}: {sum(r.cost for r in p.results):.6g}"
-                    + ("" if p.feasible else " (does not fly)")
-                    for p in plans
-                )
-                out.print(f"runs ({costs}); kept {plan.algorithm} seed {plan.seed}, which "
-                          f"`-a {plan.algorithm} --seed {plan.seed}` plans alone")  # fmt: skip
-                algorithm = plan.algorithm
-                n_runs = len(plans)
-            tried = plan
-            for name, extra in fallbacks if not plan.feasible else ():
-                bad = next(r for r in tried.results if not r.flown_feasible)
-                why = _verdict(False, bad.flown_violations or bad.violations)[4:] or "a check"
-                out.print(f"{tried.algorithm}'s plan does not fly ({bad.uav_id}: {why}); "
-                          f"trying the fallback {name}")  # fmt: skip
-                algorithm = name
-                fb = get_planner(name, **{**extra, **options})
-                tried = plan_all(scenario, fb, budget, seed, make_cb, polish=not raw)
-                if tried.feasible:
-                    out.print(f"{name}'s plan flies: it is the one written")
-                    plan = tried
-                    break
-            else:
-                if fallbacks and not plan.feasible:
-                    out.print(f"no fallback's plan flies either: {plan.algorithm}'s is written")
+            outcome = execute(strategy, scenario, budget, seed, make_cb)
         except ValueError as exc:
             raise fail(f"{scenario_ref}: {exc}") from None
+    _attempt_lines(outcome)
+    plan, n_runs = outcome.plan, len(outcome.competing)
     planning = clock.elapsed  # the files and the figure are not the planner's time
     try:
         write_plan(plan, out_dir, figure=figure)
@@ -206,47 +163,45 @@ def _run_plan(
 
 
 def planning_world(scenario: Any, ref: str, nominal: bool, model: Any = None) -> Any:
-    """The world a plan is made in: ``scenario`` under its execution model (``model`` when
-    given, e.g. a plan file's; else the scenario's own, else uavplan's default; the nominal one
-    with ``--nominal``), every static clearance widened by the model's tracking error
-    (:func:`uavplan.world.execution.widened`). Says the model on the console; exit 2 when a
-    task does not fit in the widened world."""
-    import numpy as np
+    """The world a plan is made in (:func:`uavplan.strategy.planning_world`); says the model
+    (and any turns raised) on the console; exit 2 when it cannot be made."""
+    from uavplan.strategy import WorldProblem
+    from uavplan.strategy import planning_world as make
 
-    from uavplan.world.airframes import AIRFRAMES
-    from uavplan.world.execution import NOMINAL, default_for, flyable_turns, widened
-
-    by_default = not nominal and model is None and scenario.execution is None
-    model = NOMINAL if nominal else (model or scenario.execution or default_for(scenario.uav))
-    if by_default:  # uavplan's default also turns no tighter than the airframe flies in wind
-        given_r = float(scenario.uav.turn_radius)
-        scenario, r = flyable_turns(scenario)
-        if r > 0:
-            af = AIRFRAMES[scenario.uav.airframe]
-            out.print(f"turns planned at {r:.1f} m radius, not {given_r:g} m: the tightest a "
-                      f"{af.name} flies at its {af.max_bank_deg:g} degree bank limit with "
-                      f"{af.turn_wind:g} m/s of wind behind it (--nominal plans the scenario's "
-                      "turns)", markup=False)  # fmt: skip
-    where = "--nominal" if nominal else model.source
-    hint = "" if nominal or model.nominal else "; --nominal plans for an exact execution"
-    out.print(f"execution model: {model.describe()} ({where}){hint}", markup=False)
     try:
-        world = widened(scenario, model)
-    except ValueError as exc:
-        raise fail(f"{ref}: the execution model ({model.describe()}): {exc}") from None
-    if model.track_h or model.track_v:
-        bad = []
-        for t in world.tasks:
-            for what, p in (("start", t.start), ("goal", t.goal)):
-                why = world.point_problems(np.asarray(p, dtype=np.float64))
-                if why:
-                    bad.append(f"{ref}: task {t.id}: its {what} {list(p)} is {why[0]} once every "
-                               f"clearance is widened by the tracking error ({model.track_h:g} m "
-                               f"horizontal, {model.track_v:g} m vertical); move it, or plan "
-                               "with --nominal")  # fmt: skip
-        if bad:
-            raise fail(bad)
-    return world
+        pw = make(scenario, ref, nominal, model)
+    except WorldProblem as exc:
+        raise fail(exc.problems) from None
+    line = pw.turns_line()
+    if line:
+        out.print(line, markup=False)
+    hint = "" if nominal or pw.model.nominal else "; --nominal plans for an exact execution"
+    out.print(f"execution model: {pw.model.describe()} ({pw.source}){hint}", markup=False)
+    return pw.world
+
+
+def _attempt_lines(outcome: Any) -> None:
+    """What the strategy did, when it did more than one run: the runs and their costs, the
+    kept one (and the command that plans it alone), the fallbacks tried and why."""
+    best = outcome.attempts[outcome.best]
+    if len(outcome.competing) > 1:
+        costs = ", ".join(
+            f"{a.planner} seed {a.seed}: {a.cost:.6g}" + ("" if a.flies else " (does not fly)")
+            for a in outcome.competing
+        )
+        out.print(f"runs ({costs}); kept {best.planner} seed {best.seed}, which "
+                  f"`-a {best.planner} --seed {best.seed}` plans alone")  # fmt: skip
+    tried = best
+    for fb in outcome.fallbacks:
+        bad = next(r for r in tried.plan.results if not r.flown_feasible)
+        why = _verdict(False, bad.flown_violations or bad.violations)[4:] or "a check"
+        out.print(f"{tried.planner}'s plan does not fly ({bad.uav_id}: {why}); "
+                  f"trying the fallback {fb.planner}")  # fmt: skip
+        if fb.flies:
+            out.print(f"{fb.planner}'s plan flies: it is the one written")
+        tried = fb
+    if outcome.fallbacks and not outcome.fallbacks[-1].flies:
+        out.print(f"no fallback's plan flies either: {outcome.plan.algorithm}'s is written")
 
 
 def _option_problem(

@@ -181,6 +181,7 @@ def plan_document(plan: FleetPlan) -> dict[str, Any]:
         "execution": _execution_record(plan),
         "margins": None,
         **({"fleet": fleet_record(plan.fleet)} if plan.fleet is not None else {}),
+        "diagnostics": plan.diagnostics(),
         "uavs": [uav_record(r) for r in plan.results],
     }
 
@@ -662,6 +663,25 @@ class FleetSpec(_Spec):
     info: dict[str, Any] = Field(default_factory=dict)
 
 
+class EventSpec(_Spec):
+    """One event of the plan's story (``uavplan.planners.events.KINDS``)."""
+
+    kind: Literal["candidate", "slower", "waited", "delayed", "repaired", "unresolved",
+                  "restart", "attempt"]  # fmt: skip
+    uav: str | None = Field(None, description="the UAV it concerns; null: the fleet or plan")
+    detail: str = ""
+    value: float | None = Field(
+        None, description="seconds of a later take-off, or a restart's or attempt's cost"
+    )
+
+
+class DiagnosticsSpec(_Spec):
+    """What happened while planning."""
+
+    schema_: str = Field("uavplan.diagnostics/1", alias="schema")
+    events: list[EventSpec] = Field(default_factory=list)
+
+
 class PlanSpec(_Spec):
     """A uavplan plan file (``plan.json``)."""
 
@@ -689,6 +709,9 @@ class PlanSpec(_Spec):
         "ok); null: not measured",
     )
     fleet: FleetSpec | None = None
+    diagnostics: DiagnosticsSpec | None = Field(
+        None, description="what happened while planning, as typed events (uavplan explain)"
+    )
     uavs: list[UAVSpec] = Field(min_length=1)
 
 

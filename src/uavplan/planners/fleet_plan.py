@@ -10,6 +10,7 @@ from typing import Any
 
 from uavplan.optimizers.base import Budget
 from uavplan.planners.base import FleetPlanner, Planner
+from uavplan.planners.events import Event
 from uavplan.planners.options import PlannerError
 from uavplan.planners.results import FleetResult, PlanResult
 from uavplan.planners.run import ProgressCallback
@@ -22,7 +23,9 @@ class FleetPlan:
     """Plans for every task of a scenario. With several UAVs they are planned together, by a
     :class:`FleetPlanner` or by a single-UAV planner in the prioritized frame
     (:func:`~uavplan.planners.sequential.plan_sequentially`): ``fleet`` then holds the
-    fleet-level result and feasibility includes the separation between UAVs."""
+    fleet-level result and feasibility includes the separation between UAVs. ``events``: what
+    happened around the planner (a strategy's attempts, :mod:`uavplan.planners.events`); the
+    UAVs' own are read from the results."""
 
     scenario: Scenario
     algorithm: str
@@ -30,6 +33,7 @@ class FleetPlan:
     seed: int | None
     results: tuple[PlanResult, ...]
     fleet: FleetResult | None = None
+    events: tuple[Event, ...] = ()
 
     @property
     def feasible(self) -> bool:
@@ -37,6 +41,13 @@ class FleetPlan:
         if self.fleet is not None:
             return bool(self.fleet.feasible)
         return all(r.flown_feasible for r in self.results)
+
+    def diagnostics(self) -> dict[str, Any]:
+        """``plan.json``'s ``diagnostics``: :attr:`events`, then the UAVs' and the restarts'
+        (:func:`~uavplan.planners.events.plan_events`)."""
+        from uavplan.planners.events import diagnostics, plan_events
+
+        return diagnostics((*self.events, *plan_events(self)))
 
     @property
     def planned_feasible(self) -> bool:

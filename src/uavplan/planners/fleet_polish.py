@@ -1,7 +1,7 @@
 """The CLI's repair of a fleet's plan (:func:`~uavplan.planners.fleet_plan.plan_all` with
 ``polish=True`` and a fleet planner; the experiments never polish, so the papers' numbers are
 the planners' own). Not from any paper: the single UAV's polish and fallback
-(:mod:`uavplan.planners.polish`, :func:`~uavplan.planners.defaults.fallback_planners`) carried
+(:mod:`uavplan.planners.polish`, the fallbacks of :mod:`uavplan.strategy`) carried
 over to a fleet, one UAV at a time, each against the declared flights of all the others that
 pass every check as they stand (so whatever is kept stays clear of every other UAV that is
 flown, before and after it in the priority order; a UAV whose flight fails and is not repaired
@@ -244,9 +244,9 @@ def _rrt_path(scenario: Scenario, task: Task, seed: int) -> FloatArray | None:
     """The task's path alone in the world: RRT* as the single-UAV fallback runs it, polished
     as the CLI polishes a single UAV's path; None when it finds none that flies."""
     from uavplan.planners import get_planner
-    from uavplan.planners.defaults import fallback_rrt_options
+    from uavplan.planners.rrt_star import map_scaled_options
 
-    planner = get_planner("rrt-star", **fallback_rrt_options(scenario))
+    planner = get_planner("rrt-star", **map_scaled_options(scenario))
     res = planner.plan(scenario, task, seed=seed, polish=True)
     return np.asarray(res.waypoints, dtype=np.float64) if res.flown_feasible else None
 

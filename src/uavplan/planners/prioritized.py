@@ -416,12 +416,8 @@ class PrioritizedPlanner(FleetPlanner):
             goal = np.asarray(task.goal, dtype=np.float64)
             path: FloatArray | None = None
             if cfg.seeding == "rrt-star":
-                from uavplan.planners.rrt_star import (
-                    RRTStarConfig,
-                    rrt_star,
-                    shortcut_path,
-                    validity_problem,
-                )
+                from uavplan.planners.rrt_star import RRTStarConfig, rrt_star, validity_problem
+                from uavplan.problems.validity import greedy_shortcut
 
                 try:
                     rc = RRTStarConfig(**cfg.rrt_params)
@@ -432,7 +428,7 @@ class PrioritizedPlanner(FleetPlanner):
                 )
                 path = res.path
                 if path is not None and path.shape[0] > n_free + 2:
-                    path = shortcut_path(validity_problem(scenario, task), path)
+                    path = greedy_shortcut(validity_problem(scenario, task), path)[0]
             found.append(path is not None)
             if path is None:
                 path = np.stack([start, goal])

@@ -77,11 +77,6 @@ class Mission:
         return float(np.linalg.norm(np.diff(self.waypoints, axis=0), axis=1).sum())
 
 
-def known_world(scenario: Scenario) -> Scenario:
-    """The world as the planner knows it before take-off (unrevealed areas stay unknown)."""
-    return scenario
-
-
 def revealed_world(scenario: Scenario, areas: set[int] | None = None) -> Scenario:
     """``scenario`` with the uncertain areas ``areas`` (default: all) revealed."""
     return dataclasses.replace(

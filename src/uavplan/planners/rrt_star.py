@@ -79,7 +79,8 @@ ChrismasTerrain world, 100-200 m above ground, that PPSwarm's experiments follow
   doubles the iterations to the first path on spso (median 264, max 1537) and lengthens it 5 %.
 * ``max_iterations = 5000``: over three times the worst first-path iteration above, even
   without goal bias.
-* ``shortcut = False``: greedy shortcutting (:func:`shortcut_path`) is not in the paper.
+* ``shortcut = False``: greedy shortcutting
+  (:func:`~uavplan.problems.validity.greedy_shortcut`) is not in the paper.
 * ``informed = False``: Informed RRT* (Gammell, Srinivasa & Barfoot, "Informed RRT*", IROS
   2014), not in the paper. Once the tree has a goal path of length ``c``, only a sample ``x``
   with ``|x - start| + |x - goal| < c`` (the prolate spheroid with foci start and goal) can lie
@@ -289,12 +290,6 @@ def validity_problem(scenario: Scenario, task: Task | str | int | None = None) -
     return MotionValidator(
         scenario, task, strict_altitude=True, lookup=LOOKUP.get(scenario.cost, "bilinear")
     )
-
-
-def shortcut_path(validator: MotionValidator, path: FloatArray) -> FloatArray:
-    """Greedy line-of-sight shortcutting (:func:`uavplan.problems.validity.greedy_shortcut`):
-    never longer than ``path``; start and goal kept. Not in the paper."""
-    return greedy_shortcut(validator, path)[0]
 
 
 # ------------------------------------------------------------------------------ the tree
@@ -820,3 +815,26 @@ class RRTStarPlanner(Planner):
 
 
 register_planner(RRTStarPlanner)
+
+
+#: RRT*'s steering step as a share of the map's horizontal diagonal when it rescues another
+#: planner's path (its default, 50 m, is the PPSwarm paper's for a 1 km map; a 30 km map
+#: needs longer steps).
+RESCUE_STEP_SHARE = 0.02
+
+
+def map_scaled_options(scenario: Scenario) -> dict[str, object]:
+    """RRT* as a rescue (the single UAV's fallback, a fleet's repair): every edge checked as
+    flown; its step scaled to the map (:data:`RESCUE_STEP_SHARE` of the horizontal diagonal,
+    at least its default 50 m); informed, anytime within its iteration budget, its shortest
+    tree paths tightened."""
+    lo, hi = scenario.bounds.lo, scenario.bounds.hi
+    step = max(50.0, RESCUE_STEP_SHARE * float(np.hypot(hi[0] - lo[0], hi[1] - lo[1])))
+    return {
+        "step": step,
+        "goal_radius": step,
+        "near_radius": 2 * step,
+        "informed": True,
+        "stop_at_goal": False,
+        "tighten": True,
+    }

@@ -412,27 +412,6 @@ def segment_circle_inside_fraction(
     )
 
 
-def segment_circle_inside_fraction_reference(
-    paths: FloatArray, centers: FloatArray, radii: FloatArray
-) -> FloatArray:
-    """NumPy reference for :func:`segment_circle_inside_fraction`."""
-    p = np.asarray(paths, dtype=np.float64)
-    a = p[:, :-1, None, :2]
-    d = p[:, 1:, None, :2] - a
-    f = a - np.asarray(centers, dtype=np.float64)[None, None, :, :2]
-    A = np.sum(d * d, axis=-1)
-    B = 2.0 * np.sum(f * d, axis=-1)
-    C = np.sum(f * f, axis=-1) - np.asarray(radii, dtype=np.float64) ** 2
-    disc = B * B - 4.0 * A * C
-    safe_a = np.where(A > 0, A, 1.0)
-    sq = np.sqrt(np.maximum(disc, 0.0))
-    t0 = np.clip((-B - sq) / (2.0 * safe_a), 0.0, 1.0)
-    t1 = np.clip((-B + sq) / (2.0 * safe_a), 0.0, 1.0)
-    frac = np.where((A > 0) & (disc > 0), t1 - t0, 0.0)
-    frac = np.where(A > 0, frac, (C < 0).astype(np.float64))
-    return np.asarray(frac)
-
-
 @population_kernel(error_model="numpy")
 def _circle_fraction_kernel(paths, centers, radii):  # pragma: no cover - numba
     P, N, _ = paths.shape

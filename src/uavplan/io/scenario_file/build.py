@@ -542,9 +542,9 @@ def _check_planning(ps: PlanningSpec, scenario: Scenario, problems: Problems) ->
         return
     from uavplan.optimizers.base import OptimizerError
     from uavplan.planners import PlannerError, get_planner
-    from uavplan.planners.defaults import default_planner
+    from uavplan.strategy import strategy_for
 
-    name = ps.planner if ps.planner is not None else default_planner(scenario)[0]
+    name = ps.planner if ps.planner is not None else strategy_for(scenario).planner
     options = dict(ps.options)
     if ps.pop_size is not None:
         options.setdefault("pop_size", ps.pop_size)

@@ -1,0 +1,91 @@
+"""The world a plan is made in (:func:`planning_world`): the scenario under its execution model
+(a plan file's, else the scenario's own, else uavplan's default for its UAV; the nominal one
+when asked), every static clearance widened by the model's tracking error
+(:func:`uavplan.world.execution.widened`); under uavplan's default also turns no tighter than
+the UAV's named airframe flies (:func:`uavplan.world.execution.flyable_turns`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from uavplan.world.airframes import Airframe
+    from uavplan.world.execution import ExecutionModel
+    from uavplan.world.scenario import Scenario
+
+
+class WorldProblem(ValueError):
+    """The planning world cannot be made: ``problems`` says why, one line each."""
+
+    def __init__(self, problems: list[str]) -> None:
+        super().__init__("; ".join(problems))
+        self.problems = problems
+
+
+@dataclass(frozen=True)
+class PlanningWorld:
+    """``world``: the scenario as planned in; ``model`` its execution model, ``source`` where
+    the model came from (``--nominal``, the plan's, the scenario's or uavplan's default);
+    ``turn_radius`` the radius its turns were raised to (0: the scenario's), ``given_turn``
+    the scenario's, ``airframe`` the airframe that raised them."""
+
+    world: Scenario
+    model: ExecutionModel
+    source: str
+    turn_radius: float = 0.0
+    given_turn: float = 0.0
+    airframe: Airframe | None = None
+
+    def turns_line(self) -> str | None:
+        """Why the turns were raised (for the console), or None."""
+        af = self.airframe
+        if af is None or self.turn_radius <= 0:
+            return None
+        why = (f"the tightest a {af.name} flies at its {af.max_bank_deg:g} degree bank "
+               f"limit with {af.turn_wind:g} m/s of wind behind it"
+               if af.kind == "fixed-wing" else
+               f"a {af.name} turning at its cruise speed with {af.turn_accel:g} m/s^2 "
+               "(its mission would slow down for a sharper corner, late on the "
+               "plan's schedule)")  # fmt: skip
+        return (f"turns planned at {self.turn_radius:.1f} m radius, not {self.given_turn:g} m: "
+                f"{why} (--nominal plans the scenario's turns)")  # fmt: skip
+
+
+def planning_world(
+    scenario: Scenario, ref: str, nominal: bool = False, model: Any = None
+) -> PlanningWorld:
+    """The world ``scenario`` (named ``ref`` in messages) is planned in: under ``model`` when
+    given (e.g. a plan file's), else the scenario's own, else uavplan's default for its UAV
+    (:func:`~uavplan.world.execution.default_for`), the nominal model with ``nominal``.
+    Raises :class:`WorldProblem` when the model is refused or a task's start or goal does not
+    fit in the widened world."""
+    from uavplan.world.airframes import AIRFRAMES
+    from uavplan.world.execution import NOMINAL, default_for, flyable_turns, widened
+
+    by_default = not nominal and model is None and scenario.execution is None
+    model = NOMINAL if nominal else (model or scenario.execution or default_for(scenario.uav))
+    given_r, r, af = float(scenario.uav.turn_radius), 0.0, None
+    if by_default:  # uavplan's default also turns no tighter than the airframe flies
+        scenario, r = flyable_turns(scenario)
+        af = AIRFRAMES[str(scenario.uav.airframe)] if r > 0 else None
+    source = "--nominal" if nominal else model.source
+    try:
+        world = widened(scenario, model)
+    except ValueError as exc:
+        raise WorldProblem([f"{ref}: the execution model ({model.describe()}): {exc}"]) from None
+    if model.track_h or model.track_v:
+        bad = []
+        for t in world.tasks:
+            for what, p in (("start", t.start), ("goal", t.goal)):
+                why = world.point_problems(np.asarray(p, dtype=np.float64))
+                if why:
+                    bad.append(f"{ref}: task {t.id}: its {what} {list(p)} is {why[0]} once every "
+                               f"clearance is widened by the tracking error ({model.track_h:g} m "
+                               f"horizontal, {model.track_v:g} m vertical); move it, or plan "
+                               "with --nominal")  # fmt: skip
+        if bad:
+            raise WorldProblem(bad)
+    return PlanningWorld(world, model, source, r, given_r, af)

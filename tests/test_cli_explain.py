@@ -1,0 +1,89 @@
+"""``uavplan explain``: a plan's story per UAV from its diagnostics, and its failures as the
+independent verifier finds them (which UAVs, when, by how much); the diagnostics section as
+plan.json writes it."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from uavplan.cli import app
+from uavplan.planners.events import KINDS, Event
+
+
+@pytest.fixture(scope="module")
+def fleet_plan(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("explain") / "p"
+    r = CliRunner().invoke(app, ["plan", "ppswarm1@6", "--iterations", "5", "--seed", "1",
+                                 "--out", str(out)])  # fmt: skip
+    assert r.exit_code == 0, r.output
+    return out
+
+
+def test_the_diagnostics_section_tells_each_uavs_rescue(fleet_plan: Path) -> None:
+    doc = json.loads((fleet_plan / "plan.json").read_text())
+    diag = doc["diagnostics"]
+    assert diag["schema"] == "uavplan.diagnostics/1"
+    events = [Event.from_record(e) for e in diag["events"]]
+    late = doc["fleet"]["info"]["delayed"]  # the engine's own record
+    told = {e.uav: e.value for e in events if e.kind in ("waited", "delayed")}
+    assert late and told == {u: pytest.approx(s) for u, s in late.items()}
+    restarts = [e for e in events if e.kind == "restart"]
+    assert len(restarts) == len(doc["fleet"]["restart_costs"]) and any(
+        "(kept)" in e.detail for e in restarts
+    )
+    from uavplan.io.plan_file import PlanSpec
+
+    PlanSpec.model_validate(doc)  # the schema holds the section
+    r = CliRunner().invoke(app, ["explain", str(fleet_plan)])
+    assert r.exit_code == 0, r.output
+    assert "the planner says it flies; the verifier agrees" in r.output
+    for uav, s in late.items():
+        assert f"{uav}:\n  waited: " in r.output and f"taking off {s:g} s later" in r.output
+
+
+def test_explain_names_the_pair_and_the_time_of_a_separation_failure(
+    fleet_plan: Path, tmp_path: Path
+) -> None:
+    """uav0's flight replaced by uav1's, 3 m to the east and on uav1's times: the verifier
+    finds them closer than S2, and explain says which two and when."""
+    doc = json.loads((fleet_plan / "plan.json").read_text())
+    a, b = doc["uavs"][0], doc["uavs"][1]
+    pts = np.asarray(b["flown"]["points"], dtype=float) + np.array([3.0, 0.0, 0.0])
+    a["flown"] = {**b["flown"], "points": pts.tolist()}
+    a["waypoints"], a["times"] = pts[[0, -1]].tolist(), [b["flown"]["times"][0],
+                                                        b["flown"]["times"][-1]]  # fmt: skip
+    bad = tmp_path / "plan.json"
+    bad.write_text(json.dumps(doc))
+    r = CliRunner().invoke(app, ["explain", str(bad)])
+    assert r.exit_code == 1, r.output
+    assert "the verifier finds" in r.output
+    line = next(x for x in r.output.splitlines() if "FAILS separation" in x)
+    assert f"{a['id']} and {b['id']}" in line and " m apart at t=" in line
+    t = float(line.split(" at t=")[1].split(" s")[0])
+    assert b["flown"]["times"][0] <= t <= b["flown"]["times"][-1]
+    # both UAVs are told, each with the failure
+    assert r.output.count("FAILS separation") >= 2
+
+
+def test_events_are_typed() -> None:
+    with pytest.raises(ValueError, match="unknown event kind"):
+        Event("teleported", "uav0", "no")
+    e = Event("waited", "uav3", "takes off 10 s later", 10.0)
+    assert Event.from_record(e.record()) == e
+    inf = Event("restart", None, "2: a UAV left infeasible", float("inf"))
+    assert inf.record()["value"] is None
+    from typing import get_args
+
+    from uavplan.io.plan_file import EventSpec
+
+    assert set(get_args(EventSpec.model_fields["kind"].annotation)) == set(KINDS)
+
+
+def test_explain_bad_input(tmp_path: Path) -> None:
+    r = CliRunner().invoke(app, ["explain", str(tmp_path / "missing.json")])
+    assert r.exit_code == 2 and "Traceback" not in r.output
