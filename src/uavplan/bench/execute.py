@@ -106,14 +106,10 @@ def git_commit() -> str | None:
 
 def _status_mb(field: str) -> float | None:
     """A ``/proc/self/status`` memory field (``VmRSS``, ``VmHWM``) in MiB; None off Linux."""
-    try:
-        with open("/proc/self/status") as f:
-            for line in f:
-                if line.startswith(field + ":"):
-                    return int(line.split()[1]) / 1024.0
-    except (OSError, ValueError):
-        pass
-    return None
+    from uavplan.planners.memory import proc_field_kib
+
+    kib = proc_field_kib("/proc/self/status", field)
+    return None if kib is None else kib / 1024.0
 
 
 def _reset_peak_rss() -> bool:

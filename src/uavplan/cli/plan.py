@@ -126,7 +126,7 @@ def _run_plan(
     budget = (
         Budget(max_iterations=iterations, max_time=max_time) if iterations or max_time else None
     )
-    n_iter = iterations or (None if max_time else 200)
+    n_iter = iterations or (None if max_time else planner.default_iterations)
 
     with Progress(
         TextColumn("[bold]{task.description}"),
@@ -410,7 +410,13 @@ def plan(
     ] = None,
     seed: Annotated[int, typer.Option(help="Root random seed.")] = 0,
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Output folder.")] = Path("out"),
-    iterations: Annotated[int | None, typer.Option(help="Iteration budget (default 200).")] = None,
+    iterations: Annotated[
+        int | None,
+        typer.Option(
+            help="Iteration budget (default: the planner's own: 200 generations for the "
+            "optimizers; RRT*'s is its max_iterations option, `uavplan planners rrt-star`)."
+        ),
+    ] = None,
     max_time: Annotated[
         float | None,
         typer.Option(

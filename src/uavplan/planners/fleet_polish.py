@@ -51,7 +51,7 @@ from uavplan.planners.flight import (
 )
 from uavplan.planners.results import FleetResult, PlanResult, make_result
 from uavplan.problems.validity import TIME_CHECKS, greedy_shortcut
-from uavplan.world.geometry import track_crosses_itself
+from uavplan.world.geometry import as_3d, track_crosses_itself
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 from uavplan.world.tolerances import RESERVE_TOL
@@ -120,10 +120,7 @@ def _others_table(
 
 def _reserve(table: ReservationTable, r: PlanResult) -> None:
     pts, ts = r.flown_trajectory()
-    p = np.asarray(pts, dtype=np.float64)
-    if p.shape[1] == 2:
-        p = np.column_stack([p, np.zeros(len(p))])
-    table.add(r.uav_id, p, np.asarray(ts, dtype=np.float64), RESERVE_TOL)
+    table.add(r.uav_id, as_3d(pts), np.asarray(ts, dtype=np.float64), RESERVE_TOL)
 
 
 def _after_all(table: ReservationTable) -> float:

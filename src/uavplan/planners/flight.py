@@ -36,7 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.planners.results import PlanResult
-from uavplan.problems.path_problem import LOOKUP
+from uavplan.problems.path_problem import lookup_for
 from uavplan.problems.validity import MotionValidator, greedy_shortcut
 from uavplan.smoothing.dubins import (
     SmoothedPath,
@@ -45,6 +45,7 @@ from uavplan.smoothing.dubins import (
     schedule,
     smooth_path,
 )
+from uavplan.world.geometry import as_3d
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 from uavplan.world.tolerances import DUPLICATE_TOL
@@ -98,7 +99,7 @@ def flight_validator(
         scenario,
         task,
         strict_altitude=True,
-        lookup=LOOKUP.get(scenario.cost, "bilinear"),
+        lookup=lookup_for(scenario.cost),
         reservations=reservations,
         kinematics=kinematics,
     )
@@ -152,11 +153,6 @@ def _planned_pose_times(waypoints: FloatArray, times: FloatArray, variant: str) 
     return np.concatenate([t[:1], 0.5 * (t[:-1] + t[1:]), t[-1:]])
 
 
-def _as3(points: FloatArray) -> FloatArray:
-    p = np.asarray(points, dtype=np.float64)
-    return p if p.shape[1] == 3 else np.column_stack([p, np.zeros(len(p))])
-
-
 def candidate_flights(
     scenario: Scenario,
     waypoints: FloatArray,
@@ -190,7 +186,7 @@ def candidate_flights(
     out: list[Flight] = []
     dim = wp.shape[1]
     for (w, t, tag), kind in itertools.product(bases, ("through", "corners")):
-        w3 = _as3(w)
+        w3 = as_3d(w)
         try:
             if kind == "through":
                 sm = smooth_path(w3, uav.turn_radius, h)

@@ -101,7 +101,7 @@ from uavplan.planners.optimizer_planner import OptimizerPlanner
 from uavplan.planners.options import PlannerConfig, PlannerError, option
 from uavplan.planners.registry import register_planner
 from uavplan.planners.run import Outcome, Run, Termination, Tracker
-from uavplan.problems.path_problem import LOOKUP, PathProblem
+from uavplan.problems.path_problem import PathProblem, lookup_for
 from uavplan.problems.validity import greedy_shortcut
 from uavplan.world.obstacles import UncertainArea
 from uavplan.world.pyramid import TerrainLevel, relaxed_near, terrain_pyramid
@@ -220,7 +220,7 @@ class HRMAGA(Planner):
             return PathProblem(
                 scenario, task, cost=cfg.cost, weights=cfg.weights, strict_altitude=strict,
                 cost_terrain=None if level is None else level.cost,
-                lookup=LOOKUP.get(scenario.cost, "bilinear"),  # as the flight reads the band
+                lookup=lookup_for(scenario.cost),  # as the flight reads the band
             )  # fmt: skip
         except ValueError as exc:
             raise PlannerError(f"{self.name}: {exc}") from None
@@ -890,7 +890,7 @@ def _decode_rows(
 
 def _lookup(sc: Scenario) -> str:
     """How the scenario's band reads terrain heights under waypoints (as its flight does)."""
-    return LOOKUP.get(sc.cost, "bilinear")
+    return lookup_for(sc.cost)
 
 
 register_planner(

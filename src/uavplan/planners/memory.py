@@ -105,26 +105,26 @@ def estimate_run(
     return MemoryEstimate(terrain, population, fleet)
 
 
-def _meminfo(key: str) -> int | None:
+def proc_field_kib(path: str, key: str) -> int | None:
+    """A ``key: value kB`` field of a Linux ``/proc`` file (``/proc/meminfo``,
+    ``/proc/self/status``) in KiB; None off Linux or when absent."""
     try:
-        with open("/proc/meminfo", encoding="ascii") as f:
+        with open(path, encoding="ascii") as f:
             for line in f:
                 if line.startswith(key + ":"):
-                    return int(line.split()[1]) * 1024
+                    return int(line.split()[1])
     except (OSError, ValueError, IndexError):
         return None
     return None
 
 
+def _meminfo(key: str) -> int | None:
+    kib = proc_field_kib("/proc/meminfo", key)
+    return None if kib is None else kib * 1024
+
+
 def _vm_size() -> int:
-    try:
-        with open("/proc/self/status", encoding="ascii") as f:
-            for line in f:
-                if line.startswith("VmSize:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    return 0
+    return (proc_field_kib("/proc/self/status", "VmSize") or 0) * 1024
 
 
 def available_memory() -> tuple[int | None, str]:

@@ -33,15 +33,17 @@ FloatArray = NDArray[np.float64]
 
 #: :func:`tighten`: the shares of the way to the neighbours' midpoint tried per vertex move.
 PULL = (1.0, 0.5, 0.25)
-#: :func:`tighten`: sweeps over the vertices at most, and the longest path it works on.
-TIGHTEN_ROUNDS, TIGHTEN_MAX_POINTS = 40, 200
+#: :func:`tighten`: sweeps over the vertices at most, and the longest path it works on (each
+#: sweep costs a cost evaluation per vertex in Python, where RRT*'s elastic band, a Numba
+#: kernel that checks clearance only, sweeps up to ``rrt_star.BAND_SWEEPS`` times).
+POLISH_SWEEPS, POLISH_MAX_POINTS = 40, 200
 
 
 def tighten(
     problem: PathProblem,
     validator: MotionValidator,
     path: FloatArray,
-    rounds: int = TIGHTEN_ROUNDS,
+    rounds: int = POLISH_SWEEPS,
 ) -> FloatArray:
     """Pull each interior vertex of ``path`` towards the midpoint of its two neighbours (by the
     shares :data:`PULL`, in one batch per vertex), keeping the move that lowers the problem's
@@ -49,7 +51,7 @@ def tighten(
     finds feasible; sweep until no vertex moves or ``rounds`` sweeps. Start and goal are kept;
     the cost never rises (only strictly lower costs are taken)."""
     P = np.array(path, dtype=np.float64)
-    if len(P) < 3 or len(P) > TIGHTEN_MAX_POINTS:
+    if len(P) < 3 or len(P) > POLISH_MAX_POINTS:
         return P
     ev = problem.evaluate(P[None])
     best = float(ev.cost[0]) if bool(ev.feasible[0]) else np.inf

@@ -89,7 +89,7 @@ from uavplan.planners.run import ProgressCallback
 from uavplan.problems.encoding import ENCODINGS, CartesianEncoding
 from uavplan.problems.path_problem import PRESETS, PathProblem
 from uavplan.problems.validity import TIME_CHECKS
-from uavplan.world.geometry import track_crosses_itself
+from uavplan.world.geometry import as_3d, track_crosses_itself
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 from uavplan.world.tolerances import RESERVE_TOL
@@ -340,7 +340,7 @@ class PrioritizedPlanner(FleetPlanner):
                 last_pop[m] = pop
                 current[m] = res.waypoints
                 pts, ts = res.flown_trajectory() if in_loop else (res.waypoints, res.times)
-                table.add(task.id, as3(pts), ts, RESERVE_TOL if in_loop else 0.0)
+                table.add(task.id, as_3d(pts), ts, RESERVE_TOL if in_loop else 0.0)
                 histories.append(res.history)
                 per_uav_cost[m] = res.cost if ok(res) else np.inf
                 if callback is not None:  # progress per UAV; a stop request ends the restart
@@ -670,7 +670,7 @@ class PrioritizedPlanner(FleetPlanner):
             key = (id(f), w_i // CHUNK)
             if key not in free:
                 ws = W[key[1] * CHUNK : (key[1] + 1) * CHUNK]
-                P = as3(f.points)
+                P = as_3d(f.points)
                 free[key] = ~table.conflicts(
                     np.broadcast_to(P[None], (len(ws), *P.shape)), f.times[None] + ws[:, None]
                 )
@@ -812,12 +812,6 @@ def _candidate(problem: PathProblem, path: FloatArray, in_loop: bool, **kw: Any)
     return r
 
 
-def as3(points: FloatArray) -> FloatArray:
-    """Points with z = 0 added in 2-D (the reservation table is 3-D)."""
-    p = np.asarray(points, dtype=np.float64)
-    return p if p.shape[1] == 3 else np.column_stack([p, np.zeros(len(p))])
-
-
 def flight_report(results: tuple[PlanResult, ...]) -> dict[str, Any]:
     """How the in-loop flights came out: the UAVs whose flight fails a check, the variants
     flown, the flown length against the planned polylines'."""
@@ -857,7 +851,7 @@ def declare_polylines(
         task = replace(tasks[uid], start_time=float(r.times[0]))
         polyline = Flight(r.waypoints, r.times, "polyline", "polyline", ())
         f = check_flights(flight_validator(scenario, task, table), [polyline])[0]
-        table.add(uid, as3(r.waypoints), r.times)
+        table.add(uid, as_3d(r.waypoints), r.times)
         out[uid] = declare(r, f)
     return tuple(out[r.uav_id] for r in results)
 
@@ -924,10 +918,10 @@ def smooth_fleet(
         max_late = max(max_late, f.late)
         variants[f.variant] = variants.get(f.variant, 0) + 1
         if f.ok:
-            table.add(uid, as3(f.points), f.times)
+            table.add(uid, as_3d(f.points), f.times)
         else:  # the planned polyline stays in the table: later UAVs are checked against it
             not_clear.append(uid)
-            table.add(uid, as3(r.waypoints), r.times)
+            table.add(uid, as_3d(r.waypoints), r.times)
         out[uid] = replace(
             r,
             smoothed=f.points,

@@ -55,7 +55,7 @@ from uavplan.planners.base import Planner
 from uavplan.planners.options import PlannerConfig, PlannerError, option
 from uavplan.planners.registry import register_planner
 from uavplan.planners.run import Outcome, Run
-from uavplan.problems.path_problem import LOOKUP
+from uavplan.problems.path_problem import lookup_for
 from uavplan.problems.validity import MotionValidator
 from uavplan.world.scenario import Scenario, Task
 
@@ -99,7 +99,7 @@ def feasibility_problem(
         scenario,
         task,
         strict_altitude=strict_altitude,
-        lookup=lookup if lookup is not None else LOOKUP.get(scenario.cost, "bilinear"),
+        lookup=lookup if lookup is not None else lookup_for(scenario.cost),
     )
 
 

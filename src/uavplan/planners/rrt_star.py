@@ -124,7 +124,7 @@ iteration per call.
 ``tighten`` (planner option, default off; not in the paper): a new shortest tree path is
 shortcut, pulled tight by an elastic band (points at most ``step / 2`` apart, each moved towards
 its neighbours' midpoint by the largest of 1, 1/2, ..., 1/32 of the way whose two segments the
-validator accepts; at most :data:`TIGHTEN_ROUNDS` sweeps) and shortcut again
+validator accepts; at most :data:`BAND_SWEEPS` sweeps) and shortcut again
 (:mod:`uavplan.planners._tighten_kernels`; the compiled check where the Numba loop runs, else
 the Python references with the validator). So are the tree paths of up to two other goal nodes
 on branches of their own whose tree paths are within 1 % of the shortest
@@ -159,7 +159,7 @@ from uavplan.planners.grid_index import GridIndex, pad3
 from uavplan.planners.options import Options, PlannerConfig, PlannerError, option
 from uavplan.planners.registry import register_planner
 from uavplan.planners.run import Outcome, Run
-from uavplan.problems.path_problem import LOOKUP
+from uavplan.problems.path_problem import lookup_for
 from uavplan.problems.validity import MotionValidator, greedy_shortcut
 from uavplan.world.scenario import Scenario, Task
 from uavplan.world.tolerances import REWIRE_TOL
@@ -180,7 +180,7 @@ CHUNK = 256
 #: milliseconds), with at most this many sweeps of the band.
 TIGHTEN_GROWTH = 1.25
 TIGHTEN_GAP = 256
-TIGHTEN_ROUNDS = 200
+BAND_SWEEPS = 200
 #: ``tighten``: the tree paths tightened each time (the shortest and others on branches of
 #: their own).
 TIGHTEN_PATHS = 3
@@ -287,9 +287,7 @@ def serial_numba() -> Iterator[None]:
 def validity_problem(scenario: Scenario, task: Task | str | int | None = None) -> MotionValidator:
     """The segment checker of the tree: strict-altitude validity, node heights read as the
     scenario's cost preset reads them (see the module docstring)."""
-    return MotionValidator(
-        scenario, task, strict_altitude=True, lookup=LOOKUP.get(scenario.cost, "bilinear")
-    )
+    return MotionValidator(scenario, task, strict_altitude=True, lookup=lookup_for(scenario.cost))
 
 
 # ------------------------------------------------------------------------------ the tree
@@ -668,7 +666,7 @@ def tightened(tree: RRTStarTree, path: FloatArray) -> tuple[FloatArray, int]:
     p3[:, :d] = path
     spacing = 0.5 * tree.config.step
     if tree._kargs is not None:
-        out, checks = T.tighten(p3, tree._kargs, spacing, TIGHTEN_ROUNDS)
+        out, checks = T.tighten(p3, tree._kargs, spacing, BAND_SWEEPS)
         return np.asarray(out[:, :d]), checks
     count = [0]
 
@@ -677,7 +675,7 @@ def tightened(tree: RRTStarTree, path: FloatArray) -> tuple[FloatArray, int]:
         return bool(tree.validator.paths_valid(np.stack([a[:d], b[:d]])[None])[0])
 
     out = T.shortcut_reference(ok, p3)
-    out = T.band_reference(ok, out, spacing, TIGHTEN_ROUNDS, T.TOL)
+    out = T.band_reference(ok, out, spacing, BAND_SWEEPS, T.TOL)
     out = T.shortcut_reference(ok, out)
     return np.asarray(out[:, :d]), count[0]
 

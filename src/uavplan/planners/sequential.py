@@ -20,10 +20,10 @@ from uavplan.compile_clock import Stopwatch
 from uavplan.optimizers.base import Budget
 from uavplan.planners.base import Planner
 from uavplan.planners.options import PlannerError
-from uavplan.planners.prioritized import as3
 from uavplan.planners.registry import registry
 from uavplan.planners.results import FleetResult, PlanResult
 from uavplan.planners.run import ProgressCallback
+from uavplan.world.geometry import as_3d
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario
 from uavplan.world.tolerances import RESERVE_TOL
@@ -70,7 +70,7 @@ def plan_sequentially(
         cb = progress(task.id) if progress else None
         r = planner.plan(scenario, task, budget, seeds[m], cb, reservations=table)
         pts, ts = r.flown_trajectory()
-        table.add(task.id, as3(pts), ts, RESERVE_TOL if r.flown_kind == "smoothed" else 0.0)
+        table.add(task.id, as_3d(pts), ts, RESERVE_TOL if r.flown_kind == "smoothed" else 0.0)
         results[m] = r
     out = tuple(results[m] for m in range(len(tasks)))
     planned = all(r.feasible for r in out)

@@ -172,8 +172,13 @@ PRESETS: dict[str, tuple[Term, ...]] = {
     "length": (Term("length", 1.0, _t_length),),
 }
 
-#: How each preset reads terrain heights for its altitude terms.
+#: How each preset reads terrain heights for its altitude terms (bilinear unless named here).
 LOOKUP = {"spso": "nearest"}
+
+
+def lookup_for(cost: str | None) -> str:
+    """How the cost preset ``cost`` reads terrain heights: :data:`LOOKUP`'s, else bilinear."""
+    return LOOKUP.get(cost or "", "bilinear")
 
 
 def _world_args(v: MotionValidator, r_in: FloatArray, r_out: FloatArray) -> tuple[Any, ...]:
@@ -342,7 +347,7 @@ class PathProblem:
                 raise ValueError(f"unknown cost term(s) {sorted(unknown)} for {self.cost_name}")
             terms = tuple(Term(t.name, weights.get(t.name, t.weight), t.fn, t.check) for t in terms)
         self.terms = terms
-        self.lookup = lookup if lookup is not None else LOOKUP.get(self.cost_name, "bilinear")
+        self.lookup = lookup if lookup is not None else lookup_for(self.cost_name)
         if name is not None:
             self.cost_name = name
         self.validator = MotionValidator(

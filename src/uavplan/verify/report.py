@@ -18,8 +18,6 @@ FloatArray = NDArray[np.float64]
 
 #: Geometric tolerance, metres.
 TOL = VERIFY_TOL
-#: Relative tolerance on the speed limit.
-SPEED_RTOL = VERIFY_TOL
 
 #: Every kind of violation, in the order they are reported.
 KINDS = (

@@ -11,14 +11,13 @@ from numpy.typing import NDArray
 
 from uavplan.io.plan_file import Trajectory
 from uavplan.verify.report import (
-    SPEED_RTOL,
     TOL,
     Violation,
     fmt_num,
     fmt_point,
     fmt_points,
 )
-from uavplan.world.tolerances import VERIFY_ROUNDING
+from uavplan.world.tolerances import VERIFY_ROUNDING, VERIFY_SPEED_RTOL
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -57,11 +56,11 @@ def check_speed(traj: Trajectory, speed: float, min_speed: float = 0.0) -> list[
     out = []
     d = np.linalg.norm(np.diff(traj.points, axis=0), axis=1)
     dt = np.diff(traj.times)
-    allowed = speed * (1 + SPEED_RTOL) * dt + VERIFY_ROUNDING * (speed + 2.0)
+    allowed = speed * (1 + VERIFY_SPEED_RTOL) * dt + VERIFY_ROUNDING * (speed + 2.0)
     fast = (dt >= 0) & (d > allowed)
     slow = np.zeros_like(fast)
     if min_speed > 0:
-        needed = min_speed * (1 - SPEED_RTOL) * dt - VERIFY_ROUNDING * (min_speed + 2.0)
+        needed = min_speed * (1 - VERIFY_SPEED_RTOL) * dt - VERIFY_ROUNDING * (min_speed + 2.0)
         slow = (dt > 0) & (d < needed)
     for k in np.flatnonzero(fast | slow):
         v = float(d[k] / dt[k]) if dt[k] > 0 else math.inf

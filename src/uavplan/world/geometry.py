@@ -269,8 +269,9 @@ def cylinder_grid_pass(
     return threat, inside, hit
 
 
-def _as_3d(paths: FloatArray) -> FloatArray:
-    """Contiguous float64 paths, 2-D ones at z = 0."""
+def as_3d(paths: FloatArray) -> FloatArray:
+    """Contiguous float64 points or paths (``(..., 2 or 3)``), 2-D ones at z = 0 (what the
+    3-D kernels, the reservation table and the Dubins curves read)."""
     p = np.asarray(paths, dtype=np.float64)
     if p.shape[-1] == 2:
         p = np.concatenate([p, np.zeros((*p.shape[:-1], 1))], axis=-1)
@@ -280,11 +281,11 @@ def _as_3d(paths: FloatArray) -> FloatArray:
 def soa(
     paths: FloatArray, centers: FloatArray, *per_cylinder: FloatArray
 ) -> tuple[FloatArray, list[FloatArray]]:
-    """Paths as :func:`_as_3d` gives them, and the axes' x, y and each per-cylinder array as
+    """Paths as :func:`as_3d` gives them, and the axes' x, y and each per-cylinder array as
     contiguous float64 (the fused kernels' structure of arrays)."""
     c = np.asarray(centers, dtype=np.float64).reshape(-1, 2)
     cols = [np.ascontiguousarray(x, dtype=np.float64) for x in (c[:, 0], c[:, 1], *per_cylinder)]
-    return _as_3d(paths), cols
+    return as_3d(paths), cols
 
 
 def gridded(p: FloatArray, n_cylinders: int) -> bool:
@@ -349,7 +350,7 @@ def cylinder_distances(
     Only the part of the segment within the cylinder's heights counts (exact); 2-D paths are
     taken at z = 0 against infinitely tall cylinders.
     """
-    p = _as_3d(paths)
+    p = as_3d(paths)
     J = len(centers)
     if J == 0:
         return np.zeros((p.shape[0], p.shape[1] - 1, 0))

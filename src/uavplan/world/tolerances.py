@@ -29,6 +29,9 @@ SPEED_SLACK = 1e-9
 RESERVE_TOL = 0.1
 #: Distances and clearances the verifier accepts below the required value.
 VERIFY_TOL = 1e-6
+#: The verifier's relative slack on the speed limits (a fraction, where planning's is
+#: :data:`SPEED_RTOL`: the verifier reads times and points rounded to a plan file's decimals).
+VERIFY_SPEED_RTOL = 1e-6
 #: The verifier's length slack per segment for plan files' 6-decimal rounding: this many metres
 #: per (speed + 2) m/s of speed.
 VERIFY_ROUNDING = 1e-6
