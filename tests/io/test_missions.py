@@ -259,6 +259,17 @@ def test_export_command_writes_every_format(plan_json: Path, tmp_path: Path) -> 
     assert "must take off at its planned second" in r.output  # a nominal plan tolerates nothing
 
 
+def test_a_single_file_format_writes_into_an_existing_folder(
+    plan_json: Path, tmp_path: Path
+) -> None:
+    """``--out DIR`` naming a folder that exists: the file goes inside it, as ``cp`` does."""
+    folder = tmp_path / "exports"
+    folder.mkdir()
+    r = runner.invoke(app, ["export", str(plan_json), "--format", "geojson", "--out", str(folder)])
+    assert r.exit_code == 0, r.output
+    assert (folder / "plan.geojson").is_file() and f"wrote {folder / 'plan.geojson'}" in r.output
+
+
 def test_export_without_origin_says_how_to_add_one(tmp_path: Path) -> None:
     doc = _plan_doc()
     del doc["origin"]

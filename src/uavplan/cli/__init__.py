@@ -54,6 +54,28 @@ app.command("algorithms", help="The same as `planners`: every planner, or NAME's
 app.command("schema")(schema_command)
 
 
+def _as_sentences(t: typer.Typer) -> None:
+    """Every command's help from its docstring as sentences (the lines of a paragraph joined:
+    rich's help box wraps them itself, where the docstring's own line breaks would break them
+    mid-sentence) and its line in the command list the first sentence."""
+    import inspect
+
+    from uavplan.planners.registry import first_sentence
+
+    for info in t.registered_commands:
+        doc = info.help or (info.callback.__doc__ if info.callback else None)
+        if doc:
+            paras = inspect.cleandoc(doc).split("\n\n")
+            info.help = "\n\n".join(" ".join(p.split()) for p in paras)
+            info.short_help = info.short_help or first_sentence(doc)
+    for g in t.registered_groups:
+        if g.typer_instance is not None:
+            _as_sentences(g.typer_instance)
+
+
+_as_sentences(app)
+
+
 def main() -> None:
     app()
 

@@ -63,7 +63,11 @@ def export(
     end: Annotated[str, typer.Option(help="After the last waypoint: land, rtl or none.")] = "land",
     firmware: Annotated[str, typer.Option(help="px4, ardupilot or generic (.plan).")] = "px4",
     vehicle: Annotated[
-        str, typer.Option(help="auto (fixed-wing if it has a turn radius), fixed-wing, multirotor.")
+        str,
+        typer.Option(
+            help="auto (the scenario UAV's airframe class; unnamed: fixed-wing if it has a "
+            "turn radius or a minimum speed), fixed-wing, multirotor."
+        ),
     ] = "auto",
     origin: Annotated[
         str | None, typer.Option(help="LAT,LON[,ALT]: geodetic origin of the local frame.")
@@ -139,6 +143,8 @@ def export(
         shown = plan_path(plan_file)
         default = shown.parent / fmt if exporter.per_uav else shown.with_suffix(exporter.suffix)
         target = out_path or default
+        if not exporter.per_uav and target.is_dir():  # into the folder, as cp does
+            target = target / default.name
         if exporter.per_uav:
             target.mkdir(parents=True, exist_ok=True)
         written = exporter.write(mission, target)

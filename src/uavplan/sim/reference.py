@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import tempfile
 from typing import Any
 
 import numpy as np
@@ -201,6 +202,8 @@ def _jsbsim_flight(legs: Legs, speed: float, l1_period: float, l1_damping: float
     n = len(P)
     fdm = jsbsim.FGFDMExec(None)
     fdm.set_debug_level(0)
+    logs = tempfile.TemporaryDirectory()  # the model's own CSV log, not in the working folder
+    fdm.set_output_path(logs.name)
     fdm.load_model("c172x")
     fdm["simulation/randomseed"] = seed
     dt = fdm.get_delta_t()
@@ -272,6 +275,8 @@ def _jsbsim_flight(legs: Legs, speed: float, l1_period: float, l1_damping: float
         i_speed = min(max(i_speed + (v_leg - vg) * dt, -30.0), 30.0)
         thr = thr0 + 0.1 * (v_leg - vg) + 0.02 * i_speed
         fdm["fcs/throttle-cmd-norm"] = min(max(thr, 0.0), 1.0)
+    del fdm  # closes its log
+    logs.cleanup()
     return np.asarray(out, dtype=np.float64)
 
 
