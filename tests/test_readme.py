@@ -20,7 +20,9 @@ def test_readme_python_example_reproduces_the_demo(
     code = re.search(r"```python\n(.*?)```", README.read_text(), re.S)
     assert code is not None
     exec(compile(code.group(1), "README.md", "exec"), {})
-    printed = capsys.readouterr().out.split()
+    out = capsys.readouterr().out
+    assert "[('run', 'spso', True)]" in out  # the strategy's one attempt, and it flies
+    printed = out.split()
     r = CliRunner().invoke(app, ["demo", "--seed", "0", "--out", str(tmp_path)])
     assert r.exit_code in (0, 1), r.output
     demo_cost = json.loads((tmp_path / "plan.json").read_text())["uavs"][0]["cost"]

@@ -10,7 +10,9 @@ compiled once, not at every start. ``NUMBA_CACHE_DIR``, when set, is left as it 
 """
 
 import os
+import sys
 from pathlib import Path
+from typing import Any
 
 
 def __getattr__(name: str) -> str:
@@ -44,4 +46,39 @@ _cache = numba_cache_dir(Path(__file__).resolve().parent, dict(os.environ))
 if _cache is not None:
     os.environ["NUMBA_CACHE_DIR"] = _cache
 
-__all__ = ["__version__", "numba_cache_dir"]
+
+def _html(obj: Any) -> str:
+    # bound late, by name: the package's root is imported by every layer (its version), and
+    # only a notebook that shows a plan needs the figures
+    from importlib import import_module
+
+    return str(import_module("uavplan.viz.notebook").html(obj))
+
+
+#: What shows itself in Jupyter: (module, class) of plans, UAV results and scenarios.
+DISPLAYED = (
+    ("uavplan.planners.fleet_plan", "FleetPlan"),
+    ("uavplan.planners.results", "PlanResult"),
+    ("uavplan.world.scenario", "Scenario"),
+)
+
+
+def notebook_display(shell: Any = None) -> bool:
+    """Have IPython (``shell``, else the running one) show plans, UAV results and scenarios as
+    HTML: the summary table and the figure (:mod:`uavplan.viz.notebook`). Registered by class
+    name, so nothing is imported before one is shown; done on ``import uavplan`` inside
+    IPython. False outside IPython."""
+    if shell is None:
+        ipython = sys.modules.get("IPython")
+        shell = ipython.get_ipython() if ipython is not None else None
+    if shell is None:
+        return False
+    formatter = shell.display_formatter.formatters["text/html"]
+    for module, name in DISPLAYED:
+        formatter.for_type_by_name(module, name, _html)
+    return True
+
+
+notebook_display()
+
+__all__ = ["__version__", "notebook_display", "numba_cache_dir"]
