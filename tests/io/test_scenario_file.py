@@ -955,3 +955,63 @@ def test_resource_limits_are_checked_when_read(tmp_path: Path) -> None:
         f.write("name: x\n")
         f.truncate(65 * 2**20)
     assert any("a scenario file is at most" in p for p in problems_of(big))
+
+
+# ------------------------------------------------------------------ heights of WGS84 tasks
+def _luxembourg_with(tmp_path: Path, task: dict[str, Any], **top: Any) -> Path:
+    """The built-in luxembourg scenario (a real DEM, placed on Earth) with one task of ours."""
+    import yaml
+
+    from uavplan.scenarios import builtin_path
+
+    doc = yaml.safe_load(builtin_path("luxembourg").read_text(encoding="utf-8"))
+    doc["terrain"]["file"] = str(builtin_path("luxembourg").parent / doc["terrain"]["file"])
+    doc["tasks"] = [task]
+    doc.pop("task_z", None)
+    doc.update(top)
+    path = tmp_path / "lux.yaml"
+    path.write_text(yaml.safe_dump(doc), encoding="utf-8")
+    return path
+
+
+def test_wgs84_task_heights_above_ground_takeoff_or_sea_level(tmp_path: Path) -> None:
+    """Near Luxembourg City (ground 277 m) to near Clervaux (ground 432 m): 100 m above the
+    ground under each point, above the ground at take-off, or the AMSL altitudes themselves
+    land where they should; a WGS84 task given above ground plans and flies over the DEM."""
+    from uavplan.io.scenario_file import load_scenario
+
+    start, goal = [49.6143714, 6.1375], [50.0503741, 6.0327821]
+    lux = load_scenario(builtin_path("luxembourg"))
+    g0 = float(lux.terrain.height(*lux.origin.to_local([[*start, 0.0]])[0][:2]))
+    g1 = float(lux.terrain.height(*lux.origin.to_local([[*goal, 0.0]])[0][:2]))
+    assert g1 - g0 > 100.0  # the highlands: a height above take-off is not one above ground
+
+    def task(height: str | None, z0: float, z1: float) -> dict[str, Any]:
+        t = {"frame": "wgs84", "start": [*start, z0], "goal": [*goal, z1]}
+        return t if height is None else {**t, "height": height}
+
+    sc = load_scenario(_luxembourg_with(tmp_path, task("ground", 100, 100)))
+    assert sc.tasks[0].start[2] == pytest.approx(g0 + 100, abs=0.05)
+    assert sc.tasks[0].goal[2] == pytest.approx(g1 + 100, abs=0.05)
+    up = load_scenario(_luxembourg_with(tmp_path, task("takeoff", 100, 260)))
+    assert up.tasks[0].goal[2] == pytest.approx(g0 + 260, abs=0.05)
+    sea = load_scenario(_luxembourg_with(tmp_path, task(None, g0 + 100, g1 + 100)))
+    assert sea.tasks[0].goal[2] == pytest.approx(g1 + 100, abs=0.05)  # AMSL is the default
+    again = load_scenario(_luxembourg_with(tmp_path, task(None, 100, 100), task_z="ground"))
+    assert again.tasks[0].goal == pytest.approx(sc.tasks[0].goal)  # task_z: ground as before
+    # 150 m AMSL is under the ground: the error says where that is in the local frame
+    local = r"under the terrain .* \(in the local frame: \[0\.0, -22500\.0, 150\.0\] m\)"
+    with pytest.raises(ScenarioFileError, match=r"tasks\[0\]\.start = .*" + local):
+        load_scenario(_luxembourg_with(tmp_path, task("amsl", 150, 600)))
+    with pytest.raises(ScenarioFileError, match="height: 'ground' is for frame: wgs84 tasks"):
+        load_scenario(_luxembourg_with(tmp_path, {"start": [0, -22500, 100],
+                                                  "goal": [-7500, 26000, 100],
+                                                  "height": "ground"}))  # fmt: skip
+    from typer.testing import CliRunner
+
+    from uavplan.cli import app
+
+    r = CliRunner().invoke(app, ["plan", str(_luxembourg_with(tmp_path, task("ground", 100, 100))),
+                                 "--out", str(tmp_path / "p")])  # fmt: skip
+    assert r.exit_code == 0, r.output
+    assert "independent verifier: every flown trajectory passes" in r.output

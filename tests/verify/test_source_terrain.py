@@ -263,3 +263,40 @@ def test_peak_block_helper() -> None:
     H, _ = hill_samples(40, 40)
     sl = peak_block(H, 3)
     assert H[sl].max() == H.max()
+
+
+def test_the_ground_within_a_small_reach_is_bounded_tightly_on_a_coarse_raster() -> None:
+    """Luxembourg (30 arc-second samples, 600 m x 930 m): the least and largest height of a
+    flight above the ground within 3 m of it. Every point within 3 m (sampled densely) stands
+    inside the bound, and the bound is within a metre of that."""
+    from uavplan.scenarios import resolve
+    from uavplan.verify.source_terrain import (
+        _piece_reach_bound,
+        read_source,
+        source_clearance,
+    )
+
+    sc = resolve("luxembourg")
+    src = read_source(sc.terrain)
+    assert src is not None
+    rng = np.random.default_rng(3)
+    xy = np.array([[0.0, -22500.0], [-2700.0, -4600.0], [-4800.0, 8800.0], [-7500.0, 26000.0]])
+    z = np.array([sc.terrain.height(*p) for p in xy]) + np.array([100.0, 60.0, 140.0, 100.0])
+    tr = Trajectory("a", np.column_stack([xy, z]), np.arange(4.0) * 500, True)
+    low, high = _piece_reach_bound(tr, src, 3.0, 150.0)
+    # brute force: points along the flight, each against ground points within 3 m of it
+    s = np.linspace(0, 1, 4001)
+    P = np.concatenate([tr.points[k] + s[:, None] * (tr.points[k + 1] - tr.points[k])
+                        for k in range(3)])  # fmt: skip
+    ang = rng.uniform(0, 2 * np.pi, (len(P), 16))
+    rad = 3.0 * np.sqrt(rng.uniform(0, 1, (len(P), 16)))
+    qx = (P[:, 0:1] + rad * np.cos(ang)).ravel()
+    qy = (P[:, 1:2] + rad * np.sin(ang)).ravel()
+    u, v = src.to_samples(qx, qy)
+    ground = Terrain(src.lo, 0.0, 0.0, 1.0, 1.0, "s").height(u, v)
+    above = np.repeat(P[:, 2], 16) - ground
+    assert above.max() <= high + 1e-6 and above.min() >= low - 1e-6
+    assert high - above.max() < 1.0 and above.min() - low < 1.0
+    assert source_clearance(tr, src, 3.0) == pytest.approx((low, high))  # the best bound
+    exact = source_clearance(tr, src, 0.0)
+    assert exact[0] - low < 1.0 and high - exact[1] < 1.0

@@ -276,6 +276,64 @@ def _source_extrema(traj: Trajectory, source: SourceGround) -> tuple[Any, ...]:
     return pa, pb, seg, span, ua, va, ub, vb, lo_ext, hi_ext
 
 
+def _piece_reach_bound(
+    traj: Trajectory, source: SourceGround, reach: float, piece: float
+) -> tuple[float, float]:
+    """The least and largest height above the ground within ``reach`` metres of the flight,
+    bounded per piece of at most a sample: the exact extrema over the ground under the piece,
+    less (plus) ``reach`` times the steepest the ground can be in metres along any direction in
+    the cells the piece's neighbourhood touches. In a cell the bilinear surface's slopes per
+    sample are at most its larger x-edge difference ``gx`` and y-edge difference ``gy``; the
+    map from metres to samples has the Jacobian ``J`` (measured at the piece's ends, the
+    larger of each entry, times 1.1 for its change across the piece), so a metre moves the
+    ground by at most ``hypot(|J00| gx + |J10| gy, |J01| gx + |J11| gy)``. Tight where the reach
+    is a small part of a sample, as a tracking error of metres is on a coarse raster; (-inf,
+    inf) (no bound) where the neighbourhood would reach past the adjacent cells."""
+    if not math.isfinite(piece):
+        return -math.inf, math.inf
+    a, b = traj.points[:-1], traj.points[1:]
+    pa, pb, _, _ = _pieces(a, b, piece)
+    ua, va = source.to_samples(pa[:, 0], pa[:, 1])
+    ub, vb = source.to_samples(pb[:, 0], pb[:, 1])
+    J = np.zeros((len(pa), 2, 2))
+    for p, (u0, v0) in ((pa, (ua, va)), (pb, (ub, vb))):
+        for col, (ddx, ddy) in enumerate(((1.0, 0.0), (0.0, 1.0))):
+            u1, v1 = source.to_samples(p[:, 0] + ddx, p[:, 1] + ddy)
+            J[:, 0, col] = np.maximum(J[:, 0, col], np.abs(u1 - u0))
+            J[:, 1, col] = np.maximum(J[:, 1, col], np.abs(v1 - v0))
+    J *= 1.1
+    r = reach * np.sqrt(np.max(np.sum(J * J, axis=1), axis=1))  # the reach in samples, at most
+    if np.any(r > 0.5):
+        return -math.inf, math.inf
+    rows, cols = source.hi.shape
+    i0 = np.clip(np.floor(np.minimum(ua, ub) - r), 0, cols - 2).astype(np.int64)
+    i1 = np.clip(np.floor(np.maximum(ua, ub) + r), 0, cols - 2).astype(np.int64)
+    j0 = np.clip(np.floor(np.minimum(va, vb) - r), 0, rows - 2).astype(np.int64)
+    j1 = np.clip(np.floor(np.maximum(va, vb) + r), 0, rows - 2).astype(np.int64)
+    if np.any(i1 - i0 > 2) or np.any(j1 - j0 > 2):
+        return -math.inf, math.inf
+    A = np.column_stack([ua, va, pa[:, 2]])
+    B = np.column_stack([ub, vb, pb[:, 2]])
+    out = []
+    for grid, col in ((source.hi, 0), (source.lo, 2)):
+        ex = np.abs(np.diff(grid, axis=1))  # x-edges (rows, cols - 1)
+        ey = np.abs(np.diff(grid, axis=0))  # y-edges (rows - 1, cols)
+        gx_cell = np.maximum(ex[:-1], ex[1:])  # (rows - 1, cols - 1)
+        gy_cell = np.maximum(ey[:, :-1], ey[:, 1:])
+        gx = np.zeros(len(pa))
+        gy = np.zeros(len(pa))
+        for dj in range(3):
+            for di in range(3):
+                ok = (j0 + dj <= j1) & (i0 + di <= i1)
+                jj, ii = np.minimum(j0 + dj, rows - 2), np.minimum(i0 + di, cols - 2)
+                gx = np.where(ok, np.maximum(gx, gx_cell[jj, ii]), gx)
+                gy = np.where(ok, np.maximum(gy, gy_cell[jj, ii]), gy)
+        per_m = np.hypot(J[:, 0, 0] * gx + J[:, 1, 0] * gy, J[:, 0, 1] * gx + J[:, 1, 1] * gy)
+        ext = terrain_clearance_extrema(A, B, Terrain(grid, 0.0, 0.0, 1.0, 1.0, source.name))
+        out.append(ext[:, col] + (1.0 if col == 2 else -1.0) * reach * per_m)
+    return float(np.min(out[0])), float(np.max(out[1]))
+
+
 def source_clearance(
     traj: Trajectory, source: SourceGround, reach: float = 0.0
 ) -> tuple[float, float]:
@@ -295,8 +353,9 @@ def source_clearance(
             stretch = max(stretch, float(np.max(np.hypot(u1 - u0, v1 - v0))))
         # both unit steps' images bound the map's stretch within sqrt(2) in any direction
         r = 1.1 * math.sqrt(2.0) * stretch * reach
-        low, high = -math.inf, math.inf
-        for how in ("height", "slope"):  # each bounds the ground within reach: the better
+        # each bounds the ground within reach: the best of them
+        low, high = _piece_reach_bound(traj, source, reach, min(source.piece, 1.0 / stretch))
+        for how in ("height", "slope"):
             s = replace(source, hi=within_reach(source.hi, 1.0, 1.0, r, True, how),
                         lo=within_reach(source.lo, 1.0, 1.0, r, False, how))  # fmt: skip
             ext = _source_extrema(traj, s)

@@ -427,7 +427,8 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
             problems.add(("moving_obstacles", i), str(exc), NO_VALUE)
 
     # ---- tasks
-    geo = None if spec.origin is None else GeoOrigin(**spec.origin.model_dump())
+    # the file's origin, else the one a georeferenced DEM places the frame at
+    geo = dem_origin if spec.origin is None else GeoOrigin(**spec.origin.model_dump())
     tasks: list[Task] = []
     checks: list[tuple[int, str, tuple[float, ...]]] = []  # (spec index, which, point)
     seen: dict[str, int] = {}
@@ -441,28 +442,40 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
             )
         seen.setdefault(tid, i)
         points: dict[str, tuple[float, ...]] = {}
+        takeoff_xy: tuple[float, float] | None = None
         for which in ("start", "goal"):
             v = [float(c) for c in getattr(t, which)]
+            above = spec.task_z == "ground"  # the z given is a height above the ground here
             if t.frame == "wgs84":
                 if geo is None:
-                    problems.add(("tasks", i, which), "frame: wgs84 needs the scenario's origin")
+                    problems.add(
+                        ("tasks", i, which),
+                        "frame: wgs84 needs the scenario's origin (or a "
+                        "georeferenced terrain that places it)",
+                    )
                     continue
                 if not (-90 < v[0] < 90 and -180 <= v[1] <= 180):
                     problems.add(("tasks", i, which), "is not [lat, lon(, alt)] in degrees", v)
                     continue
                 x, y, _ = geo.to_local([[v[0], v[1], geo.alt]])[0]
-                z = [] if len(v) < 3 else [v[2] if spec.task_z == "ground" else v[2] - geo.alt]
+                ref = t.height or ("ground" if above else "amsl")
+                if which == "start":
+                    takeoff_xy = (float(x), float(y))
+                z = [] if len(v) < 3 else [v[2] - geo.alt if ref == "amsl" else v[2]]
                 v = [float(x), float(y), *z]
+                above = ref != "amsl"
+                under = takeoff_xy if ref == "takeoff" else None
             if dim is not None and len(v) != dim:
                 problems.add(
                     ("tasks", i, which),
                     f"has {len(v)} coordinates but the scenario is {_dim_reason(spec, dim)}",
                 )
                 continue
-            if spec.task_z == "ground" and len(v) == 3:
-                if terrain_failed:
+            if above and len(v) == 3:
+                if terrain_failed or (t.frame == "wgs84" and ref == "takeoff" and under is None):
                     continue
-                v[2] += ground(v[0], v[1])
+                at = under if t.frame == "wgs84" and under is not None else (v[0], v[1])
+                v[2] += ground(*at)
             points[which] = tuple(v)
             checks.append((i, which, tuple(v)))
         if len(points) != 2:
@@ -511,8 +524,10 @@ def build_scenario(spec: ScenarioSpec, problems: Problems, base_dir: Path) -> Sc
         problems.raise_if_any()
         raise  # pragma: no cover
     for i, which, point in checks:
+        wgs84 = spec.tasks is not None and spec.tasks[i].frame == "wgs84"
+        local = f" (in the local frame: {[round(c, 2) for c in point]} m)" if wgs84 else ""
         for reason in scenario.point_problems(np.asarray(point)):
-            problems.add(("tasks", i, which), reason)
+            problems.add(("tasks", i, which), reason + local)
     problems.raise_if_any()
     if spec.fleet is not None:
         scenario = _with_generated_fleet(scenario, spec.fleet, problems)

@@ -384,9 +384,24 @@ class TaskSpec(_Spec):
     frame: Literal["local", "wgs84"] = Field(
         "local",
         description="local: start and goal in metres; wgs84: [lat, lon] or [lat, lon, alt] "
-        "(degrees; alt AMSL, or above ground with task_z: ground), converted through the "
-        "scenario's origin (required).",
+        "(degrees; alt as 'height' says), converted through the scenario's origin (required).",
     )
+    height: Literal["amsl", "ground", "takeoff"] | None = Field(
+        None,
+        description="wgs84 tasks: what the third number is measured from: amsl (above mean sea "
+        "level), ground (above the terrain under the point) or takeoff (above the terrain "
+        "under the start, as a ground station shows heights). Default: ground with task_z: "
+        "ground, else amsl. Local tasks use task_z.",
+    )
+
+    @model_validator(mode="after")
+    def _height_for_wgs84(self) -> TaskSpec:
+        if self.height is not None and self.frame != "wgs84":
+            raise ValueError(
+                f"height: {self.height!r} is for frame: wgs84 tasks; a local task's z is "
+                "absolute or above ground by the scenario's task_z"
+            )
+        return self
 
 
 class PlanningSpec(_Spec):
