@@ -7,7 +7,7 @@ A planner named instead of ``default`` runs alone, as ``-a NAME`` does.
 
 * ``default-paths``: the default on every built-in scenario: feasible and verified as flown,
   tracks crossing themselves, fallbacks and the planner kept.
-* ``default-rivals``: on the single-UAV built-ins, the default beside the planners a user
+* ``default-rivals``: on the 3-D single-UAV built-ins, the default beside the planners a user
   could name (SPSO, RGG-PSO+, HR-MAGA, RRT*, each with the command's defaults): the default's
   length over the shortest flying path any run reached, and its cost over the best.
 """
@@ -198,7 +198,7 @@ register_plan(
             "The default beside SPSO, RGG-PSO+, HR-MAGA and RRT* as `-a NAME` runs them, on the "
             "single-UAV built-ins: length over the shortest and cost over the best flying plan"
         ),
-        scenarios=SINGLE,
+        scenarios=tuple(n for n in SINGLE if n != "simple2d"),  # HR-MAGA plans 3-D only
         algorithms=(Algorithm("default", "default"), *(Algorithm(n, n) for n in RIVALS)),
         scales={
             "smoke": Scale(runs=1, iterations=10, scenarios=("spso",)),
