@@ -76,6 +76,12 @@ def export(
         str, typer.Option(help="UTC time of the plan's t = 0 (KML times), ISO 8601.")
     ] = "2000-01-01T00:00:00Z",
     list_formats: Annotated[bool, typer.Option("--list", help="List the formats.")] = False,
+    drone: Annotated[
+        str,
+        typer.Option(
+            help="wpml: the DJI aircraft: m300, m350, m30, m30t, m3e, m3t, m3m, m3d or m3td."
+        ),
+    ] = "m3e",
     max_items: Annotated[
         int,
         typer.Option(
@@ -95,6 +101,7 @@ def export(
         tolerances,
         write_launch_schedule,
     )
+    from uavplan.io.missions.wpml import DRONES
     from uavplan.io.plan_file import PlanFormatError, plan_path, read_plan_file
 
     if list_formats:
@@ -109,7 +116,8 @@ def export(
     choices = {"frame": (frame, ("amsl", "relative", "terrain")),
                "end": (end, ("land", "rtl", "none")),
                "firmware": (firmware, ("px4", "ardupilot", "generic")),
-               "vehicle": (vehicle, ("auto", "fixed-wing", "multirotor"))}  # fmt: skip
+               "vehicle": (vehicle, ("auto", "fixed-wing", "multirotor")),
+               "drone": (drone, tuple(DRONES))}  # fmt: skip
     for name, (value, allowed) in choices.items():
         if value not in allowed:
             raise fail(f"--{name} {value!r}: choose from {', '.join(allowed)}")
@@ -138,7 +146,7 @@ def export(
             plan = dataclasses.replace(plan, origin=world.origin)
         options = ExportOptions(kind=kind, frame=frame, end=end, firmware=firmware,  # type: ignore[arg-type]
                                 vehicle=vehicle, epoch=epoch,  # type: ignore[arg-type]
-                                max_items=max_items)  # fmt: skip
+                                max_items=max_items, drone=drone)  # fmt: skip
         mission = Mission(plan, world, options)
         shown = plan_path(plan_file)
         default = shown.parent / fmt if exporter.per_uav else shown.with_suffix(exporter.suffix)

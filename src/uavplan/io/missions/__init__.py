@@ -62,6 +62,8 @@ class ExportOptions:
     #: the most MAVLink items a per-vehicle mission may hold (PX4 stores 500 on its RAM
     #: backend; ArduPilot about 700 on a Pixhawk without SD storage: docs/decisions.md)
     max_items: int = MAX_ITEMS
+    #: the DJI aircraft a ``wpml`` export names (:data:`uavplan.io.missions.wpml.DRONES`)
+    drone: str = "m3e"
 
 
 @dataclass(eq=False)
