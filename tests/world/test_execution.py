@@ -303,3 +303,18 @@ def test_a_multirotor_plans_its_corners_as_curves_it_flies_at_speed() -> None:
     # a fixed wing whose scenario sets no turn radius keeps none
     fw = dataclasses.replace(sc, uav=dataclasses.replace(sc.uav, airframe="small-fixed-wing"))
     assert flyable_turns(fw) == (fw, 0.0)
+
+
+def test_a_fixed_wing_plans_no_slower_than_it_flies_with_the_wind_behind_it() -> None:
+    """Its slowest ground speed with ``turn_wind`` behind it is its minimum airspeed plus the
+    wind: uavplan's default plans no slower (a multirotor, or a UAV whose minimum is its
+    cruise speed, keeps the scenario's)."""
+    from uavplan.world.airframes import SMALL_FIXED_WING
+    from uavplan.world.execution import flyable_speeds
+
+    sc = resolve("ppswarm1@4")
+    faster, v = flyable_speeds(sc)
+    assert v == pytest.approx(float(sc.uav.min_speed) + SMALL_FIXED_WING.turn_wind) and v < 20
+    assert faster.uav.min_speed == pytest.approx(v) and faster.uav.speed == sc.uav.speed
+    assert flyable_speeds(resolve("quadrotors@4"))[1] == 0.0
+    assert flyable_speeds(resolve("rscdwoa-static"))[1] == 0.0  # min speed = cruise: no room

@@ -172,9 +172,9 @@ def planning_world(scenario: Any, ref: str, nominal: bool, model: Any = None) ->
         pw = make(scenario, ref, nominal, model)
     except WorldProblem as exc:
         raise fail(exc.problems) from None
-    line = pw.turns_line()
-    if line:
-        out.print(line, markup=False)
+    for line in (pw.turns_line(), pw.speeds_line()):
+        if line:
+            out.print(line, markup=False)
     hint = "" if nominal or pw.model.nominal else "; --nominal plans for an exact execution"
     out.print(f"execution model: {pw.model.describe()} ({pw.source}){hint}", markup=False)
     return pw.world

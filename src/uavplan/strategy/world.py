@@ -30,7 +30,8 @@ class PlanningWorld:
     """``world``: the scenario as planned in; ``model`` its execution model, ``source`` where
     the model came from (``--nominal``, the plan's, the scenario's or uavplan's default);
     ``turn_radius`` the radius its turns were raised to (0: the scenario's), ``given_turn``
-    the scenario's, ``airframe`` the airframe that raised them."""
+    the scenario's, ``airframe`` the airframe that raised them; ``min_speed`` the slowest speed
+    planned when raised (0: the scenario's), ``given_min`` the scenario's."""
 
     world: Scenario
     model: ExecutionModel
@@ -38,6 +39,22 @@ class PlanningWorld:
     turn_radius: float = 0.0
     given_turn: float = 0.0
     airframe: Airframe | None = None
+    min_speed: float = 0.0
+    given_min: float = 0.0
+
+    def speeds_line(self) -> str | None:
+        """Why the slowest planned speed was raised (for the console), or None."""
+        from uavplan.world.airframes import AIRFRAMES
+
+        af = AIRFRAMES.get(str(self.world.uav.airframe))
+        if af is None or self.min_speed <= 0:
+            return None
+        why = (
+            f"a {af.name} at its slowest airspeed with {af.turn_wind:g} m/s of wind behind "
+            "it flies that fast over the ground"
+        )
+        return (f"speeds planned from {self.min_speed:g} m/s, not {self.given_min:g} m/s: "
+                f"{why} (--nominal plans the scenario's speeds)")  # fmt: skip
 
     def turns_line(self) -> str | None:
         """Why the turns were raised (for the console), or None."""
@@ -63,14 +80,22 @@ def planning_world(
     Raises :class:`WorldProblem` when the model is refused or a task's start or goal does not
     fit in the widened world."""
     from uavplan.world.airframes import AIRFRAMES
-    from uavplan.world.execution import NOMINAL, default_for, flyable_turns, widened
+    from uavplan.world.execution import (
+        NOMINAL,
+        default_for,
+        flyable_speeds,
+        flyable_turns,
+        widened,
+    )
 
     by_default = not nominal and model is None and scenario.execution is None
     model = NOMINAL if nominal else (model or scenario.execution or default_for(scenario.uav))
     given_r, r, af = float(scenario.uav.turn_radius), 0.0, None
-    if by_default:  # uavplan's default also turns no tighter than the airframe flies
+    given_v, v = float(scenario.uav.min_speed), 0.0
+    if by_default:  # uavplan's default also turns and slows no more than the airframe flies
         scenario, r = flyable_turns(scenario)
         af = AIRFRAMES[str(scenario.uav.airframe)] if r > 0 else None
+        scenario, v = flyable_speeds(scenario)
     source = "--nominal" if nominal else model.source
     try:
         world = widened(scenario, model)
@@ -88,4 +113,4 @@ def planning_world(
                                "with --nominal")  # fmt: skip
         if bad:
             raise WorldProblem(bad)
-    return PlanningWorld(world, model, source, r, given_r, af)
+    return PlanningWorld(world, model, source, r, given_r, af, v, given_v)
