@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 from uavplan.planners import get_planner
-from uavplan.planners.apf import field_params, fly_field, force_reference
+from uavplan.planners.potential.apf import field_params, fly_field, force_reference
 from uavplan.scenarios import resolve
 
 

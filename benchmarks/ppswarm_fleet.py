@@ -52,7 +52,7 @@ PAPER = {(40, 5): 149.9, (40, 1): 81.2, (100, 1): 419.6, (100, 5): 778.3, (200, 
          (400, 5): 13898.4, (500, 1): 5847.5, (500, 5): 21636.0}  # fmt: skip
 DEFAULT_RUNS = ("40:5", "100:1", "200:1", "500:1", "500:5", "1000:1")
 #: the modules whose kernels count as the cost and validity kernels (issue 18, item 3)
-KERNEL_PACKAGES = ("uavplan.problems", "uavplan.world", "uavplan.planners.fleet_objective")
+KERNEL_PACKAGES = ("uavplan.problems", "uavplan.world", "uavplan.planners.fleet.fleet_objective")
 
 
 # ---------------------------------------------------------------------------- child
@@ -86,7 +86,7 @@ def child(a: argparse.Namespace) -> None:
     spent = _time_kernels() if a.kernel_share else None
     from uavplan.io.plan_file import plan_document
     from uavplan.planners import get_planner
-    from uavplan.planners.fleet_plan import FleetPlan
+    from uavplan.planners.fleet.fleet_plan import FleetPlan
     from uavplan.scenarios import resolve
     from uavplan.verify import verify_plan
 

@@ -44,7 +44,7 @@ def run(
     from uavplan.compile_clock import Stopwatch
     from uavplan.io.plan_file import parse_plan, plan_document
     from uavplan.planners import get_planner
-    from uavplan.planners.fleet_plan import plan_all
+    from uavplan.planners.fleet.fleet_plan import plan_all
     from uavplan.scenarios import resolve
     from uavplan.verify import verify_trajectories
     from uavplan.verify.executions import sample_fleet

@@ -4,7 +4,8 @@ Run: ``python benchmarks/rrt_star_nn.py [--repeats N] [--seeds S] [--threads T]`
 
 It prints, measured in this one run:
 
-* **Nearest neighbour.** Queries/s of :class:`uavplan.planners.rrt_star.GridIndex` (``nearest``
+* **Nearest neighbour.** Queries/s of :class:`uavplan.planners.sampling.rrt_star.GridIndex`
+(``nearest``
   and ``near(r)``, with the cell RRT* would use for that many nodes) against a
   brute-force scan of every point on the same queries: the NumPy reference
   (:func:`nearest_brute` / :func:`near_brute`, what the tests compare against) and a compiled
@@ -39,8 +40,8 @@ import numpy as np
 from numba import njit
 
 from _timing import best_time
-from uavplan.planners.grid_index import GridIndex, near_brute, nearest_brute
-from uavplan.planners.rrt_star import RRTStarConfig, RRTStarTree, rrt_star
+from uavplan.planners.sampling.grid_index import GridIndex, near_brute, nearest_brute
+from uavplan.planners.sampling.rrt_star import RRTStarConfig, RRTStarTree, rrt_star
 from uavplan.scenarios import load_builtin
 
 

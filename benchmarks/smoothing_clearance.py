@@ -26,8 +26,8 @@ import numpy as np
 
 from uavplan.io.plan_file import plan_document
 from uavplan.planners import get_planner
-from uavplan.planners.fleet_plan import FleetPlan
-from uavplan.planners.prioritized import smooth_fleet
+from uavplan.planners.fleet.fleet_plan import FleetPlan
+from uavplan.planners.fleet.prioritized import smooth_fleet
 from uavplan.scenarios import resolve
 from uavplan.verify import verify_plan
 from uavplan.world.fleet_tasks import with_fleet

@@ -274,10 +274,10 @@ def kernel_targets() -> list[tuple[Any, str]]:
     """The compiled kernels and the validator's and cost's entry points an RRT* run calls:
     the Numba loop, the tightening kernels, the Python loop's batched segment checks and tree
     kernels, and the path evaluations."""
-    from uavplan.planners import _rrt_star_kernels as K
-    from uavplan.planners import _tighten_kernels as T
-    from uavplan.planners import grid_index as G
-    from uavplan.planners import rrt_star as R
+    from uavplan.planners.sampling import _rrt_star_kernels as K
+    from uavplan.planners.sampling import _tighten_kernels as T
+    from uavplan.planners.sampling import grid_index as G
+    from uavplan.planners.sampling import rrt_star as R
     from uavplan.problems.path_problem import PathProblem
 
     return [(K, "grow"), (T, "band"), (T, "shortcut"), (MotionValidator, "paths_valid"),

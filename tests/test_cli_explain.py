@@ -12,7 +12,7 @@ import pytest
 from typer.testing import CliRunner
 
 from uavplan.cli import app
-from uavplan.planners.events import KINDS, Event
+from uavplan.planners.core.events import KINDS, Event
 
 
 @pytest.fixture(scope="module")

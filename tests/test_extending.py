@@ -13,7 +13,7 @@ import pytest
 
 from planners import test_planners as contract
 from uavplan.planners import available_planners, get_planner
-from uavplan.planners.registry import unregister_planner
+from uavplan.planners.core.registry import unregister_planner
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "extending.md"
 

@@ -23,7 +23,7 @@ HERE = Path(__file__).resolve().parent
 KERNEL_MODULES = ("uavplan.world.geometry", "uavplan.world._terrain_kernels",
                   "uavplan.world.reservations", "uavplan.problems.costs",
                   "uavplan.problems._validity_kernels",
-                  "uavplan.planners.fleet_objective")  # fmt: skip
+                  "uavplan.planners.fleet.fleet_objective")  # fmt: skip
 
 
 def _row_sums(x):  # pragma: no cover - numba

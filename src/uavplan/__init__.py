@@ -57,8 +57,8 @@ def _html(obj: Any) -> str:
 
 #: What shows itself in Jupyter: (module, class) of plans, UAV results and scenarios.
 DISPLAYED = (
-    ("uavplan.planners.fleet_plan", "FleetPlan"),
-    ("uavplan.planners.results", "PlanResult"),
+    ("uavplan.planners.fleet.fleet_plan", "FleetPlan"),
+    ("uavplan.planners.core.results", "PlanResult"),
     ("uavplan.world.scenario", "Scenario"),
 )
 

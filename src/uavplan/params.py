@@ -1,7 +1,7 @@
 """Declared configuration fields, below every layer: :func:`option` gives a config
 dataclass's field its one-line documentation and its valid values (range, choices), which the
 configs check when built (:func:`bad_value`) and ``uavplan planners NAME`` prints
-(:func:`describe_options`). Planner options (``uavplan.planners.options``) and optimizer
+(:func:`describe_options`). Planner options (``uavplan.planners.core.options``) and optimizer
 hyperparameters (``uavplan.optimizers.base.OptimizerConfig``) both use it."""
 
 from __future__ import annotations

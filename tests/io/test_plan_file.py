@@ -22,7 +22,7 @@ from uavplan.io.plan_file import (
     write_plan_file,
 )
 from uavplan.planners import available_planners, get_planner
-from uavplan.planners.fleet_plan import plan_all
+from uavplan.planners.fleet.fleet_plan import plan_all
 from uavplan.scenarios import resolve
 from uavplan.world.fleet_tasks import with_fleet
 

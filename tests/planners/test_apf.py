@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from uavplan.planners import get_planner
-from uavplan.planners.apf import field_params, fly_field
+from uavplan.planners.potential.apf import field_params, fly_field
 from uavplan.problems.path_problem import PathProblem
 from uavplan.scenarios import resolve
 from uavplan.world import UAV, Bounds, Scenario, Task
@@ -83,7 +83,7 @@ def test_reservation_table_gives_back_its_trajectories() -> None:
 
 
 def test_fused_apf_escapes_the_cup_that_catches_the_classical_one() -> None:
-    from uavplan.planners.apf_fused import curvature
+    from uavplan.planners.potential.apf_fused import curvature
 
     sc = resolve("rscdwoa-static")
     r = get_planner("rscdwoa-apf", pop_size=10).plan(sc, 0, budget=5, seed=0)
@@ -100,7 +100,7 @@ def test_fused_apf_fits_the_optimizers_schedule_to_the_run(
 ) -> None:
     """The sub-goal optimizer's schedule ends with the run: WOA's ``a`` reaches 0 at the
     run's last iteration, not at the optimizer's default t_max of 100."""
-    import uavplan.planners.apf_fused as fused
+    import uavplan.planners.potential.apf_fused as fused
 
     made = []
     real = fused.get_optimizer
@@ -134,7 +134,7 @@ def test_fused_apf_fits_the_optimizers_schedule_to_the_run(
 def test_fused_apf_sub_goals_in_a_corridor_and_the_share_that_arrives(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    import uavplan.planners.apf_fused as fused
+    import uavplan.planners.potential.apf_fused as fused
 
     sc = resolve("rscdwoa-static")
     task = sc.tasks[0]
@@ -164,7 +164,7 @@ def test_fused_apf_sub_goals_in_a_corridor_and_the_share_that_arrives(
 def test_kernel_force_matches_the_numpy_reference() -> None:
     import dataclasses
 
-    from uavplan.planners.apf import force_at, force_reference
+    from uavplan.planners.potential.apf import force_at, force_reference
 
     rng = np.random.default_rng(3)
     for name in ("rscdwoa-mixed", "rscdwoa-static", "hrmaga-virtual", "ppswarm1"):
@@ -190,7 +190,7 @@ def test_a_moving_obstacle_with_many_samples_is_found_on_the_right_interval() ->
     obstacle elsewhere on the curve)."""
     import dataclasses
 
-    from uavplan.planners.apf import force_at
+    from uavplan.planners.potential.apf import force_at
 
     sc = resolve("rscdwoa-mixed")
     o = sc.moving_obstacles[0]

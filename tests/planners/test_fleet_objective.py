@@ -1,6 +1,7 @@
 """The fleet engine's swarm evaluation: only the particles that can improve on their personal
 best are checked (``PathProblem.evaluate_cv(below=...)``), in one kernel where it applies
-(``uavplan.planners.fleet_objective``), against the reference (every particle, NumPy terms)."""
+(``uavplan.planners.fleet.fleet_objective``), against the reference (every particle, NumPy
+terms)."""
 
 from __future__ import annotations
 
@@ -11,9 +12,9 @@ import pytest
 
 from uavplan.optimizers.constraints import infinite_if_violated
 from uavplan.planners import get_planner
-from uavplan.planners.base import separated_problem
-from uavplan.planners.fleet_objective import FleetObjective
-from uavplan.planners.prioritized import PrioritizedPlanner
+from uavplan.planners.core.base import separated_problem
+from uavplan.planners.fleet.fleet_objective import FleetObjective
+from uavplan.planners.fleet.prioritized import PrioritizedPlanner
 from uavplan.problems.encoding import CartesianEncoding
 from uavplan.problems.path_problem import PathProblem
 from uavplan.scenarios import resolve

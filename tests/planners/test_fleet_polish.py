@@ -1,5 +1,5 @@
-"""The CLI's repair of a fleet's looping or failing UAVs (``planners/fleet_polish.py``): what it
-keeps flies (the independent verifier agrees), it is deterministic, and it leaves alone a fleet
+"""The CLI's repair of a fleet's looping or failing UAVs (``planners/fleet/fleet_polish.py``): what
+it keeps flies (the independent verifier agrees), it is deterministic, and it leaves alone a fleet
 that needs nothing."""
 
 from __future__ import annotations
@@ -11,11 +11,16 @@ import pytest
 
 from uavplan.io.plan_file import plan_document
 from uavplan.planners import get_planner
-from uavplan.planners.base import separated_problem
-from uavplan.planners.fleet_plan import FleetPlan
-from uavplan.planners.fleet_polish import _others_table, cut_loops, first_crossing, polish_fleet
-from uavplan.planners.flight import declare, fly
-from uavplan.planners.results import FleetResult, PlanResult, make_result
+from uavplan.planners.core.base import separated_problem
+from uavplan.planners.core.flight import declare, fly
+from uavplan.planners.core.results import FleetResult, PlanResult, make_result
+from uavplan.planners.fleet.fleet_plan import FleetPlan
+from uavplan.planners.fleet.fleet_polish import (
+    _others_table,
+    cut_loops,
+    first_crossing,
+    polish_fleet,
+)
 from uavplan.scenarios import resolve
 from uavplan.verify import verify_plan
 from uavplan.world import Scenario
@@ -121,7 +126,7 @@ def test_a_fleet_that_needs_nothing_is_left_as_it_is(planned) -> None:  # type: 
 def test_the_last_resort_takes_off_after_every_other_uav_has_landed() -> None:
     """Under a drifting schedule: the latest landing of the flights reserved, plus the
     take-off error; the nominal table: the last landing."""
-    from uavplan.planners.fleet_polish import _after_all
+    from uavplan.planners.fleet.fleet_polish import _after_all
     from uavplan.world.execution import DEFAULT, widened
     from uavplan.world.reservations import ReservationTable
 
@@ -142,7 +147,7 @@ def test_the_last_resort_takes_off_after_every_other_uav_has_landed() -> None:
 def test_a_single_uav_planner_run_as_a_fleet_is_repaired_too() -> None:
     """The prioritized frame around a single-UAV planner (here the potential field) gets the
     same repair as a fleet planner, and what it keeps passes the verifier under the model."""
-    from uavplan.planners.fleet_plan import plan_all
+    from uavplan.planners.fleet.fleet_plan import plan_all
     from uavplan.world.execution import DEFAULT, widened
 
     given = with_fleet(resolve("ppswarm1"), 6, seed=0)

@@ -1,4 +1,4 @@
-"""A planned polyline's flight (planners/flight.py): timing within the UAV's speed range."""
+"""A planned polyline's flight (planners/core/flight.py): timing within the UAV's speed range."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from uavplan.planners.flight import fly, pose_times
+from uavplan.planners.core.flight import fly, pose_times
 from uavplan.problems.validity import speed_violations
 from uavplan.scenarios import resolve
 

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from uavplan.planners import PlannerError, get_planner
-from uavplan.planners.hr_maga import HRMAGA
+from uavplan.planners.population.hr_maga import HRMAGA
 from uavplan.problems.path_problem import PathProblem
 from uavplan.world.obstacles import DangerArea, UncertainArea
 from uavplan.world.pyramid import terrain_pyramid
@@ -105,7 +105,7 @@ def test_segment_end_moves_to_the_nearest_point_outside_the_area() -> None:
 def admit_reference(p, areas, sc, level=None):  # type: ignore[no-untyped-def]
     """Sect. III-C's move and the band, one point at a time in plain Python (the first form of
     ``HRMAGA._admit``): the reference of :meth:`HRMAGA._admit_all`."""
-    from uavplan.planners.hr_maga import _lookup
+    from uavplan.planners.population.hr_maga import _lookup
 
     q = p.copy()
     lo, hi = sc.bounds.lo, sc.bounds.hi
@@ -191,7 +191,7 @@ def test_evaluation_budget_is_kept_and_shared_by_the_levels() -> None:
 
 
 def test_hull_chains_go_both_ways_around_and_need_the_ends_on_the_hull() -> None:
-    from uavplan.planners.hr_maga import _hull_chains
+    from uavplan.planners.population.hr_maga import _hull_chains
 
     # ends west and east of a square: one chain over its north side, one over its south
     pts = np.array([[0.0, 0.5], [3.0, 0.5], [1, 0], [2, 0], [2, 1], [1, 1]])

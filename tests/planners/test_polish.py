@@ -1,4 +1,4 @@
-"""The CLI's polish (:mod:`uavplan.planners.polish`): tightening never raises the cost, keeps
+"""The CLI's polish (:mod:`uavplan.planners.core.polish`): tightening never raises the cost, keeps
 start and goal and every segment valid, and does pull a zigzag straight."""
 
 from __future__ import annotations
@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from uavplan.planners import get_planner
-from uavplan.planners.flight import flight_validator
-from uavplan.planners.polish import polished, tighten
+from uavplan.planners.core.flight import flight_validator
+from uavplan.planners.core.polish import polished, tighten
 from uavplan.scenarios import resolve
 
 

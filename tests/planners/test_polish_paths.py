@@ -16,7 +16,7 @@ from uavplan.world.geometry import track_crosses_itself
 
 
 def test_first_sentence_keeps_abbreviations() -> None:
-    from uavplan.planners.registry import first_sentence
+    from uavplan._text import first_sentence
 
     doc = "P-MAGA (HR-MAGA Alg. 1): agents,\n    crossover. More here.\n\nOther paragraph."
     assert first_sentence(doc) == "P-MAGA (HR-MAGA Alg. 1): agents, crossover."

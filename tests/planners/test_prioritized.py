@@ -13,9 +13,9 @@ from uavplan.cli import app
 from uavplan.io.plan_file import plan_document
 from uavplan.optimizers.constraints import Constrained
 from uavplan.planners import PlannerError, get_planner
-from uavplan.planners.base import separated_problem
-from uavplan.planners.fleet_plan import FleetPlan, plan_all
-from uavplan.planners.prioritized import (
+from uavplan.planners.core.base import separated_problem
+from uavplan.planners.fleet.fleet_plan import FleetPlan, plan_all
+from uavplan.planners.fleet.prioritized import (
     polyline_with_n_vertices,
     resample_by_length,
 )
@@ -251,7 +251,7 @@ def test_every_feasible_fleet_passes_the_verifier(name: str, planner: str) -> No
 
 def test_departure_delay_retries_until_a_later_take_off_is_clear(monkeypatch, fleet3) -> None:
     """A UAV whose low level finds nothing conflict-free tries later take-offs (max_delays)."""
-    from uavplan.planners.prioritized import PrioritizedPlanner
+    from uavplan.planners.fleet.prioritized import PrioritizedPlanner
 
     real = PrioritizedPlanner._low_level
     calls: list[float] = []
@@ -400,7 +400,7 @@ def test_blocked_flight_waits_on_the_ground_before_replanning(monkeypatch, fleet
     """In-loop, a UAV whose flights are all blocked tries, for each later take-off, first its
     best candidates re-timed (no new low-level run), then a re-plan from there; the wait is
     what the plan declares and the verifier checks."""
-    import uavplan.planners.prioritized as pr
+    import uavplan.planners.fleet.prioritized as pr
 
     real_fly, real_low = pr.fly, pr.PrioritizedPlanner._low_level
     lows: list[float] = []

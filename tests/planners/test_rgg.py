@@ -7,7 +7,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 from uavplan.planners import PlannerError, get_planner
-from uavplan.planners.rgg import (
+from uavplan.planners.sampling.rgg import (
     RGG,
     build_rgg,
     connection_radius,
@@ -201,7 +201,7 @@ def test_shortest_path_reuses_the_graph_matrix_with_the_same_answers() -> None:
     from scipy.sparse import csr_matrix
     from scipy.sparse.csgraph import dijkstra
 
-    from uavplan.planners.rgg import build_rgg
+    from uavplan.planners.sampling.rgg import build_rgg
     from uavplan.scenarios import resolve
 
     for i in range(6):

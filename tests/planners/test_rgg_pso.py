@@ -8,8 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from uavplan.planners import PlannerError, get_planner
-from uavplan.planners.rgg import feasibility_problem, rgg_candidates
-from uavplan.planners.rgg_pso import conquer, fit_interior, initial_swarm
+from uavplan.planners.sampling.rgg import feasibility_problem, rgg_candidates
+from uavplan.planners.sampling.rgg_pso import conquer, fit_interior, initial_swarm
 from uavplan.problems import PathProblem
 from uavplan.problems.validity import shortest_subsequence
 from uavplan.problems.variable_length import (

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from uavplan.planners import PlannerError, get_planner
-from uavplan.planners.grid_index import GridIndex, near_brute, nearest_brute
-from uavplan.planners.rrt_star import (
+from uavplan.planners.sampling.grid_index import GridIndex, near_brute, nearest_brute
+from uavplan.planners.sampling.rrt_star import (
     RRTStarConfig,
     RRTStarPlanner,
     RRTStarTree,

@@ -1,4 +1,4 @@
-"""RRT*'s Numba loop (:func:`uavplan.planners._rrt_star_kernels.grow`) against the Python
+"""RRT*'s Numba loop (:func:`uavplan.planners.sampling._rrt_star_kernels.grow`) against the Python
 reference (:meth:`RRTStarTree.iterate`): the same tree, node for node, on random 3-D worlds."""
 
 from __future__ import annotations
@@ -7,9 +7,9 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from uavplan.planners import _tighten_kernels as T
 from uavplan.planners import get_planner
-from uavplan.planners.rrt_star import RRTStarConfig, RRTStarTree, validity_problem
+from uavplan.planners.sampling import _tighten_kernels as T
+from uavplan.planners.sampling.rrt_star import RRTStarConfig, RRTStarTree, validity_problem
 from uavplan.problems.validity import MotionValidator
 from uavplan.scenarios import resolve
 from uavplan.world import AltitudeBand, Bounds, Circle, Cylinder, Scenario, Task
@@ -178,7 +178,7 @@ def test_tighten_option_shortens_and_stays_valid() -> None:
 
 
 def test_distinct_goal_nodes() -> None:
-    from uavplan.planners import _rrt_star_kernels as K
+    from uavplan.planners.sampling import _rrt_star_kernels as K
 
     sc = random_world(3, 12, None)
     tree = RRTStarTree(sc, None, RRTStarConfig(goal_radius=150.0), np.random.default_rng(1))

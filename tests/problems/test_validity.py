@@ -165,7 +165,7 @@ def _all_pairs_shortcut(v: MotionValidator, p: np.ndarray) -> np.ndarray:
 
 
 def test_greedy_shortcut_is_valid_never_longer_and_matches_the_all_pairs_form() -> None:
-    from uavplan.planners.rrt_star import RRTStarConfig, rrt_star, validity_problem
+    from uavplan.planners.sampling.rrt_star import RRTStarConfig, rrt_star, validity_problem
 
     sc = resolve("spso")
     v = validity_problem(sc)

@@ -7,7 +7,7 @@ import pytest
 
 from uavplan import notebook_display
 from uavplan.planners import get_planner
-from uavplan.planners.fleet_plan import plan_all
+from uavplan.planners.fleet.fleet_plan import plan_all
 from uavplan.scenarios import resolve
 
 

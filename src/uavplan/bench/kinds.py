@@ -204,7 +204,7 @@ def run_fleet(spec: RunSpec) -> dict[str, Any]:
     ``flown_verified``) and informative smoothed paths if any."""
     from uavplan.io.plan_file import plan_document
     from uavplan.planners import get_planner
-    from uavplan.planners.fleet_plan import FleetPlan
+    from uavplan.planners.fleet.fleet_plan import FleetPlan
     from uavplan.verify import verify_plan
 
     p = spec.params

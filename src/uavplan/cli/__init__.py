@@ -60,7 +60,7 @@ def _as_sentences(t: typer.Typer) -> None:
     mid-sentence) and its line in the command list the first sentence."""
     import inspect
 
-    from uavplan.planners.registry import first_sentence
+    from uavplan._text import first_sentence
 
     for info in t.registered_commands:
         doc = info.help or (info.callback.__doc__ if info.callback else None)

@@ -2,7 +2,7 @@
 
 It reads the plan's story (``plan.json``'s ``diagnostics``: the strategy's attempts, the
 fleet's restarts, each UAV's later candidate, slower speed, later take-off, repair or failure,
-:mod:`uavplan.planners.events`) and has the independent verifier check every flown trajectory
+:mod:`uavplan.planners.core.events`) and has the independent verifier check every flown trajectory
 against the scenario under the plan's execution model: each failure it finds is a value (the
 check, the UAVs, the time, the distance or clearance and the bound). Then, for each UAV that
 fails or was rescued, what happened and why. Exit 0 when the plan flies and the verifier
@@ -22,7 +22,7 @@ from uavplan.cli._common import fail, load_world
 
 def story_lines(doc: dict[str, Any], report: Any, everyone: bool = False) -> list[str]:
     """The explanation of a plan (its JSON ``doc``) given the verifier's ``report`` on it."""
-    from uavplan.planners.events import Event
+    from uavplan.planners.core.events import Event
 
     diag = doc.get("diagnostics") or {}
     events = [Event.from_record(e) for e in diag.get("events", [])]

@@ -13,7 +13,7 @@ from rich.table import Table
 from uavplan.cli._common import compile_notice, err, fail, out, parse_params, print_table
 
 if TYPE_CHECKING:
-    from uavplan.planners.fleet_plan import FleetPlan
+    from uavplan.planners.fleet.fleet_plan import FleetPlan
 
 
 def write_plan(plan: FleetPlan, out: str | Path, figure: bool = True) -> list[Path]:

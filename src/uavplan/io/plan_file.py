@@ -62,8 +62,8 @@ from uavplan.world.terrain import not_a_regular_file
 MAX_PLAN_BYTES = 256 * 2**20
 
 if TYPE_CHECKING:
-    from uavplan.planners.fleet_plan import FleetPlan
-    from uavplan.planners.results import FleetResult, PlanResult
+    from uavplan.planners.core.results import FleetResult, PlanResult
+    from uavplan.planners.fleet.fleet_plan import FleetPlan
 
 FloatArray = NDArray[np.float64]
 
@@ -664,7 +664,7 @@ class FleetSpec(_Spec):
 
 
 class EventSpec(_Spec):
-    """One event of the plan's story (``uavplan.planners.events.KINDS``)."""
+    """One event of the plan's story (``uavplan.planners.core.events.KINDS``)."""
 
     kind: Literal["candidate", "slower", "waited", "delayed", "repaired", "unresolved",
                   "restart", "attempt"]  # fmt: skip

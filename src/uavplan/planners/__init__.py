@@ -1,8 +1,8 @@
 """Planners: ``plan(scenario, task, budget, seed) -> PlanResult``, found by name.
 
 Importing this package imports every module in it, each planner module registering its
-planners (:func:`~uavplan.planners.base.register_planner`): a new planner is a new module.
-See :mod:`uavplan.planners.base` for the framework and ``docs/extending.md`` for an example.
+planners (:func:`~uavplan.planners.core.base.register_planner`): a new planner is a new module.
+See :mod:`uavplan.planners.core.base` for the framework and ``docs/extending.md`` for an example.
 """
 
 from __future__ import annotations
@@ -10,12 +10,12 @@ from __future__ import annotations
 from typing import Any
 
 from uavplan._discovery import import_submodules
-from uavplan.planners.base import FleetPlanner, Planner
-from uavplan.planners.optimizer_planner import OptimizerPlanner
-from uavplan.planners.options import PlannerConfig, PlannerError, describe_options, option
-from uavplan.planners.registry import PlannerEntry, register_planner, registry
-from uavplan.planners.results import FleetResult, PlanResult
-from uavplan.planners.run import Outcome, Run
+from uavplan.planners.core.base import FleetPlanner, Planner
+from uavplan.planners.core.options import PlannerConfig, PlannerError, describe_options, option
+from uavplan.planners.core.registry import PlannerEntry, register_planner, registry
+from uavplan.planners.core.results import FleetResult, PlanResult
+from uavplan.planners.core.run import Outcome, Run
+from uavplan.planners.population.optimizer_planner import OptimizerPlanner
 
 import_submodules(__name__, __path__)  # registers every planner module's planners
 

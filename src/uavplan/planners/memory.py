@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from uavplan.planners.base import Planner
+    from uavplan.planners.core.base import Planner
     from uavplan.world import Scenario
 
 #: Bytes per DEM node: heights (8), the max-pyramid (about 8 / 3), the kernels' and the

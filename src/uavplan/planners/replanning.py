@@ -10,11 +10,11 @@ control period, 0.1 s). The repair's own compute time is measured; it misses the
 it exceeds ``latency``. The flown trajectory is the current plan up to that instant followed by
 the repaired plan.
 
-* :meth:`Planner.repair <uavplan.planners.base.Planner.repair>` (the default, every planner):
+* :meth:`Planner.repair <uavplan.planners.core.base.Planner.repair>` (the default, every planner):
   plan again from scratch, from the predicted state to the goal, on the world as now known (the
   baseline any reader asks for);
 * HR-MAGA overrides it: only the segments of the remaining plan that the new area touches are
-  re-optimized, on the finest level (:mod:`uavplan.planners.hr_maga`).
+  re-optimized, on the finest level (:mod:`uavplan.planners.population.hr_maga`).
 
 A revealed area whose interior the remaining plan does not enter needs no repair (the event is
 recorded as ``clear``). The mission is checked at the end, as flown, against the world with
@@ -35,9 +35,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.optimizers.base import Budget
-from uavplan.planners.base import Planner
-from uavplan.planners.flight import flight_validator
-from uavplan.planners.results import PlanResult
+from uavplan.planners.core.base import Planner
+from uavplan.planners.core.flight import flight_validator
+from uavplan.planners.core.results import PlanResult
 from uavplan.world.obstacles import UncertainArea
 from uavplan.world.scenario import Scenario, Task
 

@@ -32,7 +32,7 @@ optional times ``(pop, n)``.
   estimate, the heading change over the mean length of the two segments, at most
   ``(1 + TURN_RTOL) / turn_radius``; consecutive points with the same x, y are merged).
   A planned polyline is a geometric path and is not checked for them; the trajectory a UAV
-  flies (:mod:`uavplan.planners.flight`) is.
+  flies (:mod:`uavplan.planners.core.flight`) is.
 
 A point is valid when the zero-length segment at it is; a segment without times is flown from
 the task's start time at the UAV's speed.
@@ -781,7 +781,7 @@ def band_repair(
     ``max_points`` points. The horizontal track is unchanged (no loop can appear), start and
     goal are kept. Returns the repaired path when every segment then passes ``validator``, else
     None (a segment fails for a reason splitting cannot cure, such as a cylinder). Not in any
-    paper: the CLI's polish (:meth:`uavplan.planners.base.Planner.plan`) uses it."""
+    paper: the CLI's polish (:meth:`uavplan.planners.core.base.Planner.plan`) uses it."""
     sc = validator.scenario
     band = sc.altitude
     P = np.array(path, dtype=np.float64)

@@ -16,8 +16,8 @@ from uavplan.strategy.table import Strategy
 
 if TYPE_CHECKING:
     from uavplan.optimizers.base import Budget
-    from uavplan.planners.fleet_plan import FleetPlan
-    from uavplan.planners.run import ProgressCallback
+    from uavplan.planners.core.run import ProgressCallback
+    from uavplan.planners.fleet.fleet_plan import FleetPlan
     from uavplan.world.scenario import Scenario
 
 #: What an attempt was: a run of the strategy's planner, another planner run once beside it,
@@ -105,14 +105,14 @@ def execute(
     its planner (:func:`run_seeds`) and each of ``strategy.also`` once, the best kept
     (:func:`best_plan`); while the kept plan does not fly, each fallback once, the first that
     flies kept. Repair after planning as ``strategy.repair`` says
-    (:func:`~uavplan.planners.fleet_plan.plan_all`'s ``polish``: the same for every fleet).
+    (:func:`~uavplan.planners.fleet.fleet_plan.plan_all`'s ``polish``: the same for every fleet).
     Raises what the planners raise (ValueError for a scenario they refuse)."""
     from uavplan.planners import get_planner
 
     attempts: list[Attempt] = []
 
     def attempt(role: Role, name: str, options: Mapping[str, Any], root: int) -> Attempt:
-        from uavplan.planners.fleet_plan import plan_all
+        from uavplan.planners.fleet.fleet_plan import plan_all
 
         planner = get_planner(name, **dict(options))
         cb = (lambda uav: progress(uav, name)) if progress is not None else None
@@ -136,7 +136,7 @@ def execute(
                 break
     plan = attempts[kept].plan
     if len(attempts) > 1:  # the plan's story starts with the attempts
-        from uavplan.planners.events import Event
+        from uavplan.planners.core.events import Event
 
         told = tuple(Event("attempt", None, f"{a.role}: {a.planner} seed {a.seed}: cost "
                            f"{a.cost:.6g}, {'flies' if a.flies else 'does not fly'}"

@@ -28,7 +28,7 @@ The reasoning per kind (the measured figures are in ``docs/results.md``):
   are not open to such UAVs.
 
 A fleet has no fallback planners (minutes per try): its failing UAVs are repaired one by one
-instead (:mod:`uavplan.planners.fleet_polish`).
+instead (:mod:`uavplan.planners.fleet.fleet_polish`).
 """
 
 from __future__ import annotations
@@ -149,11 +149,11 @@ def scenario_kind(scenario: Scenario) -> ScenarioKind:
 
 def fallbacks_for(scenario: Scenario) -> tuple[tuple[str, Mapping[str, Any]], ...]:
     """The planners tried in order when a single UAV's plan does not fly: RRT* with its step
-    scaled to the map (:func:`~uavplan.planners.rrt_star.map_scaled_options`), then
+    scaled to the map (:func:`~uavplan.planners.sampling.rrt_star.map_scaled_options`), then
     RGG-PSO+; none for a fleet."""
     if len(scenario.tasks) > 1:
         return ()
-    from uavplan.planners.rrt_star import map_scaled_options
+    from uavplan.planners.sampling.rrt_star import map_scaled_options
 
     opts: dict[str, Mapping[str, Any]] = {"rrt-star": map_scaled_options(scenario)}
     return tuple((name, opts.get(name, {})) for name in SINGLE_FALLBACKS)

@@ -17,7 +17,7 @@ from matplotlib.patches import Circle as CirclePatch
 from matplotlib.patches import Polygon as PolygonPatch
 from matplotlib.patches import Rectangle
 
-from uavplan.planners.results import PlanResult
+from uavplan.planners.core.results import PlanResult
 from uavplan.world.scenario import Scenario
 
 _MAX_SURFACE = 120  # grid nodes per side drawn in the 3-D view

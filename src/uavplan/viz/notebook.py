@@ -58,7 +58,7 @@ _HEAD = ["UAV", "planned", "flown", "cost", "m", "flight s"]
 
 
 def plan_html(plan: Any) -> str:
-    """A :class:`~uavplan.planners.fleet_plan.FleetPlan`: its verdict, the UAVs' table (the
+    """A :class:`~uavplan.planners.fleet.fleet_plan.FleetPlan`: its verdict, the UAVs' table (the
     first 25) and the figure."""
     n = len(plan.results)
     ok = sum(bool(r.flown_feasible) for r in plan.results)
@@ -73,7 +73,7 @@ def plan_html(plan: Any) -> str:
 
 
 def result_html(result: Any) -> str:
-    """One UAV's :class:`~uavplan.planners.results.PlanResult`: its row."""
+    """One UAV's :class:`~uavplan.planners.core.results.PlanResult`: its row."""
     return f"<div>{_table(_result_rows([result]), _HEAD)}</div>"
 
 

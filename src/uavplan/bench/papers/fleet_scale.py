@@ -1,6 +1,6 @@
 """Not a paper's: how far the flown-fleet guarantee scales. PPSwarm's engine in our
 default mode (each UAV's Dubins-smoothed, timed flight checked while planning, reserved and
-declared; the rescues of :mod:`uavplan.planners.prioritized`) with ``N_restart = 1`` on 40 to
+declared; the rescues of :mod:`uavplan.planners.fleet.prioritized`) with ``N_restart = 1`` on 40 to
 1,000 UAVs: the four PPSwarm maps, the flat open map (``open``, the crowd alone) and the dense
 field (``dense``, >= 40 cylinders with narrow passages). Every plan is checked by the
 independent verifier as flown (kinematic limits included).

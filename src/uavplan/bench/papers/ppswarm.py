@@ -326,7 +326,7 @@ def plans() -> list[ExperimentPlan]:
             scenarios=scen4,
             # graded infeasibility for every method: with the literal infinite costs of Sect. 2
             # the uniformly seeded baselines end with most UAVs infeasible (see
-            # uavplan.planners.prioritized); feasible paths still cost exactly F
+            # uavplan.planners.fleet.prioritized); feasible paths still cost exactly F
             algorithms=(
                 Algorithm("ppswarm", "ppswarm", {**PAPER, "constraints": "feasibility-first"}),
                 *(

@@ -161,7 +161,7 @@ def curvature_profile(points: np.ndarray, n: int = PROFILE) -> tuple[list[float]
     """Curvature (1/km) and its derivative along the track (1/km^2) at ``n`` points of the
     normalized horizontal arc length (the largest value in each of ``n`` equal bins, so that a
     sharp turn is not averaged away; 0 where a bin holds no interior point)."""
-    from uavplan.planners.apf_fused import curvature
+    from uavplan.planners.potential.apf_fused import curvature
 
     p = np.asarray(points, dtype=np.float64)[:, :2]
     k = curvature(p) * 1000.0
@@ -180,7 +180,7 @@ def curvature_profile(points: np.ndarray, n: int = PROFILE) -> tuple[list[float]
 
 
 def _curv_stats(points: np.ndarray) -> tuple[float, float]:
-    from uavplan.planners.apf_fused import curvature
+    from uavplan.planners.potential.apf_fused import curvature
 
     k = curvature(points)
     return (
@@ -195,7 +195,7 @@ def run_rscdwoa(spec: RunSpec) -> dict[str, Any]:
     planner's own otherwise), verified as flown; per-UAV figures as lists."""
     from uavplan.io.plan_file import plan_document
     from uavplan.planners import get_planner
-    from uavplan.planners.fleet_plan import plan_all
+    from uavplan.planners.fleet.fleet_plan import plan_all
     from uavplan.scenarios import resolve
     from uavplan.verify import verify_plan
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from uavplan.planners.fleet_plan import FleetPlan
+    from uavplan.planners.fleet.fleet_plan import FleetPlan
 
 #: The event kinds and what each says.
 KINDS: Mapping[str, str] = {

@@ -4,7 +4,7 @@
 LH order), each with the planner's own search against a reservation table of the flights of
 the UAVs planned before it (the search then sees PPSwarm's F5: a path that comes closer than
 S2 to a reserved UAV at some instant costs infinity), and reserves the flight it declares
-(:mod:`uavplan.planners.flight`), so that separation holds between the trajectories that will
+(:mod:`uavplan.planners.core.flight`), so that separation holds between the trajectories that will
 be flown. A planner whose search cannot see other UAVs (``supports_reservations`` false:
 RRT*, the RGG) is refused with a message naming the planners that can.
 """
@@ -18,11 +18,11 @@ import numpy as np
 
 from uavplan.compile_clock import Stopwatch
 from uavplan.optimizers.base import Budget
-from uavplan.planners.base import Planner
-from uavplan.planners.options import PlannerError
-from uavplan.planners.registry import registry
-from uavplan.planners.results import FleetResult, PlanResult
-from uavplan.planners.run import ProgressCallback
+from uavplan.planners.core.base import Planner
+from uavplan.planners.core.options import PlannerError
+from uavplan.planners.core.registry import registry
+from uavplan.planners.core.results import FleetResult, PlanResult
+from uavplan.planners.core.run import ProgressCallback
 from uavplan.world.geometry import as_3d
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario

@@ -1,5 +1,6 @@
 """PPSwarm (Meng, Chen & Qu 2024, *Drones* 8, 192) and the prioritized baselines of its Table 2:
-two named configurations of one engine, :class:`uavplan.planners.prioritized.PrioritizedPlanner`
+two named configurations of one engine,
+:class:`uavplan.planners.fleet.prioritized.PrioritizedPlanner`
 (see it for every choice where the paper is silent).
 
 * ``ppswarm``: RRT* initial paths (Alg. 1), prioritized planning with LH priorities and
@@ -17,8 +18,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from uavplan.planners.prioritized import PrioritizedPlanner
-from uavplan.planners.registry import register_planner
+from uavplan.planners.core.registry import register_planner
+from uavplan.planners.fleet.prioritized import PrioritizedPlanner
 
 #: PPSwarm Table 1.
 PPSWARM: dict[str, Any] = {

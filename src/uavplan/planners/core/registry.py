@@ -9,8 +9,9 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
-from uavplan.planners.base import FleetPlanner, Planner
-from uavplan.planners.options import PlannerError
+from uavplan._text import first_sentence
+from uavplan.planners.core.base import FleetPlanner, Planner
+from uavplan.planners.core.options import PlannerError
 
 
 @dataclass(frozen=True)
@@ -35,19 +36,6 @@ _REGISTRY: dict[str, PlannerEntry] = {}
 _PROVIDERS: list[Callable[[], None]] = []
 
 P = TypeVar("P", bound=type[Planner])
-
-
-def first_sentence(doc: str) -> str:
-    """A docstring's first sentence on one line (up to the first full stop followed by a space
-    or the end of its paragraph), without "(see the module docstring)" remarks."""
-    import re
-
-    para = " ".join(doc.strip().split("\n\n")[0].split())
-    # a full stop ends the sentence unless it ends an abbreviation (Alg. 1, Sect. 5, e.g. ...)
-    end = re.search(r"(?<!\bAlg)(?<!\bAlgs)(?<!\bSect)(?<!\bEq)(?<!\bEqs)(?<!\bFig)(?<!\bFigs)"
-                    r"(?<!\be\.g)(?<!\bi\.e)(?<!\bvs)\.(\s|$)", para)  # fmt: skip
-    text = para if end is None else para[: end.start() + 1]
-    return text.replace(" (see the module docstring)", "").replace("; see the module docstring", "")
 
 
 @typing.overload

@@ -45,10 +45,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.optimizers.base import Budget
-from uavplan.planners.options import option
-from uavplan.planners.registry import register_planner
-from uavplan.planners.rgg_pso import RGGPSOConfig, RGGPSOPlanner, Stats, conquer
-from uavplan.planners.run import Outcome, Run
+from uavplan.planners.core.options import option
+from uavplan.planners.core.registry import register_planner
+from uavplan.planners.core.run import Outcome, Run
+from uavplan.planners.sampling.rgg_pso import RGGPSOConfig, RGGPSOPlanner, Stats, conquer
 from uavplan.problems.variable_length import evaluate_many, evaluate_paths, particle_to_path
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task

@@ -1,7 +1,7 @@
 """Post-processing of a 3-D polyline in Numba, judged by the compiled segment check of the
 motion validator (:attr:`uavplan.problems.validity.MotionValidator.segment_kernel`): the
 greedy line-of-sight shortcut and an elastic-band tightening (RRT*'s ``tighten`` option,
-:mod:`uavplan.planners.rrt_star`). References in Python: :func:`shortcut_reference` is
+:mod:`uavplan.planners.sampling.rrt_star`). References in Python: :func:`shortcut_reference` is
 :func:`uavplan.problems.validity.greedy_shortcut`'s rule, :func:`band_reference` the band's;
 the tests compare them.
 
@@ -24,7 +24,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from uavplan.planners._rrt_star_kernels import _check, dist3
+from uavplan.planners.sampling._rrt_star_kernels import _check, dist3
 
 FloatArray = NDArray[np.float64]
 

@@ -17,17 +17,13 @@ from dataclasses import dataclass
 from typing import Any
 
 from uavplan import optimizers
+from uavplan._text import first_sentence
 from uavplan.optimizers.base import fit_schedule
 from uavplan.optimizers.constraints import RULES, Constrained
-from uavplan.planners.base import Planner
-from uavplan.planners.options import PlannerConfig, option
-from uavplan.planners.registry import (
-    add_provider,
-    first_sentence,
-    is_registered,
-    register_planner,
-)
-from uavplan.planners.run import Outcome, Run
+from uavplan.planners.core.base import Planner
+from uavplan.planners.core.options import PlannerConfig, option
+from uavplan.planners.core.registry import add_provider, is_registered, register_planner
+from uavplan.planners.core.run import Outcome, Run
 from uavplan.problems.encoding import ENCODINGS
 
 

@@ -29,10 +29,10 @@ engine, and every optimizer is a configuration of the optimizer planner. Lookups
 (``get_planner``, ``available_planners``) live in :mod:`uavplan.planners`, which imports the
 planner modules; nothing here imports a planner.
 
-Modules: :mod:`~uavplan.planners.options` (``option``, config bases, errors),
-:mod:`~uavplan.planners.results` (``PlanResult``, ``FleetResult``, ``make_result``),
-:mod:`~uavplan.planners.run` (``Termination``, ``Tracker``, ``Run``, ``Outcome``),
-:mod:`~uavplan.planners.registry` (``register_planner``), and this one (``Planner``,
+Modules: :mod:`~uavplan.planners.core.options` (``option``, config bases, errors),
+:mod:`~uavplan.planners.core.results` (``PlanResult``, ``FleetResult``, ``make_result``),
+:mod:`~uavplan.planners.core.run` (``Termination``, ``Tracker``, ``Run``, ``Outcome``),
+:mod:`~uavplan.planners.core.registry` (``register_planner``), and this one (``Planner``,
 ``FleetPlanner``).
 
 Planners never print, plot or read files.
@@ -53,8 +53,8 @@ from numpy.typing import NDArray
 from uavplan import optimizers
 from uavplan.compile_clock import Stopwatch
 from uavplan.optimizers.base import Budget, OptimizerConfig, OptimizerError
-from uavplan.planners.flight import declare, fly
-from uavplan.planners.options import (
+from uavplan.planners.core.flight import declare, fly
+from uavplan.planners.core.options import (
     FleetPlannerConfig,
     OptionError,
     Options,
@@ -63,9 +63,9 @@ from uavplan.planners.options import (
     bad_value,
     type_hints,
 )
-from uavplan.planners.polish import polished
-from uavplan.planners.results import FleetResult, PlanResult, make_result
-from uavplan.planners.run import Outcome, ProgressCallback, Run, Termination, Tracker
+from uavplan.planners.core.polish import polished
+from uavplan.planners.core.results import FleetResult, PlanResult, make_result
+from uavplan.planners.core.run import Outcome, ProgressCallback, Run, Termination, Tracker
 from uavplan.problems.path_problem import PRESETS, SEPARATION_TERM, PathProblem
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
@@ -101,7 +101,7 @@ class Planner(ABC):
     deterministic: ClassVar[bool] = False
     anytime: ClassVar[bool] = True
     #: its path is a trajectory stepped in time within the UAV's limits (flown as planned if
-    #: it passes every check, see :func:`~uavplan.planners.flight.fly`)
+    #: it passes every check, see :func:`~uavplan.planners.core.flight.fly`)
     steps_in_time: ClassVar[bool] = False
     #: whether its search sees moving obstacles in time (False: refused on such a scenario)
     handles_moving: ClassVar[bool] = True
@@ -226,7 +226,7 @@ class Planner(ABC):
         """Refuse what this planner cannot plan: a dimension it does not handle, a task
         outside the bounds or of the wrong dimension, moving obstacles it cannot see in time."""
         if scenario.moving_obstacles and not self.handles_moving:
-            from uavplan.planners.registry import registry
+            from uavplan.planners.core.registry import registry
 
             able = sorted(n for n, e in registry().items() if e.cls.handles_moving)
             raise PlannerError(
@@ -271,13 +271,13 @@ class Planner(ABC):
         iterations; default :attr:`default_iterations`) from ``seed``; ``callback(iteration,
         best)`` after every iteration may return True to stop. ``reservations``: other UAVs'
         flights to keep S2 from (planners with :attr:`supports_reservations` only).
-        ``polish``: the found path is then polished (:func:`~uavplan.planners.polish.polished`:
+        ``polish``: the found path is then polished (:func:`~uavplan.planners.core.polish.polished`:
         terrain following, tightening and line-of-sight shortcuts; ``info["polished"]`` says
         what changed); not for planners that step in time, nor with reservations. The CLI
         polishes unless ``--raw``; the experiments never do (the papers' numbers are the
         optimizers' own).
 
-        The result declares its flight (:mod:`uavplan.planners.flight`): the polyline itself,
+        The result declares its flight (:mod:`uavplan.planners.core.flight`): the polyline itself,
         or with a turn radius its Dubins-smoothed version, checked as it will be flown."""
         t = task if isinstance(task, Task) else _task(scenario, task)
         self.check_input(scenario, t)

@@ -1,7 +1,7 @@
-"""The CLI's repair of a fleet's plan (:func:`~uavplan.planners.fleet_plan.plan_all` with
+"""The CLI's repair of a fleet's plan (:func:`~uavplan.planners.fleet.fleet_plan.plan_all` with
 ``polish=True`` and a fleet planner; the experiments never polish, so the papers' numbers are
 the planners' own). Not from any paper: the single UAV's polish and fallback
-(:mod:`uavplan.planners.polish`, the fallbacks of :mod:`uavplan.strategy`) carried
+(:mod:`uavplan.planners.core.polish`, the fallbacks of :mod:`uavplan.strategy`) carried
 over to a fleet, one UAV at a time, each against the declared flights of all the others that
 pass every check as they stand (so whatever is kept stays clear of every other UAV that is
 flown, before and after it in the priority order; a UAV whose flight fails and is not repaired
@@ -11,7 +11,7 @@ fails the fleet), in the plan's priority order:
    ``benchmarks/default_paths.py`` one UAV of 40 in some seeds of ``dense`` and ``ppswarm2``):
    the loop is cut at the crossing, the polyline shortened by line of sight in the static world
    (:func:`~uavplan.problems.validity.greedy_shortcut`), and the result flown against the
-   others (:func:`~uavplan.planners.flight.fly`).
+   others (:func:`~uavplan.planners.core.flight.fly`).
 2. **A UAV whose flight fails a check, or whose loop no cut removes** (``dense``: a UAV of 40
    boxed in by the flights of those before it in a narrow passage): first its own path taking
    off later (as below), then re-planned alone with RRT*
@@ -40,8 +40,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from uavplan.planners.base import separated_problem
-from uavplan.planners.flight import (
+from uavplan.planners.core.base import separated_problem
+from uavplan.planners.core.flight import (
     Flight,
     candidate_flights,
     check_flights,
@@ -49,7 +49,7 @@ from uavplan.planners.flight import (
     flight_validator,
     fly,
 )
-from uavplan.planners.results import FleetResult, PlanResult, make_result
+from uavplan.planners.core.results import FleetResult, PlanResult, make_result
 from uavplan.problems.validity import TIME_CHECKS, greedy_shortcut
 from uavplan.world.geometry import as_3d, track_crosses_itself
 from uavplan.world.reservations import ReservationTable
@@ -241,7 +241,7 @@ def _rrt_path(scenario: Scenario, task: Task, seed: int) -> FloatArray | None:
     """The task's path alone in the world: RRT* as the single-UAV fallback runs it, polished
     as the CLI polishes a single UAV's path; None when it finds none that flies."""
     from uavplan.planners import get_planner
-    from uavplan.planners.rrt_star import map_scaled_options
+    from uavplan.planners.sampling.rrt_star import map_scaled_options
 
     planner = get_planner("rrt-star", **map_scaled_options(scenario))
     res = planner.plan(scenario, task, seed=seed, polish=True)

@@ -1,6 +1,7 @@
 """RGG-PSO (Liu et al. 2024, J. Intell. Robot. Syst.): PSO over variable-length waypoint
 particles seeded by random geometric graphs; its divide-and-conquer version RGG-PSO+ is in
-:mod:`uavplan.planners.rgg_pso_plus`, the particles in :mod:`uavplan.problems.variable_length`.
+:mod:`uavplan.planners.sampling.rgg_pso_plus`, the particles in
+:mod:`uavplan.problems.variable_length`.
 
 **Particles (Sect. 4.2.2).** A particle holds ``N`` free waypoints (default: the scenario's
 ``n_waypoints``; 20 in the paper and in ``simple2d``); the task's start and goal stay fixed
@@ -10,7 +11,7 @@ N = 20). Algs. 1-2 and the encoding that evaluates the decoded paths are in
 :class:`~uavplan.problems.encoding.CartesianEncoding` (x, y[, z]; z above ground in a ground
 band), so PSO moves exactly the paper's Eq. (1) particles.
 
-**RGG-PSO (``rgg-pso``).** RGG candidates (:func:`uavplan.planners.rgg.rgg_candidates`, one
+**RGG-PSO (``rgg-pso``).** RGG candidates (:func:`uavplan.planners.sampling.rgg.rgg_candidates`, one
 graph of ``N`` free samples per swarm, Sect. 4.2.1, not densified by default) give the
 initial swarm: particle ``i`` is Alg. 1 of candidate ``i mod n_candidates`` with its own random
 duplication. A candidate with more than ``N`` interior nodes is first shortened by an exact
@@ -39,11 +40,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.optimizers.pso import PSO, PSOConfig
-from uavplan.planners.base import Planner
-from uavplan.planners.options import PlannerConfig, option
-from uavplan.planners.registry import register_planner
-from uavplan.planners.rgg import DEFAULT_GAMMA, feasibility_problem, rgg_candidates
-from uavplan.planners.run import Outcome, Run
+from uavplan.planners.core.base import Planner
+from uavplan.planners.core.options import PlannerConfig, option
+from uavplan.planners.core.registry import register_planner
+from uavplan.planners.core.run import Outcome, Run
+from uavplan.planners.sampling.rgg import DEFAULT_GAMMA, feasibility_problem, rgg_candidates
 from uavplan.problems.encoding import CartesianEncoding
 from uavplan.problems.path_problem import PathProblem
 from uavplan.problems.validity import MotionValidator, shortest_subsequence

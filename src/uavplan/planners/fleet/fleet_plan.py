@@ -9,12 +9,12 @@ from dataclasses import dataclass
 from typing import Any
 
 from uavplan.optimizers.base import Budget
-from uavplan.planners.base import FleetPlanner, Planner
-from uavplan.planners.events import Event
-from uavplan.planners.options import PlannerError
-from uavplan.planners.results import FleetResult, PlanResult
-from uavplan.planners.run import ProgressCallback
-from uavplan.planners.sequential import plan_sequentially, task_seeds
+from uavplan.planners.core.base import FleetPlanner, Planner
+from uavplan.planners.core.events import Event
+from uavplan.planners.core.options import PlannerError
+from uavplan.planners.core.results import FleetResult, PlanResult
+from uavplan.planners.core.run import ProgressCallback
+from uavplan.planners.fleet.sequential import plan_sequentially, task_seeds
 from uavplan.world.scenario import Scenario
 
 
@@ -22,9 +22,9 @@ from uavplan.world.scenario import Scenario
 class FleetPlan:
     """Plans for every task of a scenario. With several UAVs they are planned together, by a
     :class:`FleetPlanner` or by a single-UAV planner in the prioritized frame
-    (:func:`~uavplan.planners.sequential.plan_sequentially`): ``fleet`` then holds the
+    (:func:`~uavplan.planners.fleet.sequential.plan_sequentially`): ``fleet`` then holds the
     fleet-level result and feasibility includes the separation between UAVs. ``events``: what
-    happened around the planner (a strategy's attempts, :mod:`uavplan.planners.events`); the
+    happened around the planner (a strategy's attempts, :mod:`uavplan.planners.core.events`); the
     UAVs' own are read from the results."""
 
     scenario: Scenario
@@ -44,8 +44,8 @@ class FleetPlan:
 
     def diagnostics(self) -> dict[str, Any]:
         """``plan.json``'s ``diagnostics``: :attr:`events`, then the UAVs' and the restarts'
-        (:func:`~uavplan.planners.events.plan_events`)."""
-        from uavplan.planners.events import diagnostics, plan_events
+        (:func:`~uavplan.planners.core.events.plan_events`)."""
+        from uavplan.planners.core.events import diagnostics, plan_events
 
         return diagnostics((*self.events, *plan_events(self)))
 
@@ -74,12 +74,12 @@ def plan_all(
     and costs no more (:meth:`Planner.plan`); a fleet's looping or failing UAVs (a fleet
     planner's, or a single-UAV planner's in the prioritized frame) are repaired one by one
     against all the others' flights
-    (:func:`~uavplan.planners.fleet_polish.polish_fleet`)."""
+    (:func:`~uavplan.planners.fleet.fleet_polish.polish_fleet`)."""
     if isinstance(planner, FleetPlanner):
         cb = progress("fleet") if progress else None
         fr = planner.plan_fleet(scenario, budget, seed, cb, tuple(tasks) if tasks else None)
         if polish and len(fr.results) > 1:
-            from uavplan.planners.fleet_polish import polish_fleet
+            from uavplan.planners.fleet.fleet_polish import polish_fleet
 
             fr = polish_fleet(scenario, fr, seed, planner.describe())
         return FleetPlan(scenario, planner.name, planner.describe(), seed, fr.results, fr)
@@ -93,7 +93,7 @@ def plan_all(
     sc = dataclasses.replace(scenario, tasks=chosen)
     fr = plan_sequentially(planner, sc, budget, seed, progress)
     if polish:  # the same repair as a fleet planner's: a failing UAV re-planned against all
-        from uavplan.planners.fleet_polish import polish_fleet
+        from uavplan.planners.fleet.fleet_polish import polish_fleet
 
         # the table's buckets as plan_sequentially's (a planner's own dt is its time step)
         fr = polish_fleet(sc, fr, seed, {**planner.describe(), "dt": 1.0})

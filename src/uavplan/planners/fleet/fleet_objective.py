@@ -25,7 +25,7 @@ the table), except the threat sum, which the reference kernel adds in a vectoris
 own SIMD code on some CPUs (an ulp apart from the C library's in a few % of the angles): the
 costs agree to 1e-12 relative and every verdict (infinite or not) is the same; the tests check
 both. The reported result of a UAV is evaluated afresh by the reference
-(:func:`uavplan.planners.results.make_result`).
+(:func:`uavplan.planners.core.results.make_result`).
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ the UAV escapes the field's local minima (Sect. 5.3, Fig. 12) and its trajectory
   random sub-goal pairs already lead around a trap a few kilometres wide, so leading out cannot
   tell optimizers apart; within about one obstacle's radius of influence of the line the trap
   is in the way);
-  the UAV flies the field of :mod:`uavplan.planners.apf` (same gains, kinematics and
+  the UAV flies the field of :mod:`uavplan.planners.potential.apf` (same gains, kinematics and
   obstacles, other UAVs' flights included) with its attraction towards the first sub-goal,
   then, once within ``subgoal_radius`` of it, the next, and last the goal;
 * **fitness**: the flight's length plus ``curvature_weight`` times the start-goal distance
@@ -40,11 +40,11 @@ from numpy.typing import NDArray
 from uavplan.optimizers.base import FunctionProblem, fit_schedule
 from uavplan.optimizers.base import get as get_optimizer
 from uavplan.optimizers.constraints import feasibility_first
-from uavplan.planners.apf import APFConfig, FieldParams, field_params, fly_field
-from uavplan.planners.base import Planner
-from uavplan.planners.options import PlannerError, option
-from uavplan.planners.registry import register_planner
-from uavplan.planners.run import Outcome, Run
+from uavplan.planners.core.base import Planner
+from uavplan.planners.core.options import PlannerError, option
+from uavplan.planners.core.registry import register_planner
+from uavplan.planners.core.run import Outcome, Run
+from uavplan.planners.potential.apf import APFConfig, FieldParams, field_params, fly_field
 from uavplan.problems.validity import turn_estimates
 
 FloatArray = NDArray[np.float64]

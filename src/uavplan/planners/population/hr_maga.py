@@ -96,11 +96,11 @@ from numpy.typing import NDArray
 from uavplan.optimizers.base import Budget
 from uavplan.optimizers.constraints import feasibility_first
 from uavplan.optimizers.maga import MAGABatch, MAGAConfig, ReferenceMAGA, turn_cosines
-from uavplan.planners.base import Planner
-from uavplan.planners.optimizer_planner import OptimizerPlanner
-from uavplan.planners.options import PlannerConfig, PlannerError, option
-from uavplan.planners.registry import register_planner
-from uavplan.planners.run import Outcome, Run, Termination, Tracker
+from uavplan.planners.core.base import Planner
+from uavplan.planners.core.options import PlannerConfig, PlannerError, option
+from uavplan.planners.core.registry import register_planner
+from uavplan.planners.core.run import Outcome, Run, Termination, Tracker
+from uavplan.planners.population.optimizer_planner import OptimizerPlanner
 from uavplan.problems.path_problem import PathProblem, lookup_for
 from uavplan.problems.validity import greedy_shortcut
 from uavplan.world.obstacles import UncertainArea

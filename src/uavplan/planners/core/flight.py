@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from uavplan.planners.results import PlanResult
+from uavplan.planners.core.results import PlanResult
 from uavplan.problems.path_problem import lookup_for
 from uavplan.problems.validity import MotionValidator, greedy_shortcut
 from uavplan.smoothing.dubins import (

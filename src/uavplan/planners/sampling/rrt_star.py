@@ -94,8 +94,8 @@ ChrismasTerrain world, 100-200 m above ground, that PPSwarm's experiments follow
 **The Numba loop.** Where the tree's validator has a compiled segment check
 (:attr:`MotionValidator.segment_kernel`: a 3-D world of bounds, fewer than 64 cylinders,
 terrain read bilinearly and the band, as ``ppswarm``, ``dense`` and the RGG scenes), whole
-iterations run in Numba (:func:`uavplan.planners._rrt_star_kernels.grow`): sampling from the
-drawn blocks, the grid queries, steering, the checks, choose-parent, rewiring, the goal test.
+iterations run in Numba (:func:`uavplan.planners.sampling._rrt_star_kernels.grow`): sampling from
+the drawn blocks, the grid queries, steering, the checks, choose-parent, rewiring, the goal test.
 It builds the same tree as the Python loop, node for node (the tests compare them on random
 worlds), but checks segments lazily (OMPL's ``delayCC``): the nearest node's segment first,
 then the candidate parents in order of cost through them until one is free, then only the
@@ -125,8 +125,8 @@ iteration per call.
 shortcut, pulled tight by an elastic band (points at most ``step / 2`` apart, each moved towards
 its neighbours' midpoint by the largest of 1, 1/2, ..., 1/32 of the way whose two segments the
 validator accepts; at most :data:`BAND_SWEEPS` sweeps) and shortcut again
-(:mod:`uavplan.planners._tighten_kernels`; the compiled check where the Numba loop runs, else
-the Python references with the validator). So are the tree paths of up to two other goal nodes
+(:mod:`uavplan.planners.sampling._tighten_kernels`; the compiled check where the Numba loop runs,
+else the Python references with the validator). So are the tree paths of up to two other goal nodes
 on branches of their own whose tree paths are within 1 % of the shortest
 (:data:`TIGHTEN_PATHS`, :data:`TIGHTEN_SLACK`, :func:`_rrt_star_kernels.distinct_goal_nodes`):
 a longer tree path may lie in a way between the obstacles that tightens shorter. The shortest
@@ -152,13 +152,13 @@ from numba import njit
 from numpy.typing import NDArray
 
 from uavplan.optimizers.base import Budget
-from uavplan.planners import _rrt_star_kernels as K
-from uavplan.planners import _tighten_kernels as T
-from uavplan.planners.base import Planner
-from uavplan.planners.grid_index import GridIndex, pad3
-from uavplan.planners.options import Options, PlannerConfig, PlannerError, option
-from uavplan.planners.registry import register_planner
-from uavplan.planners.run import Outcome, Run
+from uavplan.planners.core.base import Planner
+from uavplan.planners.core.options import Options, PlannerConfig, PlannerError, option
+from uavplan.planners.core.registry import register_planner
+from uavplan.planners.core.run import Outcome, Run
+from uavplan.planners.sampling import _rrt_star_kernels as K
+from uavplan.planners.sampling import _tighten_kernels as T
+from uavplan.planners.sampling.grid_index import GridIndex, pad3
 from uavplan.problems.path_problem import lookup_for
 from uavplan.problems.validity import MotionValidator, greedy_shortcut
 from uavplan.world.scenario import Scenario, Task
@@ -309,7 +309,7 @@ class RRTStarTree:
 
     :meth:`iterate` is one pass in Python (the reference: every segment of the pass checked in
     one batch by the validator). :meth:`run` and :meth:`advance` run many passes in Numba
-    (:func:`uavplan.planners._rrt_star_kernels.grow`) where the validator has a compiled
+    (:func:`uavplan.planners.sampling._rrt_star_kernels.grow`) where the validator has a compiled
     segment check (:attr:`MotionValidator.segment_kernel`; ``fast=False`` turns it off): the
     same tree, node for node, with the segments checked lazily (fewer ``edge_checks``).
 
@@ -371,7 +371,8 @@ class RRTStarTree:
         self._stack = np.zeros(cap, dtype=np.int64)
         self._goal_nodes = np.zeros(cap, dtype=np.int64)
         self.grid.add(self.start)
-        #: the loop's counters (:mod:`uavplan.planners._rrt_star_kernels`'s ``ctr`` entries)
+        #: the loop's counters (:mod:`uavplan.planners.sampling._rrt_star_kernels`'s ``ctr``
+        #: entries)
         self._ctr = np.zeros(K.N_CTR, dtype=np.int64)
         self._ctr[K.N] = 1
         self._ctr[K.BEST] = -1
@@ -658,7 +659,8 @@ def rrt_star(
 
 def tightened(tree: RRTStarTree, path: FloatArray) -> tuple[FloatArray, int]:
     """``path`` (valid) shortcut, tightened by an elastic band with points at most half a step
-    apart, and shortcut again (:mod:`uavplan.planners._tighten_kernels`), every segment judged
+    apart, and shortcut again (:mod:`uavplan.planners.sampling._tighten_kernels`), every segment
+    judged
     by the tree's validator (its compiled check where it has one, else the Python references);
     returns it (never longer) and the segment checks spent."""
     d = tree.dim

@@ -54,10 +54,10 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from uavplan.planners.base import Planner
-from uavplan.planners.options import PlannerConfig, option
-from uavplan.planners.registry import register_planner
-from uavplan.planners.run import Outcome, Run
+from uavplan.planners.core.base import Planner
+from uavplan.planners.core.options import PlannerConfig, option
+from uavplan.planners.core.registry import register_planner
+from uavplan.planners.core.run import Outcome, Run
 from uavplan.problems.validity import PackedWorld
 from uavplan.world._terrain_kernels import bilinear_one
 from uavplan.world.scenario import Scenario

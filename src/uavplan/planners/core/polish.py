@@ -2,7 +2,7 @@
 experiments never polish, so the papers' numbers are the optimizers' own). Not from any paper:
 cheap post-processing that planning tools commonly apply, each step judged by the
 straight-segment validator of the UAV's flight (the altitude band along whole segments,
-:func:`~uavplan.planners.flight.flight_validator`) and by the planner's own problem:
+:func:`~uavplan.planners.core.flight.flight_validator`) and by the planner's own problem:
 
 1. **terrain following** when that validator rejects the path
    (:func:`~uavplan.problems.validity.band_repair`: points moved or added vertically until
@@ -14,7 +14,7 @@ straight-segment validator of the UAV's flight (the altitude band along whole se
 
 The result is kept when the problem finds it feasible, it is no less flyable than the found
 path, and it costs no more unless it flies where the found path did not. The flight is checked
-again after this (:func:`~uavplan.planners.flight.fly`), so the verdict stays the flight's.
+again after this (:func:`~uavplan.planners.core.flight.fly`), so the verdict stays the flight's.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from uavplan.planners.flight import flight_validator
+from uavplan.planners.core.flight import flight_validator
 from uavplan.problems.path_problem import PathProblem
 from uavplan.problems.validity import MotionValidator, band_repair, greedy_shortcut
 from uavplan.world.scenario import Scenario, Task

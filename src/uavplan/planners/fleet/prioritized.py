@@ -80,12 +80,12 @@ from uavplan.compile_clock import Stopwatch
 from uavplan.optimizers.base import Budget, OptimizerConfig
 from uavplan.optimizers.constraints import RULES, Constrained, infinite_if_violated
 from uavplan.optimizers.pso import PSO
-from uavplan.planners.base import FleetOutcome, FleetPlanner, separated_problem
-from uavplan.planners.fleet_objective import FleetObjective
-from uavplan.planners.flight import TIMINGS, Flight, declare, fly
-from uavplan.planners.options import FleetPlannerConfig, PlannerError, option
-from uavplan.planners.results import PlanResult, make_result
-from uavplan.planners.run import ProgressCallback
+from uavplan.planners.core.base import FleetOutcome, FleetPlanner, separated_problem
+from uavplan.planners.core.flight import TIMINGS, Flight, declare, fly
+from uavplan.planners.core.options import FleetPlannerConfig, PlannerError, option
+from uavplan.planners.core.results import PlanResult, make_result
+from uavplan.planners.core.run import ProgressCallback
+from uavplan.planners.fleet.fleet_objective import FleetObjective
 from uavplan.problems.encoding import ENCODINGS, CartesianEncoding
 from uavplan.problems.path_problem import PRESETS, PathProblem
 from uavplan.problems.validity import TIME_CHECKS
@@ -206,7 +206,7 @@ def resample_by_length(path: FloatArray, n: int) -> FloatArray:
 
 class PrioritizedPlanner(FleetPlanner):
     """Prioritized planning with restarts and a low-level population optimizer (PPSwarm's
-    engine; its named configurations are in :mod:`uavplan.planners.ppswarm`).
+    engine; its named configurations are in :mod:`uavplan.planners.fleet.ppswarm`).
 
     ``budget`` (iterations) sets ``n_iter`` when given: the low-level optimizer's iterations per
     UAV per restart.
@@ -416,7 +416,11 @@ class PrioritizedPlanner(FleetPlanner):
             goal = np.asarray(task.goal, dtype=np.float64)
             path: FloatArray | None = None
             if cfg.seeding == "rrt-star":
-                from uavplan.planners.rrt_star import RRTStarConfig, rrt_star, validity_problem
+                from uavplan.planners.sampling.rrt_star import (
+                    RRTStarConfig,
+                    rrt_star,
+                    validity_problem,
+                )
                 from uavplan.problems.validity import greedy_shortcut
 
                 try:
@@ -554,7 +558,7 @@ class PrioritizedPlanner(FleetPlanner):
         only make a cost infinite, so a particle whose cost without the checks is not below
         it cannot change the swarm and is not checked (the same swarm, bit for bit:
         ``PathProblem.evaluate_cv(below=...)``); in one kernel where
-        :class:`~uavplan.planners.fleet_objective.FleetObjective` applies."""
+        :class:`~uavplan.planners.fleet.fleet_objective.FleetObjective` applies."""
         lazy = (self.config.constraints == "inf" and type(opt) is PSO
                 and isinstance(enc, CartesianEncoding))  # fmt: skip
         if not lazy:
@@ -613,7 +617,7 @@ class PrioritizedPlanner(FleetPlanner):
         was seeded from, then the best three feasible ones (four at most). Under a
         drifting schedule the steps go on past ``max_delays`` to the first free slot, at worst
         one after every UAV in the table has landed (:meth:`ReservationTable.clear_time`)."""
-        from uavplan.planners.flight import candidate_flights, check_flights, flight_validator
+        from uavplan.planners.core.flight import candidate_flights, check_flights, flight_validator
 
         cfg = self.config
         timing = "constant" if scenario.moving_obstacles else cfg.smooth_timing
@@ -840,7 +844,7 @@ def declare_polylines(
     """The paper's mode: every UAV is declared to fly its planned polyline, checked as flown
     (the world, the polylines of the UAVs before it and the kinematic limits: a UAV with a
     turn radius cannot fly a polyline's corners, and this says so)."""
-    from uavplan.planners.flight import check_flights, flight_validator
+    from uavplan.planners.core.flight import check_flights, flight_validator
 
     by_id = {r.uav_id: r for r in results}
     tasks = {t.id: t for t in scenario.tasks}
@@ -865,7 +869,7 @@ def smooth_fleet(
     """The paper's mode (``flight="after"``): Dubins-smooth every UAV's path (Sect. 4.4) after
     planning, as information, and check the smoothed paths: against the world (the same
     continuous checks as planning), the UAVs smoothed before it in priority order (separation
-    S2, continuous time) and the kinematic limits (:func:`uavplan.planners.flight.fly`'s
+    S2, continuous time) and the kinematic limits (:func:`uavplan.planners.core.flight.fly`'s
     variants and checks).
 
     Two variants are smoothed for each UAV: the paper's curves through every waypoint
@@ -887,7 +891,7 @@ def smooth_fleet(
     A path no variant keeps clear is reported (``smoothed_ok = False`` and its violations)
     and its planned polyline stays in the table that the UAVs after it are checked against.
     The plan still declares the polylines (:func:`declare_polylines`)."""
-    from uavplan.planners.flight import (
+    from uavplan.planners.core.flight import (
         best_flight,
         candidate_flights,
         check_flights,

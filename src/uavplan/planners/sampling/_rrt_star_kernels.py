@@ -1,5 +1,6 @@
 """RRT*'s loop in Numba: whole iterations of PPSwarm Alg. 1 (lines 3-10) without a Python round
-trip, the fast path of :class:`uavplan.planners.rrt_star.RRTStarTree` where the tree's segment
+trip, the fast path of :class:`uavplan.planners.sampling.rrt_star.RRTStarTree` where the tree's
+segment
 checker has a compiled form (:attr:`uavplan.problems.validity.MotionValidator.segment_kernel`).
 
 :func:`grow` runs iterations until one of its stop conditions and returns a status that tells
@@ -20,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from uavplan.planners.grid_index import _grid_insert, _grid_near, _grid_nearest
+from uavplan.planners.sampling.grid_index import _grid_insert, _grid_near, _grid_nearest
 from uavplan.problems._validity_kernels import static_world_ok
 from uavplan.world.tolerances import REWIRE_TOL
 

@@ -51,10 +51,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.optimizers.base import Budget
-from uavplan.planners.base import Planner
-from uavplan.planners.options import PlannerConfig, PlannerError, option
-from uavplan.planners.registry import register_planner
-from uavplan.planners.run import Outcome, Run
+from uavplan.planners.core.base import Planner
+from uavplan.planners.core.options import PlannerConfig, PlannerError, option
+from uavplan.planners.core.registry import register_planner
+from uavplan.planners.core.run import Outcome, Run
 from uavplan.problems.path_problem import lookup_for
 from uavplan.problems.validity import MotionValidator
 from uavplan.world.scenario import Scenario, Task
