@@ -32,8 +32,12 @@ def option(
     Args:
         default: the default (the paper's, cited in ``doc``); or ``default_factory``.
         doc: one line for ``describe_options`` and ``uavplan planners NAME``.
-        low, high: the range of a number (inclusive unless ``low_open``/``high_open``).
+        low: the least value of a number (inclusive unless ``low_open``).
+        high: the largest value of a number (inclusive unless ``high_open``).
+        low_open: whether ``low`` itself is refused.
+        high_open: whether ``high`` itself is refused.
         choices: the allowed values.
+        default_factory: makes the default (a mutable one).
     """
     meta = {"doc": doc, "low": low, "high": high, "low_open": low_open, "high_open": high_open,
             "choices": tuple(choices) if choices is not None else None}  # fmt: skip
