@@ -118,8 +118,8 @@ QUADROTOR = Airframe(
     nav_h=0.8,
     nav_v=1.0,
     accept=2.0,
-    track_h=6.5,
-    track_v=7.0,
+    track_h=4.5,
+    track_v=4.0,
     speed_margin=0.0,
     turn_accel=3.0,
 )
