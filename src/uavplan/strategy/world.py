@@ -30,8 +30,8 @@ class PlanningWorld:
     """``world``: the scenario as planned in; ``model`` its execution model, ``source`` where
     the model came from (``--nominal``, the plan's, the scenario's or uavplan's default);
     ``turn_radius`` the radius its turns were raised to (0: the scenario's), ``given_turn``
-    the scenario's, ``airframe`` the airframe that raised them; ``min_speed`` the slowest speed
-    planned when raised (0: the scenario's), ``given_min`` the scenario's."""
+    the scenario's; ``min_speed`` the slowest speed planned when raised (0: the scenario's),
+    ``given_min`` the scenario's; ``airframe`` the named airframe that raised either."""
 
     world: Scenario
     model: ExecutionModel
@@ -44,9 +44,7 @@ class PlanningWorld:
 
     def speeds_line(self) -> str | None:
         """Why the slowest planned speed was raised (for the console), or None."""
-        from uavplan.world.airframes import AIRFRAMES
-
-        af = AIRFRAMES.get(str(self.world.uav.airframe))
+        af = self.airframe
         if af is None or self.min_speed <= 0:
             return None
         why = (
@@ -94,8 +92,8 @@ def planning_world(
     given_v, v = float(scenario.uav.min_speed), 0.0
     if by_default:  # uavplan's default also turns and slows no more than the airframe flies
         scenario, r = flyable_turns(scenario)
-        af = AIRFRAMES[str(scenario.uav.airframe)] if r > 0 else None
         scenario, v = flyable_speeds(scenario)
+        af = AIRFRAMES[str(scenario.uav.airframe)] if r > 0 or v > 0 else None
     source = "--nominal" if nominal else model.source
     try:
         world = widened(scenario, model)

@@ -331,6 +331,9 @@ def verify_plan(
             smoothed paths) are checked with the UAV's kinematic limits; ``"planned"`` (the
             planned polylines, geometric paths) without them.
 
+    The flown trajectories are checked under the execution model the plan states (its
+    ``execution`` block; none: as flown exactly).
+
     Raises:
         PlanFormatError: the plan cannot be read (a missing or malformed field, mismatched
             lengths, points of the wrong dimension, no smoothed path with ``smoothed=True``).
@@ -351,4 +354,5 @@ def verify_plan(
         smoothed=trajectory == "smoothed",
         kinematics=TRAJECTORIES[trajectory],
         trajectory=trajectory,
+        model=pf.execution if trajectory == "flown" else None,
     )

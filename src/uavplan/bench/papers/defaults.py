@@ -49,10 +49,10 @@ def run_strategy(spec: RunSpec) -> dict[str, Any]:
     """``uavplan plan`` as a run: the default strategy (planner ``default``) or the named
     planner alone, in the world under uavplan's default execution model, then the verifier on
     the flown trajectories (the scenario as given, the plan's model)."""
-    from uavplan.io.plan_file import parse_plan, plan_document
+    from uavplan.io.plan_file import plan_document
     from uavplan.scenarios import resolve
     from uavplan.strategy import chosen, execute, planning_world, strategy_for
-    from uavplan.verify import verify_trajectories
+    from uavplan.verify import verify_plan
     from uavplan.world.geometry import track_crosses_itself
 
     p = spec.params
@@ -70,8 +70,7 @@ def run_strategy(spec: RunSpec) -> dict[str, Any]:
     outcome = execute(strategy, pw.world, budget, spec.seed)
     wall = time.perf_counter() - t0
     plan = outcome.plan
-    pf = parse_plan(plan_document(plan), pw.world.dim)
-    rep = verify_trajectories(pf.trajectories("flown"), given, pf.scenario, model=pf.execution)
+    rep = verify_plan(plan_document(plan), given)  # under the model the plan states
     flown = [r.flown_trajectory()[0] for r in plan.results]
     cost = float(sum(r.cost for r in plan.results))
     return {
