@@ -27,7 +27,8 @@ def write_plan(plan: FleetPlan, out: str | Path, figure: bool = True) -> list[Pa
     d.mkdir(parents=True, exist_ok=True)
     written = [write_plan_file(plan, d / "plan.json")]
     if figure:
-        page = viewer_html(parse_plan(plan_document(plan)), plan.scenario)
+        given = plan.scenario.metadata.get("given", plan.scenario)  # not the widened world
+        page = viewer_html(parse_plan(plan_document(plan)), given)
         written.append(write_text_atomic(d / "plan.html", page))
         from uavplan.viz.figures import save_plan_figure
 
@@ -243,12 +244,21 @@ def verified_by_the_verifier(plan: Any, out_dir: Path) -> bool:
         with_margins(out_dir / "plan.json", margins_record(report))
         for line in margin_lines(report):
             out.print(line, markup=False)
+    rejected = sorted({u for v in report.violations for u in v.uavs})
+    if (out_dir / "plan.html").exists() and (report.model is not None or rejected):
+        # the page shows the margins just measured, and what the verifier rejects in red
+        from uavplan.io.atomic import write_text_atomic
+        from uavplan.viz.viewer import viewer_html
+
+        page = viewer_html(read_plan_file(out_dir / "plan.json", plan.scenario.dim), world,
+                           rejected=rejected)  # fmt: skip
+        write_text_atomic(out_dir / "plan.html", page)
     if report.ok:
         under = " under the execution model" if report.model is not None else ""
         out.print(f"independent verifier: every flown trajectory passes{under} "
                   f"({report.n_segments} segments, kinematic limits included)")  # fmt: skip
         return True
-    uavs = sorted({u for v in report.violations for u in v.uavs})
+    uavs = rejected
     err.print(
         "[bold red]UNSAFE[/]: the planner called this plan feasible, and the independent "
         f"verifier rejects it ({len(report.violations)} violations, UAVs "
