@@ -150,6 +150,7 @@ def test_the_page_in_headless_chromium(tmp_path: Path) -> None:
     result = selftest(flags, page)
     assert result["webgl"] is True and result["errors"] == []
     assert result["uavs"] == 40 and result["moved"] == 40
+    assert result["picked"] == "uav39"  # a click on its marker opens its card
     assert result["painted"] > 0.2  # the terrain fills a good part of the view
     shot = tmp_path / "shot.png"
     subprocess.run([*flags, "--window-size=900,650", f"--screenshot={shot}", page.as_uri()],

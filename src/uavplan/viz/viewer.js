@@ -573,6 +573,11 @@ if (selftest) {
   setTime(tEnd); render();
   const last = markerScreen();
   result.moved = first.filter((p, k) => Math.hypot(p[0] - last[k][0], p[1] - last[k][1]) > 1).length;
+  // a click on the last UAV's marker opens its card (the pick that a click runs)
+  const k = pick(last[nU - 1][0], last[nU - 1][1]);
+  select(k);
+  result.picked = k >= 0 && $("info").style.display === "block" ? $("info").textContent.split(":")[0] : null;
+  select(-1);
   if (location.hash.startsWith("#fps")) {  // frames drawn per second while playing (each frame finished)
     if (location.hash === "#fps-empty") scene.visible = live.visible = false;  // the reference
     const px = new Uint8Array(4);
