@@ -198,3 +198,25 @@ def test_a_constant_speed_fleet_is_repaired_like_any_other() -> None:
     assert plan.fleet is not None and plan.fleet.info.get("repair")
     raw = execute(dataclasses.replace(s, repair=False), sc, 10, 0).plan
     assert raw.fleet is not None and "repair" not in raw.fleet.info
+
+
+def test_a_generated_fleet_that_the_tracking_error_pushes_out_is_placed_again() -> None:
+    """``ppswarm4@1000`` stacks four altitude layers in the 100-200 m band, the top one 5 m under
+    the ceiling: under a small fixed wing's 8 m vertical tracking error some tasks leave the
+    band, so the fleet is placed again in the widened world (the given world gets the same
+    tasks, for the verifier); ``--nominal`` keeps the first placement."""
+    import numpy as np
+
+    from uavplan.scenarios import resolve
+    from uavplan.strategy import planning_world
+
+    sc = resolve("ppswarm4@1000")
+    pw = planning_world(sc, "ppswarm4@1000")
+    assert pw.replaced > 0 and pw.tasks_line() is not None
+    assert len(pw.world.tasks) == 1000 and pw.given is not None
+    assert [t.start for t in pw.given.tasks] == [t.start for t in pw.world.tasks]
+    for t in pw.world.tasks:
+        for p in (t.start, t.goal):
+            assert not pw.world.point_problems(np.asarray(p, dtype=np.float64))
+    nominal = planning_world(sc, "ppswarm4@1000", nominal=True)
+    assert nominal.replaced == 0 and nominal.world.tasks == sc.tasks

@@ -173,8 +173,8 @@ def fly(
         algorithm, options = algorithm or strategy_for(sc).replanner, {}
     seed = 0 if seed is None else seed
     options = {**options, **parse_params(param or [])}
-    given = sc
-    sc = planning_world(given, scenario, nominal, model)  # planned and repaired in it
+    pw = planning_world(sc, scenario, nominal, model)  # planned and repaired in it
+    sc, given = pw.world, pw.given or sc
     if task is not None:  # the plan's task, its clearances widened as the world's are
         task = next(t for t in sc.tasks if t.id == task.id)
     try:

@@ -72,7 +72,8 @@ def _run_plan(
         given_world = resolve(scenario_ref)
     except ScenarioFileError as exc:
         raise fail(getattr(exc, "problems", None) or [str(exc)]) from None
-    scenario = planning_world(given_world, scenario_ref, nominal)
+    pw = planning_world(given_world, scenario_ref, nominal)
+    scenario, given_world = pw.world, pw.given or given_world
     # the scenario's planning block gives what the command line does not (checked at load)
     block = (scenario.metadata.get("spec") or {}).get("planning") or {}
     from_file = algorithm is None and "planner" in block
@@ -155,17 +156,18 @@ def _run_plan(
     _attempt_lines(outcome)
     plan, n_runs = outcome.plan, len(outcome.competing)
     planning = clock.elapsed  # the files and the figure are not the planner's time
+    plan.scenario.metadata["given"] = given_world  # what the verifier checks against
     try:
         write_plan(plan, out_dir, figure=figure)
     except OSError as exc:
         raise fail(f"--out {out_dir}: cannot write: {exc}") from None
-    plan.scenario.metadata["given"] = given_world  # what the verifier checks against
     return plan, (planning, clock.compile, n_runs)
 
 
 def planning_world(scenario: Any, ref: str, nominal: bool, model: Any = None) -> Any:
-    """The world a plan is made in (:func:`uavplan.strategy.planning_world`); says the model
-    (and any turns raised) on the console; exit 2 when it cannot be made."""
+    """The world a plan is made in (:func:`uavplan.strategy.planning_world`: a
+    ``PlanningWorld``); says the model (and any turns, speeds or tasks changed) on the console;
+    exit 2 when it cannot be made."""
     from uavplan.strategy import WorldProblem
     from uavplan.strategy import planning_world as make
 
@@ -173,12 +175,12 @@ def planning_world(scenario: Any, ref: str, nominal: bool, model: Any = None) ->
         pw = make(scenario, ref, nominal, model)
     except WorldProblem as exc:
         raise fail(exc.problems) from None
-    for line in (pw.turns_line(), pw.speeds_line()):
+    for line in (pw.turns_line(), pw.speeds_line(), pw.tasks_line()):
         if line:
             out.print(line, markup=False)
     hint = "" if nominal or pw.model.nominal else "; --nominal plans for an exact execution"
     out.print(f"execution model: {pw.model.describe()} ({pw.source}){hint}", markup=False)
-    return pw.world
+    return pw
 
 
 def _attempt_lines(outcome: Any) -> None:

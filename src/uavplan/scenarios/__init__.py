@@ -101,6 +101,12 @@ def resolve(name_or_path: str | Path) -> Scenario:
             from uavplan.io.scenario_file import ScenarioFileError
 
             raise ScenarioFileError([f"{text}: {exc}"]) from None
+        # the planning world places a generated fleet again when an execution model's
+        # tracking error leaves some of these tasks outside the world it is planned in
+        sc.metadata["generated_fleet"] = {"n_uavs": int(at.group(2)),
+                                          "seed": int(fleet.get("seed", 0)),
+                                          "pattern": str(fleet.get("pattern", "crossing")),
+                                          "min_spacing": fleet.get("min_spacing")}  # fmt: skip
         return dataclasses.replace(sc, name=text)
     m = re.fullmatch(r"rgg-n(\d+)-i(\d+)(?:-s(\d+))?", text)
     if m:  # a scene of the RGG-PSO+ family, generated deterministically

@@ -6,6 +6,7 @@ the UAV's named airframe flies (:func:`uavplan.world.execution.flyable_turns`)."
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -41,6 +42,19 @@ class PlanningWorld:
     airframe: Airframe | None = None
     min_speed: float = 0.0
     given_min: float = 0.0
+    #: the scenario as given (what the verifier checks against); its generated fleet placed
+    #: again when the first placement left tasks outside the widened world (``replaced``)
+    given: Scenario | None = None
+    replaced: int = 0
+
+    def tasks_line(self) -> str | None:
+        """Why a generated fleet's tasks were placed again (for the console), or None."""
+        if not self.replaced:
+            return None
+        return (f"fleet placed again: {self.replaced} of the generated fleet's starts and goals "
+                "lay where the tracking error would take a UAV out of the band or too near an "
+                "obstacle, so every task was placed in the world widened by it (--nominal "
+                "keeps the first placement)")  # fmt: skip
 
     def speeds_line(self) -> str | None:
         """Why the slowest planned speed was raised (for the console), or None."""
@@ -86,6 +100,7 @@ def planning_world(
         widened,
     )
 
+    original = scenario
     by_default = not nominal and model is None and scenario.execution is None
     model = NOMINAL if nominal else (model or scenario.execution or default_for(scenario.uav))
     given_r, r, af = float(scenario.uav.turn_radius), 0.0, None
@@ -99,16 +114,36 @@ def planning_world(
         world = widened(scenario, model)
     except ValueError as exc:
         raise WorldProblem([f"{ref}: the execution model ({model.describe()}): {exc}"]) from None
+    given, replaced = original, 0
     if model.track_h or model.track_v:
-        bad = []
-        for t in world.tasks:
-            for what, p in (("start", t.start), ("goal", t.goal)):
-                why = world.point_problems(np.asarray(p, dtype=np.float64))
-                if why:
-                    bad.append(f"{ref}: task {t.id}: its {what} {list(p)} is {why[0]} once every "
-                               f"clearance is widened by the tracking error ({model.track_h:g} m "
-                               f"horizontal, {model.track_v:g} m vertical); move it, or plan "
-                               "with --nominal")  # fmt: skip
+        bad = _task_problems(world, ref, model)
+        fleet = scenario.metadata.get("generated_fleet")
+        if bad and fleet:  # a generated fleet is placed again, in the widened world
+            from uavplan.world.fleet_tasks import with_fleet
+
+            try:
+                placed = with_fleet(world, **fleet)
+            except ValueError as exc:
+                again = f"{ref}: placed again in the widened world: {exc}"
+                raise WorldProblem([*bad, again]) from None
+            replaced = len(bad)
+            world = dataclasses.replace(world, tasks=placed.tasks)
+            given = dataclasses.replace(original, tasks=placed.tasks)
+            bad = _task_problems(world, ref, model)
         if bad:
             raise WorldProblem(bad)
-    return PlanningWorld(world, model, source, r, given_r, af, v, given_v)
+    return PlanningWorld(world, model, source, r, given_r, af, v, given_v, given, replaced)
+
+
+def _task_problems(world: Scenario, ref: str, model: Any) -> list[str]:
+    """Every task start or goal that the widened ``world`` refuses, one line each."""
+    bad = []
+    for t in world.tasks:
+        for what, p in (("start", t.start), ("goal", t.goal)):
+            why = world.point_problems(np.asarray(p, dtype=np.float64))
+            if why:
+                bad.append(f"{ref}: task {t.id}: its {what} {list(p)} is {why[0]} once every "
+                           f"clearance is widened by the tracking error ({model.track_h:g} m "
+                           f"horizontal, {model.track_v:g} m vertical); move it, or plan "
+                           "with --nominal")  # fmt: skip
+    return bad

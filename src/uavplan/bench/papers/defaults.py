@@ -58,6 +58,7 @@ def run_strategy(spec: RunSpec) -> dict[str, Any]:
     p = spec.params
     given = resolve(spec.scenario)
     pw = planning_world(given, spec.scenario)
+    given = pw.given or given  # a generated fleet placed again in the widened world
     options = dict(p["options"])
     if p["planner"] == "default":
         strategy = strategy_for(pw.world).with_options(options)
