@@ -6,5 +6,11 @@ same cores made the suite 2.3x slower here (488 s against 211 s on 2 cores). An 
 from __future__ import annotations
 
 import os
+import sys
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+# Cached bytecode even where the environment says not to write it (PYTHONDONTWRITEBYTECODE, as on
+# the machines this suite is developed on): without it every pytest process, each xdist worker
+# included, rewrites the asserts of every test module again, 7-8 s of a run's start (pytest
+# caches a rewritten module only where Python may write bytecode).
+sys.dont_write_bytecode = False
