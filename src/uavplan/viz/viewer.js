@@ -202,7 +202,7 @@ const cylinders = DATA.cylinders || [];
 if (cylinders.length) {
   const g = new THREE.CylinderGeometry(1, 1, 1, 48, 1);
   g.rotateX(Math.PI / 2);
-  const mesh = new THREE.InstancedMesh(shade(g, rgb(0xc0392b)), solid(0.75), cylinders.length);
+  const mesh = new THREE.InstancedMesh(shade(g, rgb(0x8d939c)), solid(0.75), cylinders.length);
   const M = new THREE.Matrix4();
   cylinders.forEach((c, k) => {
     const z0 = flat ? 0 : c.z[0], z1 = flat ? 0 : c.z[1];
@@ -464,7 +464,7 @@ function legend() {
     rows.push(`<span class='bad'>${bad.length} UAV(s) failing a check</span>: ` +
       bad.slice(0, 12).map(([u, k]) => `<a data-k='${k}'>${esc(u.id)}</a>`).join(", ") + (bad.length > 12 ? " ..." : ""));
   }
-  if (cylinders.length) rows.push("<span style='color:#c0392b'>&#9632;</span> cylinders / circles");
+  if (cylinders.length) rows.push("<span style='color:#8d939c'>&#9632;</span> cylinders / circles");
   if ((DATA.polygons || []).length) rows.push("<span style='color:#8e44ad'>&#9632;</span> polygons");
   if ((DATA.danger || []).length) rows.push("<span style='color:#d4a017'>&#9632;</span> danger areas");
   if ((DATA.uncertain || []).length) rows.push("<span style='color:#8e44ad'>&#9633;</span> uncertain areas (dashed: unknown at take-off)");
@@ -558,18 +558,23 @@ if (selftest) {
   // gl: the renderer's context (above)
   const canvas = renderer.domElement, w = canvas.width, h = canvas.height;
   const bg = [244, 246, 248];
-  const painted = () => {  // the share of pixels not the background's
+  const painted = () => {  // the share of pixels not the background's, and the red ones
     const px = new Uint8Array(4 * w * h);
     gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
-    let n = 0;
-    for (let i = 0; i < px.length; i += 4) if (Math.abs(px[i] - bg[0]) + Math.abs(px[i + 1] - bg[1]) + Math.abs(px[i + 2] - bg[2]) > 12) n++;
-    return n / (w * h);
+    let n = 0, red = 0;
+    for (let i = 0; i < px.length; i += 4) {
+      if (Math.abs(px[i] - bg[0]) + Math.abs(px[i + 1] - bg[1]) + Math.abs(px[i + 2] - bg[2]) > 12) n++;
+      if (px[i] > 170 && px[i + 1] < 70 && px[i + 2] < 70) red++;
+    }
+    return [n / (w * h), red];
   };
   const result = { webgl: !!gl && !gl.isContextLost(), uavs: nU, size: [w, h] };
   result.ready_ms = Math.round(performance.now());  // from navigation to the first frame drawn
   setTime(t0); render();
   const first = markerScreen();
-  result.painted = Math.round(1000 * painted()) / 1000;
+  const [share, red] = painted();
+  result.painted = Math.round(1000 * share) / 1000;
+  result.red = red;  // failing UAVs' markers and paths (#e00000)
   setTime(tEnd); render();
   const last = markerScreen();
   result.moved = first.filter((p, k) => Math.hypot(p[0] - last[k][0], p[1] - last[k][1]) > 1).length;
