@@ -18,7 +18,7 @@ out = Console(soft_wrap=True)
 
 #: modules whose Numba kernels every plan uses (their cache tells a first run)
 _KERNEL_MODULES = (
-    "world/geometry.py",
+    "world/geometry/cylinders.py",
     "world/_terrain_kernels.py",
     "problems/_validity_kernels.py",
 )
