@@ -632,17 +632,20 @@ def vertical_clearance(
         a, b = traj.points[:-1], traj.points[1:]
         floor0 = terrain.heights
         top0 = terrain.heights if terrain.lower is None else terrain.lower
+        # the clearances read only the cells under the flight: each grid is cut to them (and
+        # one node around) before it is offset, so a margin's bisection over a fleet does not
+        # rebuild whole rasters per UAV and step; the values read are the same
+        cut = _cells_under(traj.points, terrain)
         low_c, high_c = -math.inf, math.inf
         for how in ("height", "slope") if reach > 0 and within is not None else ("",):
-            floor, top = floor0, top0
             if how:
-                floor = within(floor0, terrain.dx, terrain.dy, reach, True, how)
-                top = within(top0, terrain.dx, terrain.dy, reach, False, how)
+                floor = within(floor0, terrain.dx, terrain.dy, reach, True, how, cut)
+                top = within(top0, terrain.dx, terrain.dy, reach, False, how, cut)
+            else:
+                floor, top = floor0[cut], top0[cut]
             # each construction bounds the ground within reach: the better bound holds
-            fl = replace(terrain, heights=floor, lower=None)
-            tp = replace(terrain, heights=top, lower=None)
-            low_c = max(low_c, float(np.min(extrema(a, b, fl)[:, 0])))
-            high_c = min(high_c, float(np.max(extrema(a, b, tp)[:, 2])))
+            low_c = max(low_c, float(np.min(extrema(a, b, _Grid(floor, terrain, cut))[:, 0])))
+            high_c = min(high_c, float(np.max(extrema(a, b, _Grid(top, terrain, cut))[:, 2])))
     elif band is not None and band.reference == "ground":  # flat ground at 0
         low_c, high_c = float(z.min()), float(z.max())
     if math.isfinite(low_c):
@@ -655,6 +658,29 @@ def vertical_clearance(
             best = min(best, (float(np.min(z - band.min)), "altitude band's floor"),
                        (float(np.min(band.max - z)), "altitude band's ceiling"))  # fmt: skip
     return max(best[0], 0.0), best[1]
+
+
+class _Grid:
+    """A cut of a terrain grid (``heights``: the nodes ``cut`` of ``terrain``), as the clearance
+    kernels read a grid."""
+
+    def __init__(self, heights: FloatArray, terrain: Any, cut: tuple[slice, slice]) -> None:
+        self.heights = heights
+        self.dx, self.dy = float(terrain.dx), float(terrain.dy)
+        self.x0 = float(terrain.x0) + cut[1].start * self.dx
+        self.y0 = float(terrain.y0) + cut[0].start * self.dy
+
+
+def _cells_under(points: FloatArray, terrain: Any) -> tuple[slice, slice]:
+    """The rows and columns of the nodes of every cell the flight's points lie in (and so its
+    segments, each inside its ends' box), one node more on each side; a point outside the grid
+    counts where the clearance kernels clamp it, at the edge."""
+    ny, nx = np.shape(terrain.heights)
+    i = np.clip(np.floor((points[:, 0] - float(terrain.x0)) / float(terrain.dx)), 0, nx - 2)
+    j = np.clip(np.floor((points[:, 1] - float(terrain.y0)) / float(terrain.dy)), 0, ny - 2)
+    c0, c1 = max(0, int(i.min()) - 1), min(nx, int(i.max()) + 3)
+    r0, r1 = max(0, int(j.min()) - 1), min(ny, int(j.max()) + 3)
+    return slice(r0, r1), slice(c0, c1)
 
 
 def horizontal_bounds(traj: Trajectory, scenario: Any) -> float:

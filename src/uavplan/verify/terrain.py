@@ -163,8 +163,9 @@ def terrain_clearance_extrema(a: FloatArray, b: FloatArray, terrain: Terrain) ->
 
 
 def within_reach(
-    H: FloatArray, du: float, dv: float, reach: float, highest: bool, how: str = "height"
-) -> FloatArray:
+    H: FloatArray, du: float, dv: float, reach: float, highest: bool, how: str = "height",
+    cut: tuple[slice, slice] | None = None,
+) -> FloatArray:  # fmt: skip
     """The verifier's own bound on the ground within ``reach`` horizontally of any point: a
     grid whose bilinear surface at a point is at least (``highest``; at most otherwise) the
     surface of ``H`` (columns ``du``, rows ``dv`` apart, edges extended) anywhere within
@@ -174,18 +175,21 @@ def within_reach(
     moved by ``reach`` times the steepest cell gradient within that many cells (a cell's
     gradient is at most the hypot of its larger x-edge and y-edge slopes, and the surface is
     continuous). Either holds alone; the verifier uses the better clearance of the two. Kept
-    per grid and window (the margins' bisections ask for the same windows again)."""
+    per grid and window (the margins' bisections ask for the same windows again). ``cut``: the
+    rows and columns of the result wanted (the whole grid is filtered all the same, once per
+    window, so that the nodes at the cut's edges are the whole grid's)."""
     G = np.asarray(H, dtype=np.float64)
     if reach <= 0:
-        return G
+        return G if cut is None else G[cut]
     ku = math.ceil(reach / du) + 1
     kv = math.ceil(reach / dv) + 1
     # the filtered grid depends on the window alone (for "slope", the steepest gradient
     # near each node, which the reach then scales): kept per grid and window
     key = (id(H), ku, kv, bool(highest) if how == "height" else True, how)
-    hit = _WITHIN.get(key)
+    hit = _WITHIN.pop(key, None)
     if hit is not None and hit[0] is H:
         near = hit[1]
+        _WITHIN[key] = hit  # the most recently used last
     else:
         from scipy.ndimage import maximum_filter, minimum_filter
 
@@ -201,9 +205,11 @@ def within_reach(
             steep[1:ny, 1:nx] = np.sqrt(np.maximum(su[1:], su[:-1]) ** 2
                                         + np.maximum(sv[:, 1:], sv[:, :-1]) ** 2)  # fmt: skip
             near = maximum_filter(steep, size=size, mode="constant", cval=0.0)[:ny, :nx]
-        if len(_WITHIN) > 64:
-            _WITHIN.clear()
+        while len(_WITHIN) >= 64:  # the least recently used go first
+            del _WITHIN[next(iter(_WITHIN))]
         _WITHIN[key] = (H, near)
+    if cut is not None:
+        G, near = G[cut], near[cut]
     if how == "height":
         return near
     return G + reach * near if highest else G - reach * near
