@@ -12,7 +12,9 @@ and stays within ``e_h`` / ``e_v`` of its path. The verifier does its own geomet
   conditions, a convex polygon (Sutherland-Hodgman clipping here), on which the squared
   distance between the two points is a convex quadratic: minimised exactly (inside, or along
   the polygon's edges). Only segment pairs that can come within the separation at all (their
-  untimed distance; found with a uniform grid over all the fleet's segments) are examined. A
+  untimed distance) at a time both can be there with errors up to the margins' search limits
+  (:data:`TAKEOFF_CAP`, :data:`SPEED_CAP`; found with a uniform grid over all the fleet's
+  segments in space and time) are examined. A
   pair fails when its least distance is below ``S2 + sqrt((2 e_h)^2 + (2 e_v)^2)``: each UAV
   may be ``e_h`` and ``e_v`` off its point. A per-axis separation (a box) is taken as the
   sphere that holds it (conservative).
@@ -48,10 +50,13 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 #: The largest take-off error (s) and speed error a margin is searched to: beyond them a pair
-#: is reported as tolerating "at least" that.
-TAKEOFF_CAP = 600.0
-SPEED_CAP = 0.49
-#: Bisection steps (take-off to 600 / 2^14 s = 0.04 s; speed to 0.49 / 2^14)
+#: is reported as not limited (``inf``). They are also the horizon of the pair search: two
+#: segments are examined only when they can come close in space and, with errors up to these,
+#: in time (a 1,000-UAV fleet over open ground crosses itself everywhere in space, and
+#: searching every crossing made 10^9 pairs).
+TAKEOFF_CAP = 60.0
+SPEED_CAP = 0.2
+#: Bisection steps (take-off to 60 / 2^14 s = 0.004 s; speed to 0.2 / 2^14)
 BISECT = 14
 
 
@@ -199,14 +204,31 @@ def _seg_dist2(P, i, j):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _close_pairs(P, owner, valid, gap, cell):  # pragma: no cover - numba
+def _close_pairs(P, owner, valid, gap, cell, T, take, dcap, rcap):  # pragma: no cover - numba
     """Every pair of segments ``(i, j)`` of different owners (``owner[i] < owner[j]``; segment
     ``i`` runs from row ``i`` to ``i + 1``, ``valid[i]`` it is one) whose untimed distance is
-    below ``gap``: a uniform grid of side ``cell`` holds each segment in the cells its box
-    grown by ``gap`` towards +x, +y, +z touches (two segments closer than ``gap`` have such
-    boxes overlapping on every axis, at the larger of their closest coordinates, so they share
-    a cell)."""
+    below ``gap`` and whose flown time windows with a take-off error up to ``dcap`` and a
+    speed error up to ``rcap`` meet (``T``: the rows' planned times, ``take``: each row's
+    owner's take-off): a uniform grid of side ``cell`` in space and of the windows' longest in
+    time holds each segment in the cells its box grown by ``gap`` towards +x, +y, +z and its
+    window touch (two segments closer than ``gap`` have such boxes overlapping on every axis,
+    at the larger of their closest coordinates, and two meeting windows a time cell in
+    common, so they share a cell)."""
     n = P.shape[0] - 1
+    wlo = np.empty(n)
+    whi = np.empty(n)
+    t_lo = np.inf
+    t_hi = -np.inf
+    span = 0.0
+    for i in range(n):
+        if valid[i]:
+            t0 = take[i]
+            wlo[i] = t0 - dcap + (T[i] - t0) / (1.0 + rcap)
+            whi[i] = t0 + dcap + (T[i + 1] - t0) / (1.0 - rcap)
+            t_lo = min(t_lo, wlo[i])
+            t_hi = max(t_hi, whi[i])
+            span = max(span, whi[i] - wlo[i])
+    tcell = max(span, 1e-9)
     lo = np.empty(3)
     hi = np.empty(3)
     for d in range(3):
@@ -217,14 +239,15 @@ def _close_pairs(P, owner, valid, gap, cell):  # pragma: no cover - numba
             for d in range(3):
                 lo[d] = min(lo[d], P[i, d], P[i + 1, d])
                 hi[d] = max(hi[d], P[i, d], P[i + 1, d])
-    dims = np.empty(3, dtype=np.int64)
+    dims = np.empty(4, dtype=np.int64)
     for d in range(3):
         dims[d] = int((hi[d] - lo[d] + gap) / cell) + 2
+    dims[3] = int((t_hi - t_lo) / tcell) + 2
     count = 0
     for i in range(n):
         if not valid[i]:
             continue
-        c = 1
+        c = int((whi[i] - t_lo) / tcell) - int((wlo[i] - t_lo) / tcell) + 1
         for d in range(3):
             a = int((min(P[i, d], P[i + 1, d]) - lo[d]) / cell)
             b = int((max(P[i, d], P[i + 1, d]) + gap - lo[d]) / cell)
@@ -242,12 +265,15 @@ def _close_pairs(P, owner, valid, gap, cell):  # pragma: no cover - numba
         b1 = int((max(P[i, 1], P[i + 1, 1]) + gap - lo[1]) / cell)
         c0 = int((min(P[i, 2], P[i + 1, 2]) - lo[2]) / cell)
         c1 = int((max(P[i, 2], P[i + 1, 2]) + gap - lo[2]) / cell)
+        d0 = int((wlo[i] - t_lo) / tcell)
+        d1 = int((whi[i] - t_lo) / tcell)
         for x in range(a0, a1 + 1):
             for y in range(b0, b1 + 1):
                 for z in range(c0, c1 + 1):
-                    keys[e] = (x * dims[1] + y) * dims[2] + z
-                    segs[e] = i
-                    e += 1
+                    for w in range(d0, d1 + 1):
+                        keys[e] = ((x * dims[1] + y) * dims[2] + z) * dims[3] + w
+                        segs[e] = i
+                        e += 1
     keys = keys[:e]
     segs = segs[:e]
     order = np.argsort(keys, kind="mergesort")
@@ -428,7 +454,8 @@ def separation_under(
     take = np.array([float(trajs[k].times[0]) for k in range(len(trajs))])[np.maximum(owner, 0)]
     required = s2 + timing.gap
     search = s2 + 2.0 * timing.gap + 10.0
-    pairs = _close_pairs(P, owner, valid, float(search), float(max(search, 20.0)))
+    pairs = _close_pairs(P, owner, valid, float(search), float(max(search, 20.0)), T, take,
+                         TAKEOFF_CAP, SPEED_CAP)  # fmt: skip
     if not len(pairs):
         return [], []
     key = owner[pairs[:, 0]] * len(trajs) + owner[pairs[:, 1]]
