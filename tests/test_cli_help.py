@@ -3,6 +3,7 @@ help box wraps it), and the command list gives each command's first sentence."""
 
 from __future__ import annotations
 
+import pytest
 import typer
 from typer.testing import CliRunner
 
@@ -32,3 +33,19 @@ def test_the_command_list_shows_whole_sentences() -> None:
     assert r.exit_code == 0
     line = next(x for x in r.output.splitlines() if "│ plan " in x)
     assert "OUT/plan.html." in line and "single UAV" not in r.output
+
+
+def test_running_out_of_memory_is_one_line_not_a_traceback(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import uavplan.cli as cli
+
+    def boom() -> None:
+        raise MemoryError("Allocation failed (probably too large).")
+
+    monkeypatch.setattr(cli, "app", boom)
+    with pytest.raises(SystemExit) as exc:
+        cli.main()
+    assert exc.value.code == 1
+    text = capsys.readouterr().err
+    assert "out of memory" in text and "Traceback" not in text

@@ -77,7 +77,19 @@ _as_sentences(app)
 
 
 def main() -> None:
-    app()
+    try:
+        app()
+    except MemoryError:
+        # one line, not a traceback: what ran out, and what to do (exit 1: the input may be
+        # valid, the machine too small for it; files already written are left as they are)
+        import sys
+
+        from uavplan.cli._common import err
+
+        err.print("[bold red]out of memory[/]: this machine's memory did not hold the job; "
+                  "a smaller fleet or world, or a machine with more memory, may do "
+                  "(files written before this point are kept as they were)")  # fmt: skip
+        sys.exit(1)
 
 
 if __name__ == "__main__":  # pragma: no cover
