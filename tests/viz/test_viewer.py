@@ -163,13 +163,14 @@ def test_the_page_in_headless_chromium(tmp_path: Path) -> None:
     assert (img < 0.9).any(axis=2).mean() > 0.2
 
 
-@pytest.mark.parametrize("scenario", ["simple2d", "hrmaga-popup", "rscdwoa-mixed"])
+@pytest.mark.parametrize("scenario", ["simple2d", "hrmaga-popup", "rscdwoa-mixed", "none"])
 def test_every_kind_of_world_draws_without_errors(tmp_path: Path, scenario: str) -> None:
-    """A 2-D world (polygons, circles), terrain with danger and uncertain areas, and a world
-    without terrain with moving obstacles."""
+    """A 2-D world (polygons, circles), terrain with danger and uncertain areas, a world
+    without terrain with moving obstacles, and a plan without its scenario (paths only)."""
     page = tmp_path / "plan.html"
-    page.write_text(viewer_html(parse_plan(fleet_doc(4, points=50, scenario=scenario)),
-                                resolve(scenario)))  # fmt: skip
+    doc = fleet_doc(4, points=50, scenario="ppswarm1" if scenario == "none" else scenario)
+    world = None if scenario == "none" else resolve(scenario)
+    page.write_text(viewer_html(parse_plan(doc), world))
     result = selftest(chromium(tmp_path), page)
     assert result["webgl"] is True and result["errors"] == []
     assert result["moved"] == 4 and result["painted"] > 0.1
