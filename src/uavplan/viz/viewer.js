@@ -127,7 +127,8 @@ function shade(geometry, base) {  // base: [r, g, b] sRGB 0-1, or per vertex (a 
 }
 const rgb = (hex) => [(hex >> 16) / 255, ((hex >> 8) & 255) / 255, (hex & 255) / 255];
 const solid = (opacity) => new THREE.MeshBasicMaterial({
-  vertexColors: true, transparent: opacity < 1, opacity, side: THREE.DoubleSide, depthWrite: opacity >= 0.5,
+  // translucent solids hide nothing behind them (a UAV behind a cylinder shows through it)
+  vertexColors: true, transparent: opacity < 1, opacity, side: THREE.DoubleSide, depthWrite: opacity >= 1,
 });
 const lineOf = (pts, colour, opacity, dashed) => {  // pts: [x, y, z] in the world's frame
   const g = new THREE.BufferGeometry().setAttribute("position",
@@ -458,7 +459,7 @@ function legend() {
   ];
   const exact = ex && !ex.takeoff_s && !ex.speed && !ex.track_h && !ex.track_v;
   if (exact) rows.push("execution model: nominal (flown exactly as planned)");
-  else if (ex) rows.push(`execution model: take-off ±${ex.takeoff_s} s, speed ±${(100 * ex.speed).toFixed(3).replace(/\.?0+$/, "")} %, tracking ${ex.track_h} m / ${ex.track_v} m`);
+  else if (ex) rows.push(`execution model: take-off ±${ex.takeoff_s} s, speed ±${trim((100 * ex.speed).toFixed(3))} %, tracking ${ex.track_h} m / ${ex.track_v} m`);
   rows.push(`lines: flown paths; bright: each UAV's last ${trail.toFixed(0)} s`);
   if (bad.length) {
     rows.push(`<span class='bad'>${bad.length} UAV(s) failing a check</span>: ` +
@@ -475,7 +476,12 @@ function legend() {
   $("legend").innerHTML = rows.join("<br>");
   for (const a of $("legend").querySelectorAll("a[data-k]")) a.addEventListener("click", () => select(Number(a.dataset.k)));
 }
-const num = (x, unit, scale) => (x === null || x === undefined ? "any" : `${(x * (scale || 1)).toPrecision(3).replace(/\.?0+$/, "")} ${unit}`);
+const trim = (t) => (t.includes(".") && !t.includes("e") ? t.replace(/0+$/, "").replace(/\.$/, "") : t);
+const num = (x, unit, scale) => {
+  const v = x * (scale || 1);
+  return `±${Math.abs(v) >= 1000 ? String(Math.round(v)) : trim(v.toPrecision(3))} ${unit}`;
+};
+const limit = (x, unit, scale) => (x === null || x === undefined ? "any" : num(x, unit, scale));
 function select(k) {
   selected = k;
   pathMat.uniforms.sel.value = trailMat.uniforms.sel.value = k;
@@ -490,9 +496,9 @@ function select(k) {
   if (u.m) {
     const by = (w) => (u.m.limited_by && u.m.limited_by[w] ? ` (by ${esc(u.m.limited_by[w])})` : "");
     rows.push("margins it tolerates:",
-      `&nbsp; take-off error ±${num(u.m.takeoff_s, "s")}${by("takeoff_s")}`,
-      `&nbsp; speed error ±${num(u.m.speed, "%", 100)}${by("speed")}`,
-      `&nbsp; tracking ${num(u.m.track_h, "m")} horizontal${by("track_h")}, ${num(u.m.track_v, "m")} vertical${by("track_v")}`);
+      `&nbsp; take-off error: ${limit(u.m.takeoff_s, "s")}${by("takeoff_s")}`,
+      `&nbsp; speed error: ${limit(u.m.speed, "%", 100)}${by("speed")}`,
+      `&nbsp; tracking: ${limit(u.m.track_h, "m")} horizontal${by("track_h")}, ${limit(u.m.track_v, "m")} vertical${by("track_v")}`);
   }
   rows.push("<a id='unselect' style='cursor:pointer;color:#06c'>close</a>");
   card.innerHTML = rows.join("<br>");
