@@ -220,3 +220,22 @@ def test_a_generated_fleet_that_the_tracking_error_pushes_out_is_placed_again() 
             assert not pw.world.point_problems(np.asarray(p, dtype=np.float64))
     nominal = planning_world(sc, "ppswarm4@1000", nominal=True)
     assert nominal.replaced == 0 and nominal.world.tasks == sc.tasks
+
+
+def test_a_world_refusing_many_tasks_names_the_first_few_and_counts_the_rest() -> None:
+    """A fleet file's 1,000 tasks, spaced 45 m (three layers, the outer two too near the band's
+    ends for an 8 m vertical tracking error): the error is a few lines, not 1,300."""
+    import dataclasses
+
+    import pytest
+
+    from uavplan.scenarios import resolve
+    from uavplan.strategy import WorldProblem, planning_world
+    from uavplan.world.fleet_tasks import with_fleet
+
+    sc = with_fleet(resolve("ppswarm2"), 1000, seed=0, min_spacing=45.0)
+    with pytest.raises(WorldProblem) as exc:
+        planning_world(dataclasses.replace(sc, name="fleet.yaml"), "fleet.yaml")
+    lines = exc.value.problems
+    assert len(lines) == 6 and "task uav0" in lines[0]
+    assert lines[-1].startswith("fleet.yaml: ... and ") and "more starts and goals" in lines[-1]

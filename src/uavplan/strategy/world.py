@@ -130,8 +130,9 @@ def planning_world(
             world = dataclasses.replace(world, tasks=placed.tasks)
             given = dataclasses.replace(original, tasks=placed.tasks)
             bad = _task_problems(world, ref, model)
-        if bad:
-            raise WorldProblem(bad)
+        if bad:  # the first few, and how many more (a generated fleet can have hundreds)
+            more = [f"{ref}: ... and {len(bad) - 5} more starts and goals like these"]
+            raise WorldProblem(bad[:5] + (more if len(bad) > 5 else []))
     return PlanningWorld(world, model, source, r, given_r, af, v, given_v, given, replaced)
 
 
