@@ -43,7 +43,8 @@ def test_plan_runs_a_sample_at_smoke_scale(name: str, tmp_path: Path) -> None:
 @pytest.mark.parametrize("name", available_plans())
 def test_plan_runs_at_smoke_scale(name: str, tmp_path: Path) -> None:
     """One test per plan, so that the plans run in parallel (the longest is 15-40 s)."""
-    check_smoke(get_plan(name), get_plan(name), tmp_path)
+    plan = get_plan(name)
+    check_smoke(plan, plan, tmp_path)
 
 
 def check_smoke(whole: ExperimentPlan, plan: ExperimentPlan, tmp_path: Path) -> None:
