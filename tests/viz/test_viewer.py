@@ -152,6 +152,7 @@ def test_the_page_in_headless_chromium(tmp_path: Path) -> None:
     assert result["webgl"] is True and result["errors"] == []
     assert result["uavs"] == 40 and result["moved"] == 40
     assert result["picked"] == "uav39"  # a click on its marker opens its card
+    assert result["played"] is True  # play moves the clock and the slider
     assert result["painted"] > 0.2  # the terrain fills a good part of the view
     assert result["red"] > 100  # the failing UAVs' markers and paths are drawn in red
     page.write_text(viewer_html(parse_plan(fleet_doc(40)), resolve("ppswarm1-traffic")))

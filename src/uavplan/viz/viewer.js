@@ -589,6 +589,12 @@ if (selftest) {
   select(k);
   result.picked = k >= 0 && $("info").style.display === "block" ? $("info").textContent.split(":")[0] : null;
   select(-1);
+  // play: two frames half a second apart move the clock and the slider
+  setTime(t0); slider.value = 0;
+  playing = true; lastFrame = 0;
+  tick(1000); tick(1500);
+  playing = false;
+  result.played = now > t0 && Number(slider.value) > 0;
   if (location.hash.startsWith("#fps")) {  // frames drawn per second while playing (each frame finished)
     if (location.hash === "#fps-empty") scene.visible = live.visible = false;  // the reference
     const px = new Uint8Array(4);
