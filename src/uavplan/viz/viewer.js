@@ -49,18 +49,6 @@ function groundAt(x, y) {  // the shown terrain's height at (x, y), bilinear; 0 
   return (1 - b) * ((1 - a) * h(i, j) + a * h(i, j + 1)) + b * ((1 - a) * h(i + 1, j) + a * h(i + 1, j + 1));
 }
 
-function at(times, pts, t, out) {  // position at time t (held before the start and after the end)
-  const n = times.length - 1;
-  let a = 0, b = n, f = 0;
-  if (t >= times[n]) a = b = n;
-  else if (t > times[0]) {
-    while (b - a > 1) { const m = (a + b) >> 1; if (times[m] <= t) a = m; else b = m; }
-    f = (t - times[a]) / (times[b] - times[a] || 1);
-  } else b = 0;
-  for (let i = 0; i < 3; i++) out[i] = pts[3 * a + i] + f * (pts[3 * b + i] - pts[3 * a + i]);
-  return out;
-}
-
 // ------------------------------------------------------------------ renderer, camera, lights
 const view = $("view");
 THREE.ColorManagement.enabled = false;  // colours as given: sRGB values, drawn as they are
@@ -322,7 +310,7 @@ live.add(markers);
 
 // ------------------------------------------------------------------ time, drawing, overlays
 const slider = $("time"), clock = $("clock");
-let now = t0, selected = -1, pending = false, playing = false, lastFrame = 0;
+let now = t0, pending = false, playing = false, lastFrame = 0;
 const tmp = [0, 0, 0];
 function locate(times, t) {  // [a, f]: t lies between times[a] and times[a + 1] at fraction f
   const n = times.length - 1;
@@ -364,7 +352,8 @@ function setTime(t) {
   trailGeo.setDrawRange(0, nv);
   markGeo.attributes.position.needsUpdate = markGeo.attributes.air.needsUpdate = true;
   for (const o of movers) {
-    at(o.m.t, o.p, t, tmp);
+    const [a, f] = locate(o.m.t, t);
+    pointAt(o.p, a, f, tmp, 0);
     const s = S(tmp[0], tmp[1], tmp[2]);
     o.mesh.position.set(s[0], s[1], s[2]);
   }
@@ -483,7 +472,6 @@ const num = (x, unit, scale) => {
 };
 const limit = (x, unit, scale) => (x === null || x === undefined ? "any" : num(x, unit, scale));
 function select(k) {
-  selected = k;
   pathMat.uniforms.sel.value = trailMat.uniforms.sel.value = k;
   staticDirty = true;
   const card = $("info");
