@@ -36,12 +36,15 @@ def planned(fleet6: Scenario) -> dict[str, np.ndarray]:
     return {r.uav_id: (r.waypoints, r.times) for r in fr.results}
 
 
-def _problem(sc: Scenario, planned: dict, reserved: int) -> PathProblem:
-    """The last task's problem among the planned flights of the first ``reserved`` tasks."""
+def _problem(
+    sc: Scenario, planned: dict, reserved: int, cruise: float | None = None
+) -> PathProblem:
+    """The last task's problem among the planned flights of the first ``reserved`` tasks
+    (its cruise layer at ``cruise`` m in the band's reference when given)."""
     table = ReservationTable.for_uav(sc.bounds.lo, sc.bounds.hi, sc.uav)
     for t in sc.tasks[:reserved]:
         table.add(t.id, *planned[t.id])
-    return separated_problem(sc, sc.tasks[-1], table)
+    return separated_problem(sc, dataclasses.replace(sc.tasks[-1], cruise=cruise), table)
 
 
 def _swarm(enc: CartesianEncoding, path: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -56,11 +59,11 @@ def _reference(problem: PathProblem, enc: CartesianEncoding, X: np.ndarray, belo
     return infinite_if_violated(f, cv)
 
 
-@pytest.mark.parametrize("reserved", [0, 5])
+@pytest.mark.parametrize(("reserved", "cruise"), [(0, None), (5, None), (5, 120.0)])
 def test_fused_kernel_gives_the_reference_costs(
-    fleet6: Scenario, planned: dict, reserved: int
+    fleet6: Scenario, planned: dict, reserved: int, cruise: float | None
 ) -> None:
-    problem = _problem(fleet6, planned, reserved)
+    problem = _problem(fleet6, planned, reserved, cruise)
     enc = CartesianEncoding(problem, 10)
     fused = FleetObjective.of(problem, enc)
     assert fused is not None

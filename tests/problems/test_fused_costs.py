@@ -5,6 +5,8 @@ random paths, for the total alone (which stops early at a collision) and for eve
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -143,12 +145,22 @@ def world_paths(rng: np.random.Generator, N: int) -> np.ndarray:
     band=st.sampled_from([None, "ground", "absolute"]),
     lookup=st.sampled_from(["bilinear", "nearest"]),
     moving=st.integers(0, 2),
+    cruise=st.one_of(st.none(), st.floats(-10.0, 70.0)),
 )
 def test_ppswarm_fused_equals_the_terms(
-    seed: int, J: int, N: int, terrain: bool, band: str | None, lookup: str, moving: int
+    seed: int,
+    J: int,
+    N: int,
+    terrain: bool,
+    band: str | None,
+    lookup: str,
+    moving: int,
+    cruise: float | None,
 ) -> None:
     rng = np.random.default_rng(seed)
     sc = random_world(rng, J, terrain, band is not None, "ppswarm", band or "ground", moving)
+    if cruise is not None:  # a cruise layer instead of the band's middle
+        sc = dataclasses.replace(sc, tasks=(dataclasses.replace(sc.tasks[0], cruise=cruise),))
     compare(sc, world_paths(rng, N), lookup)
 
 

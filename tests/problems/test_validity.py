@@ -222,12 +222,14 @@ def test_bad_shapes_are_refused() -> None:
 )
 @pytest.mark.parametrize("strict", [False, True])
 @pytest.mark.parametrize("lookup", ["bilinear", "nearest"])
+@pytest.mark.parametrize("climb", [False, True])
 def test_fused_static_checks_agree_with_the_checks_one_by_one(
-    name: str, strict: bool, lookup: str
+    name: str, strict: bool, lookup: str, climb: bool
 ) -> None:
-    """``passing`` (one fused kernel for bounds, cylinders, terrain and band in 3-D) gives
-    exactly the verdicts of the checks run one by one (:meth:`violations`); ``many``: 300
-    cylinders, which the grid-indexed check tests after the kernel."""
+    """``passing`` (one fused kernel for bounds, cylinders, terrain and band in 3-D, and the
+    segments' climb angles when the validator checks them) gives exactly the verdicts of the
+    checks run one by one (:meth:`violations`); ``many``: 300 cylinders, which the
+    grid-indexed check tests after the kernel."""
     import dataclasses
 
     from uavplan.world import Cylinder
@@ -247,8 +249,13 @@ def test_fused_static_checks_agree_with_the_checks_one_by_one(
         sc = resolve(name)
     if name == "jacksboro":  # finite cylinders on a real DEM; its revealed area is a polygon
         sc = dataclasses.replace(sc, uncertain_areas=())
-    v = MotionValidator(sc, sc.tasks[0], strict_altitude=strict, lookup=lookup)
+    if climb:  # limits that many of the random segments break
+        sc = dataclasses.replace(
+            sc, uav=dataclasses.replace(sc.uav, max_climb_angle=40.0, max_descent_angle=55.0)
+        )
+    v = MotionValidator(sc, sc.tasks[0], strict_altitude=strict, lookup=lookup, climb=climb)
     assert v._static_args is not None
+    assert ("climb" in v.checks()) is climb
     rng = np.random.default_rng(11)
     lo, hi = np.asarray(sc.bounds.lo), np.asarray(sc.bounds.hi)
     span = hi - lo
@@ -272,6 +279,11 @@ def test_fused_static_checks_agree_with_the_checks_one_by_one(
     got[v.passing(b)] = True
     np.testing.assert_array_equal(got, want)
     assert 0 < want.sum() < len(paths)
+    if climb:  # the climb check decides some paths that pass every other check
+        others = np.ones(len(paths), dtype=bool)
+        for check, bad in v.violations(b).items():
+            others &= ~bad if check != "climb" else True
+        assert (others & ~want).any()
     if name == "many":
         assert v._cylinders_by_grid and v.violations(b)["cylinders"][:200].any()
     np.testing.assert_array_equal(v.paths_valid(paths), want)

@@ -1,13 +1,14 @@
 """One Numba pass over a batch of 3-D paths for the world's static checks.
 
 :meth:`uavplan.problems.validity.MotionValidator.passing` (the yes/no question every planner
-asks most) runs the bounds, cylinder, terrain and altitude-band checks of a 3-D world in this
-single kernel, path by path, stopping at a path's first failure, instead of one NumPy pass per
-check. It calls the same scalar functions as the per-check kernels
-(:func:`uavplan.world.geometry.seg_cyl_dist`, the terrain's branch-and-bound
-``_segment_min_clearance``, :func:`uavplan.world._terrain_kernels.ground_one`), so its verdicts
-are those of :meth:`~uavplan.problems.validity.MotionValidator.violations`; the tests compare
-the two on random batches.
+asks most) runs the bounds, cylinder, terrain and altitude-band checks of a 3-D world (and the
+segments' climb angles where the validator checks them) in this single kernel, path by path,
+stopping at a path's first failure, instead of one NumPy pass per check. It calls the same
+scalar functions as the per-check kernels (:func:`uavplan.world.geometry.seg_cyl_dist`, the
+terrain's branch-and-bound ``_segment_min_clearance``,
+:func:`uavplan.world._terrain_kernels.ground_one`), so its verdicts are those of
+:meth:`~uavplan.problems.validity.MotionValidator.violations`; the tests compare the two on
+random batches.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from numba import njit, prange
 from uavplan.kernel_builds import population_kernel
 from uavplan.world._terrain_kernels import _segment_min_clearance, ground_one, snap_one
 from uavplan.world.geometry import seg_cyl_dist
+from uavplan.world.tolerances import ANGLE_TOL_DEG
 
 
 @njit(cache=True, inline="always")
@@ -26,7 +28,10 @@ def static_path_ok(paths, p, args, waypoint_band=True):  # pragma: no cover - nu
     (:func:`static_world_ok`'s test of one path; the fleet's fused objective calls it too).
     ``args``: the tuple ``(lo, hi, bounds_tol, cyl_c, cyl_r, cyl_lo, cyl_hi, has_terrain, H,
     flat, off, shp, nH, nflat, noff, nshp, grid, need, has_band, band_ground, nearest, bmin, bmax,
-    band_tol, strict)`` (:meth:`~uavplan.problems.validity.MotionValidator.static_kernel_args`).
+    band_tol, strict, max_climb, max_descent)``
+    (:meth:`~uavplan.problems.validity.MotionValidator.static_kernel_args`; the climb and
+    descent limits in degrees, inf where not checked, as
+    :func:`~uavplan.problems.validity.climb_violations` tests them).
     ``waypoint_band=False``: the caller knows every waypoint to be inside the band (without
     the tolerance), so the band is checked along the segments only.
 
@@ -64,6 +69,8 @@ def static_path_ok(paths, p, args, waypoint_band=True):  # pragma: no cover - nu
         bmax,
         band_tol,
         strict,
+        max_climb,
+        max_descent,
     ) = args
     N = paths.shape[1]
     J = cyl_c.shape[0]
@@ -76,6 +83,17 @@ def static_path_ok(paths, p, args, waypoint_band=True):  # pragma: no cover - nu
             c = paths[p, k, d]
             if not (c >= lo[d] - bounds_tol and c <= hi[d] + bounds_tol):
                 ok = False
+    if ok and (max_climb < np.inf or max_descent < np.inf):  # the segments' climb angles
+        for s in range(N - 1):
+            ex = paths[p, s + 1, 0] - paths[p, s, 0]
+            ey = paths[p, s + 1, 1] - paths[p, s, 1]
+            ez = paths[p, s + 1, 2] - paths[p, s, 2]
+            h = np.hypot(ex, ey)
+            if h > 0 or ez != 0:
+                ang = np.degrees(np.arctan2(ez, h))
+                if ang > max_climb + ANGLE_TOL_DEG or -ang > max_descent + ANGLE_TOL_DEG:
+                    ok = False
+                    break
     if ok and has_band and waypoint_band:  # the band at the waypoints
         for k in range(N):
             z = paths[p, k, 2]

@@ -77,10 +77,14 @@ def threat_cost_spso(
 
 
 # ---------------------------------------------------------------------------- altitude
-def altitude_cost(h: FloatArray, h_min: float, h_max: float) -> FloatArray:
+def altitude_cost(
+    h: FloatArray, h_min: float, h_max: float, mid: float | None = None
+) -> FloatArray:
     """PPSwarm Eqs. (6)-(7): sum over nodes of |h_i - (h_max + h_min)/2| inside the band, inf
-    outside. ``h``: (pop, n) altitudes in the band's reference (above ground or absolute)."""
-    mid = 0.5 * (h_max + h_min)
+    outside. ``h``: (pop, n) altitudes in the band's reference (above ground or absolute).
+    ``mid``: another height to pull toward than the band's middle (a cruise layer)."""
+    if mid is None:
+        mid = 0.5 * (h_max + h_min)
     cost = np.where((h >= h_min) & (h <= h_max), np.abs(h - mid), np.inf)
     return np.asarray(cost.sum(axis=1))
 
@@ -274,6 +278,7 @@ def path_cost_batch(
     ground_ref,
     z_min,
     z_max,
+    z_mid,
     weights,
     early,
 ):  # pragma: no cover - numba
@@ -295,7 +300,8 @@ def path_cost_batch(
     * J3: heights of the terrain ``H`` (when ``has_terrain``) read at the ``nearest`` node or
       bilinear; SPSO: over the free nodes, inf below ground, else the distance to the band's
       middle; PPSwarm (``has_band``): over every node, in the band's reference
-      (``ground_ref``: above ground), inf outside the band, else the distance to its middle.
+      (``ground_ref``: above ground), inf outside the band, else the distance to ``z_mid``
+      (its middle, or the UAV's cruise layer, :attr:`uavplan.world.scenario.Task.cruise`).
     * J4: SPSO's limited angles in degrees (:func:`_spso_node_smoothness_fast`); PPSwarm's
       turning angles and climb-angle changes in radians (Eq. 10 with a1 = a2 = 1).
 
@@ -308,7 +314,7 @@ def path_cost_batch(
     total = np.empty(P)
     terms = np.zeros((P, 4))
     psi = np.empty((P, max(N - 1, 1)))  # PPSwarm's climb angle per segment
-    mid = 0.5 * (z_max + z_min)
+    mid = 0.5 * (z_max + z_min) if model == SPSO else z_mid
     strict = model == SPSO
     for q in prange(P):
         finite = True

@@ -112,7 +112,7 @@ def _t_altitude(ctx: Batch) -> FloatArray:
     band = ctx.scenario.altitude
     if band is None:
         return np.zeros(ctx.paths.shape[0])
-    return C.altitude_cost(ctx.band_heights, band.min, band.max)
+    return C.altitude_cost(ctx.band_heights, band.min, band.max, ctx.validator.task.cruise)
 
 
 def _t_altitude_spso(ctx: Batch) -> FloatArray:
@@ -195,9 +195,11 @@ def _world_args(v: MotionValidator, r_in: FloatArray, r_out: FloatArray) -> tupl
         H.setflags(write=False)  # read-only as a terrain's heights: one kernel signature
     band = sc.altitude
     lo, hi = (band.min, band.max) if band is not None else (0.0, 0.0)
+    mid = v.task.cruise if v.task.cruise is not None else 0.5 * (hi + lo)
     ground = band is not None and band.reference == "ground"
     return (*cyl, None, None, H, t is not None, v.lookup == "nearest", float(x0), float(y0),
-            float(dx), float(dy), band is not None, ground, float(lo), float(hi))  # fmt: skip
+            float(dx), float(dy), band is not None, ground, float(lo), float(hi),
+            float(mid))  # fmt: skip
 
 
 def _spso_prepare(v: MotionValidator) -> tuple[Any, ...]:

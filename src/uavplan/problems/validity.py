@@ -44,6 +44,7 @@ fused 2-D scene pass, separation conflicts), each computed once and only when as
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import cached_property
@@ -92,7 +93,7 @@ CHECKS = (
 CASCADE = ("bounds", "cylinders", "circles", "polygons", "altitude", "speed", "climb", "turn",
            "terrain", "moving", "separation")  # fmt: skip
 #: The checks the fused kernel answers together in a 3-D world.
-STATIC = frozenset(("bounds", "cylinders", "terrain", "altitude"))
+STATIC = frozenset(("bounds", "cylinders", "terrain", "altitude", "climb"))
 #: The checks that read time: a take-off delay changes their verdicts and no other.
 TIME_CHECKS = frozenset(("moving", "separation"))
 #: Segments checked per kernel call by :meth:`MotionValidator.segments_valid` (bounds memory).
@@ -318,6 +319,9 @@ class MotionValidator:
             (``"bilinear"``, or ``"nearest"`` as SPSO's cost reads them).
         reservations: other UAVs' timed trajectories to keep clear of (``separation``).
         kinematics: also check the UAV's kinematic limits (``speed``, ``climb``, ``turn``).
+        climb: check the climb and descent angles of straight segments without the other
+            kinematic limits (a planner's edges: no smoothing flattens a segment steeper than
+            the UAV climbs, while corners are for the smoothing to round).
         cost_terrain: the map the cost terms read terrain heights from (a terrain pyramid
             level's sampled map, :mod:`uavplan.world.pyramid`), where the checks read the
             scenario's (that level's conservative map); default the scenario's terrain.
@@ -333,10 +337,12 @@ class MotionValidator:
         reservations: ReservationTable | None = None,
         kinematics: bool = False,
         cost_terrain: Terrain | None = None,
+        climb: bool = False,
     ) -> None:
         self.scenario = scenario
         self.cost_terrain = cost_terrain if cost_terrain is not None else scenario.terrain
         self.kinematics = bool(kinematics)
+        self.climb = bool(climb)
         self.task = task if isinstance(task, Task) else scenario.task(task)
         self.dim = scenario.dim
         self.strict_altitude = bool(strict_altitude)
@@ -387,14 +393,14 @@ class MotionValidator:
             out.append("moving")
         if self.reservations is not None:
             out.append("separation")
+        uav = sc.uav
         if self.kinematics:
-            uav = sc.uav
             out.append("speed")
-            limits = (uav.max_climb_angle, uav.max_descent_angle)
-            if sc.dim == 3 and any(a is not None for a in limits):
-                out.append("climb")
-            if uav.turn_radius > 0:
-                out.append("turn")
+        limits = (uav.max_climb_angle, uav.max_descent_angle)
+        if (self.kinematics or self.climb) and sc.dim == 3 and any(a is not None for a in limits):
+            out.append("climb")
+        if self.kinematics and uav.turn_radius > 0:
+            out.append("turn")
         return tuple(out)
 
     # ------------------------------------------------------------------ the checks
@@ -458,8 +464,17 @@ class MotionValidator:
             band is not None, ground, self.lookup == "nearest",
             float(band.min) if band is not None else 0.0,
             float(band.max) if band is not None else 0.0,
-            BAND_TOL, strict,
+            BAND_TOL, strict, *self._climb_limits,
         )  # fmt: skip
+
+    @property
+    def _climb_limits(self) -> tuple[float, float]:
+        """The static kernel's climb and descent limits, degrees (inf: not checked)."""
+        uav = self.scenario.uav
+        if "climb" not in self.checks():
+            return math.inf, math.inf
+        up, down = uav.max_climb_angle, uav.max_descent_angle
+        return (math.inf if up is None else float(up)), (math.inf if down is None else float(down))
 
     @cached_property
     def segment_kernel(self) -> tuple[Any, tuple[object, ...]] | None:
@@ -700,6 +715,45 @@ def climb_violations(
     if max_descent is not None:
         bad |= moving & (-ang > max_descent + ANGLE_TOL_DEG)
     return np.asarray(np.any(bad, axis=1))
+
+
+def limit_climb(
+    path: FloatArray,
+    max_climb: float | None,
+    max_descent: float | None,
+    share: float = 0.9,
+) -> FloatArray | None:
+    """``path`` (n, 3) with its interior heights moved as little as a greedy pass can so that
+    no segment climbs or descends more steeply than ``share`` of ``max_climb`` and
+    ``max_descent`` (degrees, as slopes: the tangent is scaled; None: no limit); the
+    horizontal track, the start and the goal unchanged. None when no heights do it (the start
+    and goal too far apart vertically for the track between them).
+
+    The heights each vertex can take are those reachable from the start going forward and
+    from the goal going backward within the slopes (two interval sweeps); each vertex in turn
+    then takes the height nearest its own inside both its interval and the slopes from the
+    vertex before, which the backward interval guarantees is not empty. ``share`` < 1 leaves
+    room for the smoothed flight, whose arcs shorten the track near each vertex."""
+    P = np.array(path, dtype=np.float64)
+    n = len(P)
+    if n < 3 or P.shape[1] != 3:
+        return P if not climb_violations(P[None], max_climb, max_descent)[0] else None
+    h = np.hypot(*np.diff(P[:, :2], axis=0).T)
+    up = h * (math.tan(math.radians(max_climb)) * share if max_climb is not None else np.inf)
+    down = h * (math.tan(math.radians(max_descent)) * share if max_descent is not None
+                else np.inf)  # fmt: skip
+    up, down = np.nan_to_num(up, nan=0.0), np.nan_to_num(down, nan=0.0)  # inf * 0: level
+    lo, hi = np.empty(n), np.empty(n)  # reachable backward from the goal
+    lo[-1] = hi[-1] = P[-1, 2]
+    for i in range(n - 2, -1, -1):
+        lo[i], hi[i] = lo[i + 1] - up[i], hi[i + 1] + down[i]
+    if not lo[0] <= P[0, 2] <= hi[0]:
+        return None
+    for i in range(1, n - 1):
+        a = max(lo[i], P[i - 1, 2] - down[i - 1])
+        b = min(hi[i], P[i - 1, 2] + up[i - 1])
+        P[i, 2] = min(max(P[i, 2], a), b)
+    return P
 
 
 def turn_estimates(xy: FloatArray) -> tuple[FloatArray, FloatArray]:

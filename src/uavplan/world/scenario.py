@@ -158,12 +158,15 @@ class UAV:
 @dataclass(frozen=True)
 class Task:
     """A UAV's mission: fly from ``start`` to ``goal`` (absolute metres), leaving at
-    ``start_time`` seconds."""
+    ``start_time`` seconds. ``cruise``: the height, in the altitude band's reference, that
+    PPSwarm's altitude cost (Eqs. 6-7) pulls the UAV toward instead of the band's middle (a
+    planner's cruise layer, :mod:`uavplan.world.cruise_layers`; None: the band's middle)."""
 
     id: str
     start: tuple[float, ...]
     goal: tuple[float, ...]
     start_time: float = 0.0
+    cruise: float | None = None
 
     def __post_init__(self) -> None:
         s = np.asarray(self.start, dtype=np.float64)

@@ -10,7 +10,12 @@ straight-segment validator of the UAV's flight (the altitude band along whole se
 2. **shortcuts** by line of sight (:func:`~uavplan.problems.validity.greedy_shortcut`);
 3. **tightening** (:func:`tighten`): each interior vertex pulled towards the midpoint of its
    neighbours while the problem's cost falls and both its segments stay valid (a discrete
-   string pulling), then shortcuts again (a pulled-straight vertex drops out).
+   string pulling), then shortcuts again (a pulled-straight vertex drops out);
+4. **climb limits** when a segment climbs or descends more steeply than the UAV may
+   (:func:`~uavplan.problems.validity.limit_climb`: interior heights moved the least a greedy
+   pass can, the track unchanged; kept when every segment stays valid). A sampling planner's
+   edges and a shortcut's know nothing of the climb angle (RRT* can join a vertex 15 m from
+   the start to it at 40 degrees), and no smoothing of the corners flies such a segment.
 
 The result is kept when the problem finds it feasible, it is no less flyable than the found
 path, and it costs no more unless it flies where the found path did not. The flight is checked
@@ -26,7 +31,13 @@ from numpy.typing import NDArray
 
 from uavplan.planners.core.flight import flight_validator
 from uavplan.problems.path_problem import PathProblem
-from uavplan.problems.validity import MotionValidator, band_repair, greedy_shortcut
+from uavplan.problems.validity import (
+    MotionValidator,
+    band_repair,
+    climb_violations,
+    greedy_shortcut,
+    limit_climb,
+)
 from uavplan.world.scenario import Scenario, Task
 
 FloatArray = NDArray[np.float64]
@@ -97,13 +108,33 @@ def polished(
         tight = tighten(problem, v, cand)
         if not np.array_equal(tight, cand):
             cand, steps = greedy_shortcut(v, tight)[0], [*steps, "tightening"]
+    steep = _steep(scenario, cand)
+    if steep and bool(v.paths_valid(cand[None])[0]):
+        eased = _eased(scenario, cand)
+        if eased is not None and bool(v.paths_valid(eased[None])[0]):
+            cand, steps, steep = eased, [*steps, "climb limits"], False
     if not steps:
         return path, {}
     before, after = problem.evaluate(path[None]), problem.evaluate(cand[None])
     c0, c1 = float(before.cost[0]), float(after.cost[0])
-    cand_flies = bool(v.paths_valid(cand[None])[0])
+    cand_flies = bool(v.paths_valid(cand[None])[0]) and not steep
+    flies = flies and not _steep(scenario, path)
     if not bool(after.feasible[0]) or (flies and not cand_flies):
         return path, {}
     if bool(before.feasible[0]) and c1 > c0 and (flies or not cand_flies):
         return path, {}  # a higher cost only buys a path that flies where ``path`` did not
     return cand, {"points": [len(path), len(cand)], "cost": [c0, c1], "steps": steps}
+
+
+def _steep(scenario: Scenario, path: FloatArray) -> bool:
+    """Whether a segment of ``path`` climbs or descends more steeply than the UAV may."""
+    uav = scenario.uav
+    if scenario.dim != 3 or (uav.max_climb_angle is None and uav.max_descent_angle is None):
+        return False
+    return bool(climb_violations(path[None], uav.max_climb_angle, uav.max_descent_angle)[0])
+
+
+def _eased(scenario: Scenario, path: FloatArray) -> FloatArray | None:
+    """``path`` within the UAV's climb and descent limits (:func:`limit_climb`), or None."""
+    uav = scenario.uav
+    return limit_climb(path, uav.max_climb_angle, uav.max_descent_angle)

@@ -87,7 +87,8 @@ def _row_sum(a, n):  # pragma: no cover - numba
 @population_kernel(error_model="numpy")
 def fleet_costs(
     X, below, n_free, start, goal, ends_ground, ground_genes, H, x0, y0, dx, dy,
-    weights, nonneg, cx, cy, cz_lo, cz_hi, r_in, r_out, band_mode, bmin, bmax, speed, t_start,
+    weights, nonneg, cx, cy, cz_lo, cz_hi, r_in, r_out, band_mode, bmin, bmax, mid, speed,
+    t_start,
     static, has_table, table,
 ):  # fmt: skip  # pragma: no cover - numba
     """The "inf" rule's cost of every particle ``X`` (P, 3 n_free), (P,): F1-F4 with
@@ -99,7 +100,8 @@ def fleet_costs(
     Decoding: ``ground_genes``: z genes are heights above the bilinear terrain ``H``. Threat:
     cylinders as structure of arrays, PPSwarm's Eqs. (4)-(5) (``r_in`` = R, ``r_out`` = R +
     S1, not strict). Altitude (Eqs. 6-7): ``band_mode`` 0 none, 1 above the terrain, 2
-    absolute, band ``[bmin, bmax]``; ``ends_ground``: the terrain under the start and the
+    absolute, band ``[bmin, bmax]``, each node's cost its distance to ``mid`` (the band's
+    middle, or the UAV's cruise layer); ``ends_ground``: the terrain under the start and the
     goal. Times at ``speed`` from ``t_start``. ``static`` and ``table`` are the ``args`` of
     :func:`static_path_ok` and :func:`path_query`.
     """
@@ -111,7 +113,6 @@ def fleet_costs(
     tmp = np.empty((P, N))
     ground = np.empty((P, N))
     out = np.full(P, np.inf)
-    mid = 0.5 * (bmax + bmin)
     for p in prange(P):
         for d in range(3):
             paths[p, 0, d] = start[d]
@@ -221,6 +222,13 @@ def fleet_costs(
     return out
 
 
+def _mid(band: Any, task: Any) -> float:
+    """The height F3 pulls toward: the task's cruise layer, else the band's middle."""
+    if band is None:
+        return 0.0
+    return float(task.cruise) if task.cruise is not None else 0.5 * (band.max + band.min)
+
+
 class FleetObjective:
     """The "inf" rule's objective of one UAV's low-level run in one kernel (the module
     docstring): ``evaluate(X, below)`` gives :meth:`PathProblem.evaluate_cv`'s cost under
@@ -275,6 +283,7 @@ class FleetObjective:
             band_mode,
             float(band.min) if band is not None else 0.0,
             float(band.max) if band is not None else 0.0,
+            _mid(band, problem.task),
             float(sc.uav.speed),
             float(problem.task.start_time),
         )

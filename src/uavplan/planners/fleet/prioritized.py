@@ -89,6 +89,7 @@ from uavplan.planners.fleet.fleet_objective import FleetObjective
 from uavplan.problems.encoding import ENCODINGS, CartesianEncoding
 from uavplan.problems.path_problem import PRESETS, PathProblem
 from uavplan.problems.validity import TIME_CHECKS
+from uavplan.world.cruise_layers import layered
 from uavplan.world.geometry import as_3d, track_crosses_itself
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
@@ -166,6 +167,11 @@ class PrioritizedConfig(FleetPlannerConfig):
     restart_order: str = option(
         "shuffle", "priorities after a restart: shuffled (Alg. 3 line 13) or the UAVs that "
         "failed in it first, the rest shuffled (ours)", choices=RESTART_ORDERS
+    )  # fmt: skip
+    layers: int = option(
+        1, "cruise altitude layers by heading: the altitude cost pulls each UAV toward the "
+        "middle of its heading sector's layer of the band instead of the band's middle "
+        "(ours, aviation's semicircular rule; 1: the paper's)", low=1
     )  # fmt: skip
 
 
@@ -248,7 +254,8 @@ class PrioritizedPlanner(FleetPlanner):
             if budget.max_iterations is None:
                 raise PlannerError(f"{self.name} takes an iteration budget (N_iter)")
             n_iter = int(budget.max_iterations)
-        tasks = scenario.tasks
+        tasks = layered(scenario.tasks, scenario.altitude if scenario.dim == 3 else None,
+                        cfg.layers)  # fmt: skip
         M = len(tasks)
         root = np.random.SeedSequence(seed)
         s_rrt, s_opt, s_order = root.spawn(3)

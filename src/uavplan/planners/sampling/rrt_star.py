@@ -211,6 +211,10 @@ class RRTStarConfig(Options):
         "numba", "numba: whole iterations in Numba where the world has a compiled segment check "
         "(the same tree); python: the reference loop", choices=("numba", "python"),
     )  # fmt: skip
+    climb_limits: bool = option(
+        False, "every edge within the UAV's climb and descent angles (ours; the paper's edges "
+        "keep clear of the world only): no smoothing flies a segment steeper than the UAV climbs"
+    )  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -284,10 +288,14 @@ def serial_numba() -> Iterator[None]:
         numba.set_num_threads(prev)
 
 
-def validity_problem(scenario: Scenario, task: Task | str | int | None = None) -> MotionValidator:
+def validity_problem(
+    scenario: Scenario, task: Task | str | int | None = None, climb: bool = False
+) -> MotionValidator:
     """The segment checker of the tree: strict-altitude validity, node heights read as the
-    scenario's cost preset reads them (see the module docstring)."""
-    return MotionValidator(scenario, task, strict_altitude=True, lookup=lookup_for(scenario.cost))
+    scenario's cost preset reads them (see the module docstring); with ``climb``, each edge
+    also within the UAV's climb and descent angles."""
+    return MotionValidator(scenario, task, strict_altitude=True,
+                           lookup=lookup_for(scenario.cost), climb=climb)  # fmt: skip
 
 
 # ------------------------------------------------------------------------------ the tree
@@ -334,7 +342,7 @@ class RRTStarTree:
         self.task = task if isinstance(task, Task) else scenario.task(task)
         self.config = config
         self.rng = rng
-        self.validator = validator or validity_problem(scenario, self.task)
+        self.validator = validator or validity_problem(scenario, self.task, config.climb_limits)
         self.dim = scenario.dim
         self.start = np.asarray(self.task.start, dtype=np.float64)
         self.goal = np.asarray(self.task.goal, dtype=np.float64)
@@ -827,7 +835,8 @@ def map_scaled_options(scenario: Scenario) -> dict[str, object]:
     """RRT* as a rescue (the single UAV's fallback, a fleet's repair): every edge checked as
     flown; its step scaled to the map (:data:`RESCUE_STEP_SHARE` of the horizontal diagonal,
     at least its default 50 m); informed, anytime within its iteration budget, its shortest
-    tree paths tightened."""
+    tree paths tightened, every edge within the UAV's climb and descent angles (a rescue's
+    path must fly: RRT*'s edges otherwise join vertices metres apart at any angle)."""
     lo, hi = scenario.bounds.lo, scenario.bounds.hi
     step = max(50.0, RESCUE_STEP_SHARE * float(np.hypot(hi[0] - lo[0], hi[1] - lo[1])))
     return {
@@ -837,4 +846,5 @@ def map_scaled_options(scenario: Scenario) -> dict[str, object]:
         "informed": True,
         "stop_at_goal": False,
         "tighten": True,
+        "climb_limits": True,
     }
