@@ -217,6 +217,41 @@ class ResultStore:
                 self._note_schema(shard, old.schema)
         return table
 
+    def compact(self, rows_per_shard: int = 20_000) -> tuple[int, int]:
+        """Rewrite the shards as few large ones of at most ``rows_per_shard`` rows (a sweep of
+        tens of thousands of small runs leaves hundreds of shards of a few dozen rows each,
+        most of whose bytes are per-file metadata): the same rows, a run written twice kept
+        once (the last written, as :meth:`read`). The new shards are written (each
+        atomically) before the old ones are removed, so a kill in between leaves every row on
+        disk, some twice, which reading and resuming already handle. Returns the shards
+        before and after."""
+        self.flush()
+        old = self.shards()
+        if len(old) <= 1:
+            return len(old), len(old)
+        table = pa.concat_tables([_read_table(s) for s in old], promote_options="default")
+        ids = table.column("run_id").to_pylist()
+        last = {r: i for i, r in enumerate(ids)}
+        if len(last) < len(ids):
+            table = table.take(pa.array(sorted(last.values()), type=pa.int64()))
+        new: list[Path] = []
+        try:
+            for start in range(0, table.num_rows, rows_per_shard):
+                self._seq += 1
+                name = (f"part-{time.strftime('%Y%m%dT%H%M%S')}-{self._session}-"
+                        f"{self._seq:05d}.parquet")  # fmt: skip
+                _write_shard(table.slice(start, rows_per_shard), self.dir / name)
+                new.append(self.dir / name)
+        except OSError as exc:
+            for f in new:
+                with contextlib.suppress(OSError):
+                    f.unlink()
+            raise StoreError(f"cannot write to {self.dir}: {_reason(exc)}", exc.errno) from exc
+        for f in old:
+            f.unlink()
+        self._known, self._nulls = None, {}
+        return len(old), len(new)
+
     # ------------------------------------------------------------------ reading
     def shards(self) -> list[Path]:
         return sorted(self.dir.glob("part-*.parquet"))

@@ -214,6 +214,29 @@ def _write_claims(folder: Path, target: Path) -> None:
     out.print(f"wrote {target}", markup=False)
 
 
+@bench_app.command("compact")
+def compact(
+    folder: Annotated[Path, typer.Argument(help="A sweep's results folder (its runs/ shards).")],
+    rows: Annotated[int, typer.Option(min=1, help="Rows per shard at most.")] = 20_000,
+) -> None:
+    """Rewrite a finished sweep's many small shards as a few large ones (the same runs, about a
+    third fewer bytes for tens of thousands of small runs); reading and resuming see no
+    difference."""
+    from uavplan.bench.store import ResultStore, StoreError
+
+    if not (folder / "runs").is_dir():
+        raise _fail(f"{folder}: no runs/ folder (give the --out folder of `uavplan bench run`)")
+    store = ResultStore(folder)
+    size = sum(f.stat().st_size for f in store.shards())
+    try:
+        before, after = store.compact(rows)
+    except StoreError as exc:
+        raise _fail(f"compact: {exc}; every run is still in {folder / 'runs'}") from None
+    now = sum(f.stat().st_size for f in store.shards())
+    out.print(f"{folder}: {before} shards ({size / 1e6:.1f} MB) -> {after} ({now / 1e6:.1f} MB)",
+              markup=False, highlight=False)  # fmt: skip
+
+
 def _write_report(folder: Path) -> tuple[Path, Path]:
     """The report of ``folder``, or a one-line error (a shard that cannot be read, no space)."""
     from uavplan.bench.report import write_report
