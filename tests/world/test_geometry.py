@@ -652,6 +652,20 @@ def test_track_crosses_itself() -> None:
     assert not track_crosses_itself(np.array([[0, 0], [1, 0], [1, 1], [0, 0]]))  # touches only
 
 
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 30), grid=st.booleans())
+def test_track_crosses_itself_compiled_equals_the_reference(seed: int, n: int, grid: bool) -> None:
+    from uavplan.world.geometry.polygons import (
+        track_crosses_itself,
+        track_crosses_itself_reference,
+    )
+
+    rng = np.random.default_rng(seed)
+    # random walks; on a small integer grid, touching and collinear cases are common
+    P = rng.integers(0, 4, (n, 3)).astype(float) if grid else np.cumsum(rng.normal(size=(n, 3)), 0)
+    assert track_crosses_itself(P) == track_crosses_itself_reference(P)
+
+
 def test_built_structures_are_kept_by_content() -> None:
     from uavplan.world.geometry import by_content
 

@@ -702,7 +702,10 @@ class ReservationTable:
         scenario's execution model, when it has one: the separation widened by what tracking
         error takes away (``sqrt((2 e_h)^2 + (2 e_v)^2)``; a per-axis separation widened axis
         by axis, or, when the schedule may drift, the sphere that holds the widened box), and
-        the take-off and speed errors as windows."""
+        the take-off and speed errors as windows. Under a model whose schedule drifts the
+        time bucket is at least the take-off window, ``2 delta0``: a candidate piece looks in
+        every bucket its window can meet, so buckets narrower than the window only add
+        lookups of the same reserved pieces (the answers are exact at any bucket)."""
         model = scenario.execution
         lo, hi, uav = scenario.bounds.lo, scenario.bounds.hi, scenario.uav
         if scenario.dim == 2:
@@ -710,6 +713,8 @@ class ReservationTable:
         if model is None or model.nominal:
             return cls.for_uav(lo, hi, uav, margin, dt=dt)
         timing = model.timing(uav.speed)
+        if model.timed:
+            dt = max(dt, 2.0 * float(model.takeoff_s))
         axes = getattr(uav, "s2_axes", None)
         if axes is not None:
             grown = np.asarray(axes, dtype=np.float64) + margin

@@ -220,7 +220,34 @@ def segment_polygon_inside_fraction(paths, verts, starts):  # pragma: no cover -
 def track_crosses_itself(points: FloatArray) -> bool:
     """Whether a path's horizontal track crosses itself: two non-adjacent segments properly
     intersect (a loop, as a user sees it on a map). Touching and collinear overlaps do not
-    count. Plain loops: a path has tens of segments."""
+    count. Compiled (a fleet's flight checks ask it of every candidate: hundreds of thousands
+    of orientation tests); :func:`track_crosses_itself_reference` is the plain loops."""
+    P = np.ascontiguousarray(np.asarray(points, dtype=np.float64)[:, :2])
+    return bool(_crosses(P))
+
+
+@njit(cache=True)
+def _orient(ax, ay, bx, by, cx, cy):  # pragma: no cover - numba
+    return np.sign((bx - ax) * (cy - ay) - (by - ay) * (cx - ax))
+
+
+@njit(cache=True)
+def _crosses(P):  # pragma: no cover - numba
+    n = P.shape[0] - 1
+    for i in range(n):
+        ax, ay, bx, by = P[i, 0], P[i, 1], P[i + 1, 0], P[i + 1, 1]
+        for j in range(i + 2, n):
+            cx, cy, dx, dy = P[j, 0], P[j, 1], P[j + 1, 0], P[j + 1, 1]
+            if (
+                _orient(ax, ay, bx, by, cx, cy) * _orient(ax, ay, bx, by, dx, dy) < 0
+                and _orient(cx, cy, dx, dy, ax, ay) * _orient(cx, cy, dx, dy, bx, by) < 0
+            ):
+                return True
+    return False
+
+
+def track_crosses_itself_reference(points: FloatArray) -> bool:
+    """:func:`track_crosses_itself` in plain Python loops (the reference the tests compare)."""
     P = np.asarray(points, dtype=np.float64)[:, :2]
 
     def orient(a: FloatArray, b: FloatArray, c: FloatArray) -> float:
