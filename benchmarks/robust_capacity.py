@@ -91,8 +91,8 @@ def run(
             print(f"  {name} {model_name}: {k}/{executions} executions, {broken} broken, "
                   f"{took:.0f} s", file=sys.stderr, flush=True)  # fmt: skip
         executed = sample_fleet(trajs, timing, rng, extremes=k % 3 == 0)
-        r = verify_trajectories(executed, given, kinematics=False)
-        kinds = {v.kind for v in r.violations} - {"speed"}
+        r = verify_trajectories(executed, given, kinematics=False, speed=False)
+        kinds = {v.kind for v in r.violations}
         broken += bool(kinds)
         for kind in kinds:
             by_kind[kind] = by_kind.get(kind, 0) + 1

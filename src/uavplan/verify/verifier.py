@@ -119,6 +119,7 @@ def verify_trajectories(
     *,
     trajectory: str | None = None,
     model: Any = None,
+    speed: bool = True,
 ) -> VerifyReport:
     """Run every check on parsed trajectories (see the module docstring).
 
@@ -135,6 +136,8 @@ def verify_trajectories(
         model: the execution model the plan must tolerate (an ``ExecutionModel`` or its
             record); None or nominal: the plan as flown exactly. Under a model the checks of
             :mod:`uavplan.verify.robust` run too and the report carries the margins.
+        speed: check the maximum speed (False: for sampled executions of a plan, which fly
+            off its speeds by design and would each carry tens of thousands of speed findings).
     """
     sc = scenario
     u = sc.uav
@@ -182,7 +185,8 @@ def verify_trajectories(
             )
         else:
             timed.append(tr)
-        vs += check_speed(tr, u.v_max, float(u.min_speed) if kinematics else 0.0)
+        if speed or kinematics:
+            vs += check_speed(tr, u.v_max, float(u.min_speed) if kinematics else 0.0)
         if kinematics:
             vs += check_turn(tr, float(u.turn_radius))
             vs += check_climb(tr, u.max_climb_angle, u.max_descent_angle)
