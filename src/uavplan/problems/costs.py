@@ -77,14 +77,19 @@ def threat_cost_spso(
 
 
 # ---------------------------------------------------------------------------- altitude
+def altitude_target(h_min: float, h_max: float, cruise: float | None = None) -> float:
+    """The height PPSwarm's altitude cost pulls toward: the band's middle (Eq. 7), or a UAV's
+    cruise layer (:attr:`uavplan.world.scenario.Task.cruise`) when it has one."""
+    return float(cruise) if cruise is not None else 0.5 * (h_max + h_min)
+
+
 def altitude_cost(
-    h: FloatArray, h_min: float, h_max: float, mid: float | None = None
+    h: FloatArray, h_min: float, h_max: float, cruise: float | None = None
 ) -> FloatArray:
     """PPSwarm Eqs. (6)-(7): sum over nodes of |h_i - (h_max + h_min)/2| inside the band, inf
     outside. ``h``: (pop, n) altitudes in the band's reference (above ground or absolute).
-    ``mid``: another height to pull toward than the band's middle (a cruise layer)."""
-    if mid is None:
-        mid = 0.5 * (h_max + h_min)
+    ``cruise``: a cruise layer's height to pull toward instead (:func:`altitude_target`)."""
+    mid = altitude_target(h_min, h_max, cruise)
     cost = np.where((h >= h_min) & (h <= h_max), np.abs(h - mid), np.inf)
     return np.asarray(cost.sum(axis=1))
 

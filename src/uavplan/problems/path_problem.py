@@ -195,7 +195,7 @@ def _world_args(v: MotionValidator, r_in: FloatArray, r_out: FloatArray) -> tupl
         H.setflags(write=False)  # read-only as a terrain's heights: one kernel signature
     band = sc.altitude
     lo, hi = (band.min, band.max) if band is not None else (0.0, 0.0)
-    mid = v.task.cruise if v.task.cruise is not None else 0.5 * (hi + lo)
+    mid = C.altitude_target(lo, hi, v.task.cruise)
     ground = band is not None and band.reference == "ground"
     return (*cyl, None, None, H, t is not None, v.lookup == "nearest", float(x0), float(y0),
             float(dx), float(dy), band is not None, ground, float(lo), float(hi),

@@ -108,8 +108,9 @@ def polished(
         tight = tighten(problem, v, cand)
         if not np.array_equal(tight, cand):
             cand, steps = greedy_shortcut(v, tight)[0], [*steps, "tightening"]
+    cand_valid = bool(v.paths_valid(cand[None])[0])
     steep = _steep(scenario, cand)
-    if steep and bool(v.paths_valid(cand[None])[0]):
+    if steep and cand_valid:
         eased = _eased(scenario, cand)
         if eased is not None and bool(v.paths_valid(eased[None])[0]):
             cand, steps, steep = eased, [*steps, "climb limits"], False
@@ -117,7 +118,7 @@ def polished(
         return path, {}
     before, after = problem.evaluate(path[None]), problem.evaluate(cand[None])
     c0, c1 = float(before.cost[0]), float(after.cost[0])
-    cand_flies = bool(v.paths_valid(cand[None])[0]) and not steep
+    cand_flies = cand_valid and not steep
     flies = flies and not _steep(scenario, path)
     if not bool(after.feasible[0]) or (flies and not cand_flies):
         return path, {}

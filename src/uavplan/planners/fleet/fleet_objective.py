@@ -39,6 +39,7 @@ from numpy.typing import NDArray
 from uavplan.kernel_builds import population_kernel
 from uavplan.problems import path_problem as PP
 from uavplan.problems._validity_kernels import static_path_ok
+from uavplan.problems.costs import altitude_target
 from uavplan.problems.encoding import CartesianEncoding
 from uavplan.problems.path_problem import PathProblem
 from uavplan.world._terrain_kernels import bilinear_one
@@ -222,13 +223,6 @@ def fleet_costs(
     return out
 
 
-def _mid(band: Any, task: Any) -> float:
-    """The height F3 pulls toward: the task's cruise layer, else the band's middle."""
-    if band is None:
-        return 0.0
-    return float(task.cruise) if task.cruise is not None else 0.5 * (band.max + band.min)
-
-
 class FleetObjective:
     """The "inf" rule's objective of one UAV's low-level run in one kernel (the module
     docstring): ``evaluate(X, below)`` gives :meth:`PathProblem.evaluate_cv`'s cost under
@@ -283,7 +277,7 @@ class FleetObjective:
             band_mode,
             float(band.min) if band is not None else 0.0,
             float(band.max) if band is not None else 0.0,
-            _mid(band, problem.task),
+            altitude_target(band.min, band.max, problem.task.cruise) if band is not None else 0.0,
             float(sc.uav.speed),
             float(problem.task.start_time),
         )
