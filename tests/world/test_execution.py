@@ -174,6 +174,42 @@ def test_table_conflicts_agree_with_every_reserved_piece() -> None:
     assert bad == 0
 
 
+def test_the_timed_index_finds_every_pair_at_any_bucket_and_cell() -> None:
+    """A timed table keys its entries by cell, then bucket: over bucket widths from a third of
+    a second to 8 s, cells smaller than a piece, take-offs spread over minutes (some before
+    time 0), its conflicts and its least distances within the separation equal those of every
+    candidate piece against every reserved piece (480 candidate paths)."""
+    rng = np.random.default_rng(11)
+    bad = 0
+    for trial in range(16):
+        delta0, rho = [(0.5, 0.0), (2.0, 0.03), (1.0, 0.1), (0.0, 0.05)][trial % 4]
+        dt = [0.3, 1.0, 4.0, 8.0][trial // 4]
+        sep = 25.0
+        table = ReservationTable(np.zeros(3) - 500, np.zeros(3) + 900, sep, dt=dt,
+                                 cell=[20.0, 60.0][trial % 2], timing=(delta0, rho))  # fmt: skip
+        shift = lambda: rng.choice([-30.0, 0.0, 40.0, 200.0])  # noqa: E731
+        for k in range(8):
+            p, t = _traj(rng)
+            table.add(f"u{k}", p, t + shift())
+        cands = [_traj(rng) for _ in range(30)]
+        P = np.array([c[0] for c in cands])
+        T = np.array([c[1] + shift() for c in cands])
+        found = table.conflicts(P, T)
+        least = table.min_distance(P, T)
+        for q in range(len(P)):
+            a0, a1, t0, t1, _ = _split(P[q], T[q], 1.0)
+            d = np.sqrt(min(
+                window_min_dist2(a0[i], a1[i], t0[i], t1[i], table._p0[j], table._p1[j],
+                                 table._t0[j], table._t1[j], T[q, 0], delta0, rho,
+                                 table._take[j], delta0, rho)
+                for i in range(len(t0)) for j in range(table.n_pieces)
+            ))  # fmt: skip
+            bad += bool(found[q]) != bool(d < sep)
+            if d < sep:
+                bad += not abs(least[q] - d) <= 1e-9 * (1.0 + d)
+    assert bad == 0
+
+
 def test_for_scenario_widens_the_separation_by_the_tracking_gap() -> None:
     sc = resolve("ppswarm1")
     assert ReservationTable.for_scenario(sc).separation == sc.uav.s2

@@ -229,11 +229,26 @@ def _csc_lengths(q0: Pose, q1: Pose, rho: float, kind: str) -> tuple[float, floa
     ``None`` when the word does not exist (LSR or RSL with overlapping circles).
     """
     first, last = kind[0], kind[2]
-    cx0, cy0 = _centre(q0, rho, first)
-    cx1, cy1 = _centre(q1, rho, last)
+    scale = rho + max(abs(q0[0]), abs(q0[1]), abs(q1[0]), abs(q1[1]))
+    return _csc_between(q0, q1, rho, kind, _centre(q0, rho, first), _centre(q1, rho, last), scale)
+
+
+def _csc_between(
+    q0: Pose,
+    q1: Pose,
+    rho: float,
+    kind: str,
+    c0: tuple[float, float],
+    c1: tuple[float, float],
+    scale: float,
+) -> tuple[float, float, float] | None:
+    """:func:`_csc_lengths` with the turning circles' centres ``c0`` (of ``q0`` on the side of
+    ``kind[0]``) and ``c1`` (of ``q1``, ``kind[2]``) and the coordinate ``scale`` given."""
+    first, last = kind[0], kind[2]
+    cx0, cy0 = c0
+    cx1, cy1 = c1
     vx, vy = cx1 - cx0, cy1 - cy0
     dist = math.hypot(vx, vy)
-    scale = rho + max(abs(q0[0]), abs(q0[1]), abs(q1[0]), abs(q1[1]))
     if first == last:  # outer tangent: parallel to the line of centres
         if dist <= _SAME_CIRCLE * scale:
             # One circle (the centres apart by round-off only, whose direction is noise): turn
@@ -275,15 +290,34 @@ def dubins_csc(
     rho = float(rho)
     if not (rho > 0.0 and math.isfinite(rho)):
         raise ValueError(f"rho must be a positive finite radius, got {rho!r}")
+    return _shortest_csc(p0, p1, rho, _checked_kinds(kinds))
+
+
+def _checked_kinds(kinds: Sequence[str]) -> tuple[str, ...]:
     kinds = tuple(kinds)
     if not kinds:
         raise ValueError("kinds must not be empty")
     for kind in kinds:
         if kind not in CSC_KINDS:
             raise ValueError(f"unknown Dubins CSC kind {kind!r}; expected one of {CSC_KINDS}")
+    return kinds
+
+
+def _shortest_csc(p0: Pose, p1: Pose, rho: float, kinds: tuple[str, ...]) -> DubinsPath:
+    """:func:`dubins_csc` of checked poses (Python floats), radius and kinds: each turning
+    circle's centre computed once for the words that share it."""
     best: DubinsPath | None = None
+    scale = rho + max(abs(p0[0]), abs(p0[1]), abs(p1[0]), abs(p1[1]))
+    centres: dict[tuple[int, str], tuple[float, float]] = {}
     for kind in kinds:
-        lengths = _csc_lengths(p0, p1, rho, kind)
+        first, last = kind[0], kind[2]
+        c0 = centres.get((0, first))
+        if c0 is None:
+            c0 = centres[(0, first)] = _centre(p0, rho, first)
+        c1 = centres.get((1, last))
+        if c1 is None:
+            c1 = centres[(1, last)] = _centre(p1, rho, last)
+        lengths = _csc_between(p0, p1, rho, kind, c0, c1, scale)
         if lengths is None:
             continue
         if best is None or sum(lengths) < best.length:
@@ -479,8 +513,10 @@ def smooth_path(
             raise ValueError(f"headings must be ({p.shape[0]},) finite, got {h_in.shape}")
         hd = h_in[keep]
 
+    kinds = _checked_kinds(kinds)
+    xs, ys, hs = wp[:, 0].tolist(), wp[:, 1].tolist(), np.asarray(hd, dtype=np.float64).tolist()
     pieces = [
-        dubins_csc((wp[i, 0], wp[i, 1], hd[i]), (wp[i + 1, 0], wp[i + 1, 1], hd[i + 1]), rho, kinds)
+        _shortest_csc((xs[i], ys[i], hs[i]), (xs[i + 1], ys[i + 1], hs[i + 1]), rho, kinds)
         for i in range(wp.shape[0] - 1)
     ]
     chunks_xyz: list[FloatArray] = [wp[:1]]

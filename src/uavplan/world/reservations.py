@@ -43,7 +43,10 @@ point ``tau`` of a trajectory taking off at ``t0`` can be flown at any actual ti
 piece is entered in its own time bucket, as without a model; a candidate piece whose window
 is ``[w_lo, w_hi]`` looks in the buckets of every path time whose window can meet it, which is
 ``[(1 - rho)(w_lo - delta0) + rho t_min, (1 + rho)(w_hi + delta0) - rho t_min]`` for
-trajectories taking off at ``t_min`` or later; two pieces are compared by the least distance
+trajectories taking off at ``t_min`` or later: a dozen buckets or more once the drift has
+grown, so such a table keys its entries by cell and sorts each cell's entries by bucket (one
+lookup per cell, then a bisection to the first bucket), and skips a reserved piece whose own
+window does not meet the candidate's; two pieces are compared by the least distance
 between their points over the pairs of path times whose windows meet
 (:func:`window_min_dist2`: a convex quadratic over a convex polygon, minimised exactly), after
 a test of their boxes. What the tracking error takes away is in the table's separation
@@ -71,6 +74,9 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 _EMPTY = np.int64(-1)
+#: a timed table's entry key: ``cell * _NB + _OFF + bucket`` (buckets -_OFF .. _NB - _OFF - 1)
+_NB = np.int64(1 << 21)
+_OFF = np.int64(1 << 20)
 
 
 def split_pieces(points: FloatArray, times: FloatArray, dt: float) -> tuple[FloatArray, ...]:
@@ -198,9 +204,9 @@ def _cell_range(a, b, grow, origin, cell, n):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _cell_keys(p0, p1, k, grow, origin, cell, dims):  # pragma: no cover - numba
+def _cell_keys(p0, p1, k, grow, origin, cell, dims, by_cell):  # pragma: no cover - numba
     """(entry key, piece index) for every cell that each piece's box grown by ``grow[i]``
-    touches."""
+    touches: bucket-major, or with ``by_cell`` cell-major (``cell * _NB + _OFF + k``)."""
     m = p0.shape[0]
     nx, ny, nz = dims[0], dims[1], dims[2]
     count = 0
@@ -220,7 +226,10 @@ def _cell_keys(p0, p1, k, grow, origin, cell, dims):  # pragma: no cover - numba
         for ix in range(ix0, ix1 + 1):
             for iy in range(iy0, iy1 + 1):
                 for iz in range(iz0, iz1 + 1):
-                    keys[e] = (((k[i] + 1) * nx + ix) * ny + iy) * nz + iz
+                    if by_cell:
+                        keys[e] = ((ix * ny + iy) * nz + iz) * _NB + _OFF + k[i]
+                    else:
+                        keys[e] = (((k[i] + 1) * nx + ix) * ny + iy) * nz + iz
                     idx[e] = i
                     e += 1
     return keys, idx
@@ -463,7 +472,7 @@ def path_query(paths, times, p, args):  # pragma: no cover - numba
     distance to a reserved piece found within the searched cells, less the piece's pad (inf if
     none), stopping at the first one below ``sep`` unless ``want_min``. ``args``: the tuple
     ``(dt, origin, cell, dims, sep, tkey, tstart, tcount, e_idx, rp0, rp1, rt0, rt1, rpad,
-    want_min, box, w, timed, delta0, rho, rtake, take_min)``
+    want_min, box, w, timed, delta0, rho, rtake, take_min, ekeys)``
     (:meth:`ReservationTable.query_args`; ``timed``: the pieces are compared under the
     execution model's windows, ``rtake`` the take-off time of each reserved piece's
     trajectory, ``take_min`` the earliest of them, the path's its first time)."""
@@ -490,6 +499,7 @@ def path_query(paths, times, p, args):  # pragma: no cover - numba
         rho,
         rtake,
         take_min,
+        ekeys,
     ) = args
     N = paths.shape[1]
     t0 = times[p, 0]
@@ -521,22 +531,53 @@ def path_query(paths, times, p, args):  # pragma: no cover - numba
                 iz0, iz1 = _cell_range(a0[2], a1[2], 0.0, origin[2], cell, nz)
                 k0 = k
                 k1 = k
+                w_lo = lo
+                w_hi = hi
                 if timed:  # the buckets of every path time whose window can meet this one's
                     w_lo = t0 - delta0 + (lo - t0) / (1.0 + rho)
                     w_hi = t0 + delta0 + (hi - t0) / (1.0 - rho)
                     k0 = int(np.floor(((1.0 - rho) * (w_lo - delta0) + rho * take_min) / dt)) - 1
                     k1 = int(np.floor(((1.0 + rho) * (w_hi + delta0) - rho * take_min) / dt))
-                for kk in range(k0, k1 + 1):
+                # a timed table is keyed by cell, each cell's entries by bucket: one lookup
+                # per cell, then the buckets k0..k1 by bisection
+                kb0, kb1 = (0, 0) if timed else (k0, k1)
+                for kk in range(kb0, kb1 + 1):
                     for ix in range(ix0, ix1 + 1):
                         for iy in range(iy0, iy1 + 1):
                             for iz in range(iz0, iz1 + 1):
-                                key = (((kk + 1) * nx + ix) * ny + iy) * nz + iz
+                                cid = (ix * ny + iy) * nz + iz
+                                key = cid if timed else (((kk + 1) * nx + ix) * ny + iy) * nz + iz
                                 h = _lookup(key, tkey, mask)
                                 if h < 0:
                                     continue
-                                for e in range(tstart[h], tstart[h] + tcount[h]):
+                                e_lo = tstart[h]
+                                e_end = e_lo + tcount[h]
+                                last = np.int64(0)
+                                if timed:
+                                    first = cid * _NB + _OFF + max(k0, -_OFF)
+                                    last = cid * _NB + _OFF + min(k1, _NB - _OFF - 1)
+                                    b_hi = e_end
+                                    while e_lo < b_hi:
+                                        m = (e_lo + b_hi) // 2
+                                        if ekeys[m] < first:
+                                            e_lo = m + 1
+                                        else:
+                                            b_hi = m
+                                for e in range(e_lo, e_end):
                                     r = e_idx[e]
                                     if timed:
+                                        if ekeys[e] > last:
+                                            break
+                                        # the pieces' windows never meet (window_min_dist2
+                                        # would find its polygon empty), with a slack of
+                                        # a microsecond that only ever keeps a pair
+                                        tr = rtake[r]
+                                        if (
+                                            tr - delta0 + (rt0[r] - tr) / (1.0 + rho) > w_hi + 1e-6
+                                            or tr + delta0 + (rt1[r] - tr) / (1.0 - rho)
+                                            < w_lo - 1e-6
+                                        ):
+                                            continue
                                         # the pieces' boxes too far apart for any timing
                                         if (
                                             not want_min
@@ -667,6 +708,9 @@ class ReservationTable:
         hi = np.asarray(upper, dtype=np.float64)[:3]
         self.origin = lo - self.cell
         self.dims = (np.ceil((hi - lo) / self.cell).astype(np.int64) + 3).astype(np.int64)
+        if self.timed and float(np.prod(self.dims.astype(np.float64))) >= 2.0**41:
+            raise ValueError(f"{self.dims.tolist()} cells of {self.cell} m: too many for a "
+                             "timed table's keys; use larger cells")  # fmt: skip
         self.owners: list[str] = []
         self._p0 = np.zeros((0, 3))
         self._p1 = np.zeros((0, 3))
@@ -788,8 +832,18 @@ class ReservationTable:
             if t1[-1] == (k[-1] + 1) * self.dt:
                 sel = np.append(sel, len(t0) - 1)
                 kk = np.append(kk, k[-1] + 1)
+        if self.timed and len(kk) and not (kk.min() >= -_OFF and kk.max() < _NB - _OFF):
+            raise ValueError(f"times {ts[0]}..{ts[-1]} s lie beyond the table's "
+                             f"{int(_OFF)} buckets of {self.dt} s either side of 0")  # fmt: skip
         keys, idx = _cell_keys(
-            p0[sel], p1[sel], kk, self.separation + pad[sel], self.origin, self.cell, self.dims
+            p0[sel],
+            p1[sel],
+            kk,
+            self.separation + pad[sel],
+            self.origin,
+            self.cell,
+            self.dims,
+            self.timed,
         )
         idx = sel[idx]
         base = self.n_pieces
@@ -810,7 +864,11 @@ class ReservationTable:
         at = np.searchsorted(self._keys, keys, side="right")
         self._keys = np.insert(self._keys, at, keys)
         self._idx = np.insert(self._idx, at, idx)
-        self._tkey, self._tstart, self._tcount = _build_table(self._keys)
+        self._tkey, self._tstart, self._tcount = self._hash_table()
+
+    def _hash_table(self) -> tuple[IntArray, IntArray, IntArray]:
+        # a timed table hashes cells, its entries sorted by cell then bucket
+        return _build_table(self._keys // _NB if self.timed else self._keys)
 
     def trajectories(self) -> list[tuple[FloatArray, FloatArray]]:
         """Every reserved trajectory as ``(points (n, 3), times (n,))``, in the order added
@@ -829,7 +887,7 @@ class ReservationTable:
         order = np.argsort(self._keys, kind="stable")
         self._keys = self._keys[order]
         self._idx = self._idx[order]
-        self._tkey, self._tstart, self._tcount = _build_table(self._keys)
+        self._tkey, self._tstart, self._tcount = self._hash_table()
 
     def _run(self, paths: FloatArray, times: FloatArray, want_min: bool) -> FloatArray:
         p = np.ascontiguousarray(paths, dtype=np.float64)
@@ -850,7 +908,7 @@ class ReservationTable:
             self._tkey, self._tstart, self._tcount, self._idx,
             self._p0, self._p1, self._t0, self._t1, self._pad, bool(want_min),
             self.axes is not None, self._w, self.timed, self.delta0, self.rho, self._take,
-            float(self._take.min()) if self._take.size else 0.0,
+            float(self._take.min()) if self._take.size else 0.0, self._keys,
         )  # fmt: skip
 
     def conflicts(self, paths: FloatArray, times: FloatArray) -> NDArray[np.bool_]:

@@ -28,6 +28,7 @@ The variant with the fewest kinds of violation, then the shortest, is the flight
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -186,14 +187,9 @@ def candidate_flights(
     out: list[Flight] = []
     dim = wp.shape[1]
     for (w, t, tag), kind in itertools.product(bases, ("through", "corners")):
-        w3 = as_3d(w)
-        try:
-            if kind == "through":
-                sm = smooth_path(w3, uav.turn_radius, h)
-            else:
-                poses, heads = midpoint_poses(w3)
-                sm = smooth_path(poses, uav.turn_radius, h, heads)
-        except ValueError:
+        w3 = np.ascontiguousarray(as_3d(w), dtype=np.float64)
+        sm = _smoothed(w3.tobytes(), w3.shape[0], float(uav.turn_radius), float(h), kind)
+        if sm is None:
             continue
         tp = _planned_pose_times(w3, t, kind)
         if tp.shape != sm.waypoint_index.shape:  # not for distinct waypoints; be safe
@@ -205,6 +201,29 @@ def candidate_flights(
         pts = sm.points if dim == 3 else sm.points[:, :2]
         out.append(Flight(np.asarray(pts), schedule(sm, tk), "smoothed", tag + kind, (), late))
     return out
+
+
+@functools.lru_cache(maxsize=128)
+def _smoothed(
+    key: bytes, n: int, turn_radius: float, step: float, kind: str
+) -> SmoothedPath | None:
+    """The Dubins smoothing of the (n, 3) waypoints whose bytes are ``key`` (``through``: the
+    waypoints with bisecting headings; ``corners``: between segment midpoints), None where
+    no smoothing exists. Memoized: a fleet planner flies the same polyline at several speeds
+    and take-off times (:mod:`uavplan.planners.fleet.prioritized`), and the curves depend on
+    the geometry alone; the arrays are read-only, as they are shared."""
+    w3 = np.frombuffer(key, dtype=np.float64).reshape(n, 3)
+    try:
+        if kind == "through":
+            sm = smooth_path(w3, turn_radius, step)
+        else:
+            poses, heads = midpoint_poses(w3)
+            sm = smooth_path(poses, turn_radius, step, heads)
+    except ValueError:
+        return None
+    for a in (sm.points, sm.headings, sm.waypoints, sm.waypoint_index):
+        a.setflags(write=False)
+    return sm
 
 
 def _sample_lengths(sm: SmoothedPath) -> FloatArray:
