@@ -222,6 +222,29 @@ def test_a_generated_fleet_that_the_tracking_error_pushes_out_is_placed_again() 
     assert nominal.replaced == 0 and nominal.world.tasks == sc.tasks
 
 
+def test_commands_reading_a_plan_place_its_generated_fleet_as_the_plan_did() -> None:
+    """A plan of ``ppswarm4@1000`` made under the default model flies the fleet placed again:
+    the commands that read it (``verify``, ``explain``) place it the same way from the plan's
+    execution record when the plan's paths start there, and keep the scenario's own placement
+    for a nominal plan or paths that start elsewhere."""
+    from uavplan.cli._common import world_of_plan
+    from uavplan.scenarios import resolve
+    from uavplan.strategy import planning_world
+    from uavplan.strategy.world import fleet_as_planned
+
+    sc = resolve("ppswarm4@1000")
+    pw = planning_world(sc, "ppswarm4@1000")
+    record = pw.model.record()
+    placed = fleet_as_planned(sc, "ppswarm4@1000", record)
+    assert [t.start for t in placed.tasks] == [t.start for t in pw.world.tasks] != [
+        t.start for t in sc.tasks]  # fmt: skip
+    assert fleet_as_planned(sc, "ppswarm4@1000", None) is sc
+    starts = {t.id: t.start for t in pw.world.tasks[:50]}
+    assert world_of_plan(sc, "ppswarm4@1000", record, starts).tasks == placed.tasks
+    first = {t.id: t.start for t in sc.tasks[:50]}
+    assert world_of_plan(sc, "ppswarm4@1000", record, first) is sc
+
+
 def test_a_world_refusing_many_tasks_names_the_first_few_and_counts_the_rest() -> None:
     """A fleet file's 1,000 tasks, spaced 45 m (three layers, the outer two too near the band's
     ends for an 8 m vertical tracking error): the error is a few lines, not 1,300."""

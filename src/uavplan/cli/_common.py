@@ -93,6 +93,26 @@ def parse_params(params: list[str]) -> dict[str, Any]:
     return parsed
 
 
+def world_of_plan(world: Scenario, ref: str, execution: Any, starts: dict[str, Any]) -> Scenario:
+    """``world`` with its generated fleet placed where ``uavplan plan`` placed it under the plan's
+    ``execution`` model (:func:`uavplan.strategy.world.fleet_as_planned`), when the plan's
+    paths (``starts``: the first point of each UAV's path by id) begin there; else ``world``."""
+    from uavplan.strategy.world import fleet_as_planned
+
+    placed = fleet_as_planned(world, ref, execution)
+    if placed is world:
+        return world
+    import numpy as np
+
+    tasks = {t.id: t for t in placed.tasks}
+    for uid, p in starts.items():
+        t = tasks.get(uid)
+        q = np.asarray(p, dtype=np.float64)
+        if t is None or float(np.linalg.norm(np.asarray(t.start)[: q.shape[0]] - q)) > 1e-3:
+            return world
+    return placed
+
+
 def load_world(name: str, quiet: bool = False) -> Scenario | None:
     """The scenario a command names (built-in, generated or file); its problems end the command
     with exit code 2, or, with ``quiet``, give None (a plan's own scenario name that is not a

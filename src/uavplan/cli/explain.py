@@ -17,7 +17,7 @@ from typing import Annotated, Any
 import typer
 from rich.console import Console
 
-from uavplan.cli._common import fail, load_world
+from uavplan.cli._common import fail, load_world, world_of_plan
 
 
 def story_lines(doc: dict[str, Any], report: Any, everyone: bool = False) -> list[str]:
@@ -106,6 +106,7 @@ def explain(
         trajs = pf.trajectories("flown")
     except PlanFormatError as exc:
         raise fail(exc.problems[0]) from None
+    world = world_of_plan(world, str(ref), pf.execution, {t.id: t.points[0] for t in trajs})
     own = world.execution.record() if world.execution else None
     model = None if nominal else (pf.execution or own)
     try:

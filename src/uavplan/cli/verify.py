@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 from rich.console import Console
 
-from uavplan.cli._common import fail, load_world
+from uavplan.cli._common import fail, load_world, world_of_plan
 
 if TYPE_CHECKING:
     from uavplan.io.plan_file import TrajectoryKind
@@ -194,6 +194,12 @@ def verify(
         raise fail(exc.problems[0]) from None
     from uavplan.verify.source_terrain import SourceError
 
+    out = Console(highlight=False, soft_wrap=True)
+    placed = world_of_plan(world, scenario, pf.execution, {t.id: t.points[0] for t in trajs})
+    if placed is not world:
+        world = placed
+        out.print(f"{scenario}: the generated fleet placed again in the world widened by the "
+                   "plan's execution model, as `uavplan plan` placed it", markup=False)  # fmt: skip
     model = None
     if not nominal:
         model = pf.execution or (world.execution.record() if world.execution else None)
@@ -210,7 +216,6 @@ def verify(
     except SourceError as exc:
         raise fail(f"{scenario}: {exc}") from None
 
-    out = Console(highlight=False, soft_wrap=True)
     limit = max_show if max_show > 0 else len(report.violations)
     for v in report.violations[:limit]:
         out.print(f"{v.kind}: {v.message}", markup=False)

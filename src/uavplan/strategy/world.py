@@ -136,6 +136,26 @@ def planning_world(
     return PlanningWorld(world, model, source, r, given_r, af, v, given_v, given, replaced)
 
 
+def fleet_as_planned(scenario: Scenario, ref: str, record: dict[str, Any] | None) -> Scenario:
+    """``scenario`` with its tasks where a plan made under the execution model ``record`` (a
+    plan file's ``execution``) had them: a generated fleet that :func:`planning_world` placed
+    again in the widened world is placed again the same way (the placement is deterministic);
+    otherwise ``scenario`` itself. What commands reading a plan check it against."""
+    from uavplan.world.execution import ExecutionModel, default_for
+
+    if not record or not scenario.metadata.get("generated_fleet"):
+        return scenario
+    try:
+        model = ExecutionModel.from_record(record)
+        if scenario.execution is None and model == default_for(scenario.uav):
+            pw = planning_world(scenario, ref)  # uavplan's default, its flyable turns and speeds
+        else:
+            pw = planning_world(scenario, ref, model=model)
+    except (ValueError, KeyError, TypeError):
+        return scenario
+    return pw.given if pw.replaced and pw.given is not None else scenario
+
+
 def _task_problems(world: Scenario, ref: str, model: Any) -> list[str]:
     """Every task start or goal that the widened ``world`` refuses, one line each."""
     bad = []

@@ -16,7 +16,8 @@ fails the fleet), in the plan's priority order:
    boxed in by the flights of those before it in a narrow passage): first its own path taking
    off later (as below), then re-planned alone with RRT*
    as the single-UAV fallback runs it (informed, tightened, its step scaled to the map,
-   polished), shortened, and flown against the others at its planned take-off or, where the
+   polished), shortened (and, if the shortcut flies nowhere, as polished: its flight passed
+   alone), and flown against the others at its planned take-off or, where the
    UAV may wait on the ground (it is not a constant-speed UAV), up to ``max_delays`` steps of
    ``delay_step`` seconds later and, last, after every other UAV has landed (whatever the
    execution model lets the schedules drift: no other flight is left to meet); up to
@@ -319,12 +320,19 @@ def polish_fleet(
             new = _first_slot(scenario, tasks[uid], r, r.waypoints, table, opts, starts[1:],
                               functools.partial(how, "its own path"), own)  # fmt: skip
         for a, ss in enumerate(rngs[k].spawn(RRT_TRIES) if new is None else ()):
-            path = _rrt_path(scenario, tasks[uid], int(ss.generate_state(1)[0]))
-            if path is None:
+            found = _rrt_path(scenario, tasks[uid], int(ss.generate_state(1)[0]))
+            if found is None:
                 continue
-            path, _, _ = greedy_shortcut(static, path)
-            new = _first_slot(scenario, tasks[uid], r, path, table, opts, starts,
-                              functools.partial(how, f"RRT* (try {a + 1})"))  # fmt: skip
+            short, _, _ = greedy_shortcut(static, found)
+            # the shortcut first; then the path as RRT*'s polish left it, whose flight passed
+            # (a shortcut's curves can take a flight where its polyline does not go: over a
+            # ceiling that falls steeply beside a vertex)
+            paths = [short] if np.array_equal(short, found) else [short, found]
+            for path in paths:
+                new = _first_slot(scenario, tasks[uid], r, path, table, opts, starts,
+                                  functools.partial(how, f"RRT* (try {a + 1})"))  # fmt: skip
+                if new is not None:
+                    break
             if new is not None:
                 break
         if new is not None:
