@@ -190,6 +190,25 @@ def test_evaluation_budget_is_kept_and_shared_by_the_levels() -> None:
     assert 20_000 <= r.evaluations <= 24_000
 
 
+def test_a_first_level_share_gives_the_global_level_its_evaluations() -> None:
+    """``level1_share``: the global first level runs for many more steps than with the budget
+    in proportion to sub-problems (1/91 of it), the later levels share the rest, and the whole
+    budget is still kept."""
+    sc = hills()
+    from uavplan.optimizers.base import Budget
+
+    runs = {
+        share: get_planner("hr-maga", level1_share=share).plan(
+            sc, budget=Budget(max_evaluations=20_000), seed=0
+        )
+        for share in (0.0, 1 / 3)
+    }
+    steps = {k: [len(h) for h in r.info["level_history"]] for k, r in runs.items()}
+    assert steps[1 / 3][0] > 3 * steps[0.0][0]
+    assert steps[1 / 3][1] >= 0.5 * steps[0.0][1] and steps[1 / 3][2] >= 0.5 * steps[0.0][2]
+    assert 20_000 <= runs[1 / 3].evaluations <= 24_000
+
+
 def test_hull_chains_go_both_ways_around_and_need_the_ends_on_the_hull() -> None:
     from uavplan.planners.population.hr_maga import _hull_chains
 

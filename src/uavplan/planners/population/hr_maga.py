@@ -64,7 +64,10 @@ Decisions where the paper is vague (and why)
   live sub-problem of a level: a MAGA iteration, :mod:`uavplan.optimizers.maga`). An iteration
   budget is shared equally among the levels (a level that ends early, all its P-MAGAs at
   ``G`` generations, leaves the rest to the next ones); an evaluation budget among the
-  sub-problems of all levels (a level of 81 sub-problems gets 81 times the first level's);
+  sub-problems of all levels (a level of 81 sub-problems gets 81 times the first level's: each
+  P-MAGA call the same, as Table I gives every call the same ``G``; the global first level then
+  gets 1/91 of it at v = 3), or, with ``level1_share`` (a variant), that share to the first
+  level and the rest in proportion to the later levels' sub-problems;
   P-MAGA stops at Table I's ``G = 200`` generations in any case. Table I's full schedule (200
   generations of 1 + sGen = 11 batches per level) is ``--iterations 6600``; the default, 300
   iterations (about 9 generations per level), plans in about a second of CPU here.
@@ -132,6 +135,14 @@ class HRMAGAConfig(PlannerConfig):
         0.5, "sub-problem box: its ends' box widened by this share of their distance", low=0.0
     )
     G: int = option(200, "P-MAGA generations per sub-problem at most (Table I)", low=1)
+    level1_share: float = option(
+        0.0,
+        "share of an evaluation budget the global first level gets, the rest in proportion "
+        "to the later levels' sub-problems (0: every level in proportion, each P-MAGA call "
+        "the same, as Table I gives every call the same G; a variant, not the paper's)",
+        low=0.0,
+        high=0.9,
+    )
     repair_iterations: int = option(
         20, "lockstep steps of a repair in flight (ours; the paper gives none)", low=1
     )
@@ -508,11 +519,12 @@ class HRMAGA(Planner):
             tr = run.tracker
             left = cfg.v - lv + 1  # levels still to run, this one included
             steps = math.inf if max_it is None else (max_it - len(tr.history)) / left
-            evals = (
-                math.inf
-                if max_ev is None
-                else (max_ev - tr.evaluations) * len(subs) / sum(n_sub[lv - 1 :])
-            )
+            if max_ev is None:
+                evals = math.inf
+            elif cfg.level1_share > 0 and lv == 1:
+                evals = max_ev * cfg.level1_share
+            else:  # what is left, in proportion to the sub-problems of the levels to run
+                evals = (max_ev - tr.evaluations) * len(subs) / sum(n_sub[lv - 1 :])
             if lv == cfg.v:
                 steps = math.inf if max_it is None else max_it - len(tr.history)
             best, trace = self._solve_level(
