@@ -144,6 +144,39 @@ def test_the_last_resort_takes_off_after_every_other_uav_has_landed() -> None:
     assert plain.clear_time() == 110.0 and _after_all(plain) == 111.0
 
 
+def test_a_repaired_uav_takes_the_first_free_slot_before_all_have_landed() -> None:
+    """A UAV blocked at its start for a minute, whose delays (20 s at most) do not reach past
+    that, takes off at the first 5 s step after the blocker has gone, found by the batched
+    table queries between the delays and the last resort; without them, only after every
+    other UAV has landed (501 s)."""
+    from uavplan.planners.fleet.fleet_polish import _after_all, _first_slot
+    from uavplan.world.reservations import ReservationTable
+
+    sc = with_fleet(resolve("open"), 2, seed=0)  # its straight path flies
+    task = sc.tasks[0]
+    path = np.array([task.start, task.goal], dtype=np.float64)
+    table = ReservationTable.for_scenario(sc)
+    start = np.asarray(task.start, dtype=np.float64)
+    sitting = np.stack([start, start + np.array([1.0, 0.0, 0.0])])  # at its start for 60 s
+    table.add("blocker", sitting, np.array([0.0, 60.0]))
+    far = np.array([[5.0, 5.0, float(start[2])], [6.0, 5.0, float(start[2])]])
+    table.add("far", far, np.array([0.0, 500.0]))
+    last = _after_all(table)
+    assert last == 501.0
+    starts = [5.0 * w for w in range(5)] + [last]
+    old = make_result(separated_problem(sc, task, None), path, algorithm="test", history=[],
+                      evaluations=0, evaluations_history=[], wall_time=0.0)  # fmt: skip
+    opts = {"timing": "planned", "step": 5.0}
+    found = {
+        fill: _first_slot(sc, task, old, path, table, opts, starts, lambda w: f"{w:g}", fill=fill)
+        for fill in (5.0, None)
+    }
+    assert found[5.0] is not None and found[None] is not None
+    t5 = float(np.asarray(found[5.0].flown_times)[0])
+    assert 60.0 <= t5 <= 65.0 + 1e-9 and found[5.0].info["repaired"] == f"{t5:g}"
+    assert float(np.asarray(found[None].flown_times)[0]) == last
+
+
 def test_a_single_uav_planner_run_as_a_fleet_is_repaired_too() -> None:
     """The prioritized frame around a single-UAV planner (here the potential field) gets the
     same repair as a fleet planner, and what it keeps passes the verifier under the model."""

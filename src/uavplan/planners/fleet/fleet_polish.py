@@ -66,6 +66,8 @@ MAX_CUTS = 50
 #: Among the widened cylinders of a dense map about half of the rescue paths fly, so three
 #: tries left one UAV in eight unrepaired; a failed try mostly costs a tenth of a second.
 RRT_TRIES = 8
+#: take-off times checked against the reserved flights in one table query
+SLOT_CHUNK = 64
 
 
 def first_crossing(points: FloatArray) -> tuple[int, int, FloatArray] | None:
@@ -196,13 +198,17 @@ def _first_slot(
     starts: list[float],
     how: Callable[[float], str],
     flights: list[Flight] | None = None,
+    fill: float | None = None,
 ) -> PlanResult | None:
     """``path`` flown by ``task`` taking off at the first of ``starts`` (s, ascending) where its
     flight passes every check, declared; None if at none. The flights are made and checked
     against the world and the kinematic limits once (a take-off time moves the schedule, not
     the curves); per take-off only the checks that read time run, and a flight that passes
     them is checked in full. ``how(wait)``: what the result says was done. ``flights``: the
-    flights to try (at the task's take-off time; made from ``path`` when None)."""
+    flights to try (at the task's take-off time; made from ``path`` when None). ``fill``
+    (s): where separation is the only check that reads time, the starts between the last two
+    of ``starts`` every ``fill`` seconds too (each start of a chunk of :data:`SLOT_CHUNK` is
+    one path of one table query), so the first free slot before the last start is found."""
     if track_crosses_itself(path) or not starts:
         return None
     first = dataclasses.replace(task, start_time=starts[0])
@@ -223,15 +229,41 @@ def _first_slot(
         made = [dataclasses.replace(f, times=f.times + starts[0] - task.start_time)
                 for f in flights]  # fmt: skip
     flights = sorted((f for f in check_flights(world, made) if f.ok), key=lambda f: f.length)
-    for start in starts:
+    time_checks = [n for n in TIME_CHECKS
+                   if n in flight_validator(scenario, first, table).checks()]  # fmt: skip
+    batched = time_checks == ["separation"] and len(table) > 0
+    if batched and fill is not None and len(starts) > 1:
+        # every step between the last of the delays and the take-off after all have landed:
+        # each is one path of a batched table query, and a UAV waits only as long as it must
+        more = np.arange(starts[-2] + fill, starts[-1], fill)
+        starts = [*starts[:-1], *(float(x) for x in more), starts[-1]]
+    W = np.asarray(starts, dtype=np.float64) - starts[0]
+    free: dict[tuple[int, int], NDArray[np.bool_]] = {}
+
+    def clear(fi: int, si: int) -> bool:  # separation alone reads time: a chunk of starts
+        key = (fi, si // SLOT_CHUNK)
+        if key not in free:
+            f = flights[fi]
+            ws = W[key[1] * SLOT_CHUNK : (key[1] + 1) * SLOT_CHUNK]
+            P = as_3d(f.points)
+            free[key] = ~table.conflicts(np.broadcast_to(P[None], (len(ws), *P.shape)),
+                                         f.times[None] + ws[:, None])  # fmt: skip
+        return bool(free[key][si % SLOT_CHUNK])
+
+    for si, start in enumerate(starts):
         wait = start - starts[0]
         later = dataclasses.replace(task, start_time=start)
-        v = flight_validator(scenario, later, table)
-        skip = [n for n in v.checks() if n not in TIME_CHECKS]
-        for f in flights:
+        v: Any = None
+        for fi, f in enumerate(flights):
             ts = f.times + wait
-            if not len(v.passing(v.batch(f.points[None], ts[None]), skip=skip)):
+            if batched and not clear(fi, si):
                 continue
+            if v is None:
+                v = flight_validator(scenario, later, table)
+            if not batched:
+                skip = [n for n in v.checks() if n not in TIME_CHECKS]
+                if not len(v.passing(v.batch(f.points[None], ts[None]), skip=skip)):
+                    continue
             flight = check_flights(v, [dataclasses.replace(f, times=ts)])[0]
             if not flight.ok:  # the full check disagrees: keep searching
                 continue
@@ -318,7 +350,8 @@ def polish_fleet(
                 own = [Flight(np.asarray(r.flown), np.asarray(r.flown_times) - r.times[0]
                               + tasks[uid].start_time, r.flown_kind, "declared", ())]  # fmt: skip
             new = _first_slot(scenario, tasks[uid], r, r.waypoints, table, opts, starts[1:],
-                              functools.partial(how, "its own path"), own)  # fmt: skip
+                              functools.partial(how, "its own path"), own,
+                              fill=delay_step)  # fmt: skip
         for a, ss in enumerate(rngs[k].spawn(RRT_TRIES) if new is None else ()):
             found = _rrt_path(scenario, tasks[uid], int(ss.generate_state(1)[0]))
             if found is None:
@@ -330,7 +363,8 @@ def polish_fleet(
             paths = [short] if np.array_equal(short, found) else [short, found]
             for path in paths:
                 new = _first_slot(scenario, tasks[uid], r, path, table, opts, starts,
-                                  functools.partial(how, f"RRT* (try {a + 1})"))  # fmt: skip
+                                  functools.partial(how, f"RRT* (try {a + 1})"),
+                                  fill=delay_step)  # fmt: skip
                 if new is not None:
                     break
             if new is not None:
