@@ -19,9 +19,10 @@ fails the fleet), in the plan's priority order:
    polished), shortened (and, if the shortcut flies nowhere, as polished: its flight passed
    alone), and flown against the others at its planned take-off or, where the
    UAV may wait on the ground (it is not a constant-speed UAV), up to ``max_delays`` steps of
-   ``delay_step`` seconds later and, last, after every other UAV has landed (whatever the
-   execution model lets the schedules drift: no other flight is left to meet); up to
-   :data:`RRT_TRIES` RRT* runs.
+   ``delay_step`` seconds later, then at the first free step of ``delay_step`` before every
+   other UAV has landed (where separation is the only check that reads time: batched table
+   queries), and, last, after every other UAV has landed (whatever the execution model lets
+   the schedules drift: no other flight is left to meet); up to :data:`RRT_TRIES` RRT* runs.
 
 A new flight is kept only when it passes every check (world, the others, the kinematic limits)
 and its track does not cross itself; the UAV's result then says so (``info["repaired"]``) and
