@@ -223,16 +223,6 @@ def _advance_each(
     return x + r * (np.sin(h1) - np.sin(h)), y + r * (np.cos(h) - np.cos(h1)), h1
 
 
-def _csc_lengths(q0: Pose, q1: Pose, rho: float, kind: str) -> tuple[float, float, float] | None:
-    """Arc, straight, arc lengths (m) of the CSC word ``kind`` from ``q0`` to ``q1``.
-
-    ``None`` when the word does not exist (LSR or RSL with overlapping circles).
-    """
-    first, last = kind[0], kind[2]
-    scale = rho + max(abs(q0[0]), abs(q0[1]), abs(q1[0]), abs(q1[1]))
-    return _csc_between(q0, q1, rho, kind, _centre(q0, rho, first), _centre(q1, rho, last), scale)
-
-
 def _csc_between(
     q0: Pose,
     q1: Pose,
@@ -242,8 +232,10 @@ def _csc_between(
     c1: tuple[float, float],
     scale: float,
 ) -> tuple[float, float, float] | None:
-    """:func:`_csc_lengths` with the turning circles' centres ``c0`` (of ``q0`` on the side of
-    ``kind[0]``) and ``c1`` (of ``q1``, ``kind[2]``) and the coordinate ``scale`` given."""
+    """Arc, straight, arc lengths (m) of the CSC word ``kind`` from ``q0`` to ``q1``, given the
+    turning circles' centres ``c0`` (of ``q0`` on the side of ``kind[0]``) and ``c1`` (of
+    ``q1``, ``kind[2]``) and the coordinate ``scale`` (``rho`` plus the largest coordinate);
+    ``None`` when the word does not exist (LSR or RSL with overlapping circles)."""
     first, last = kind[0], kind[2]
     cx0, cy0 = c0
     cx1, cy1 = c1

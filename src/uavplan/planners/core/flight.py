@@ -243,6 +243,29 @@ def check_flights(validator: MotionValidator, flights: Sequence[Flight]) -> list
     return out
 
 
+class ClearAt:
+    """Whether a flight is clear of ``table``'s reserved flights taking off ``waits[i]`` seconds
+    later than its times say, where separation is the only check that reads time: asked
+    lazily, ``chunk`` waits of one flight per table query (each wait one path of the batch).
+    ``clear(key, flight, i)``; ``key`` names the flight (answers are kept per key)."""
+
+    def __init__(self, table: ReservationTable, waits: Sequence[float], chunk: int) -> None:
+        self.table = table
+        self.W = np.asarray(waits, dtype=np.float64)
+        self.chunk = int(chunk)
+        self._free: dict[tuple[object, int], NDArray[np.bool_]] = {}
+
+    def clear(self, key: object, f: Flight, i: int) -> bool:
+        k = (key, i // self.chunk)
+        if k not in self._free:
+            ws = self.W[k[1] * self.chunk : (k[1] + 1) * self.chunk]
+            P = as_3d(f.points)
+            self._free[k] = ~self.table.conflicts(
+                np.broadcast_to(P[None], (len(ws), *P.shape)), f.times[None] + ws[:, None]
+            )
+        return bool(self._free[k][i % self.chunk])
+
+
 def best_flight(flights: Sequence[Flight]) -> Flight | None:
     """The flight with the fewest kinds of violation, then the shortest (None if none)."""
     if not flights:

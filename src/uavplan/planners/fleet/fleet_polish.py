@@ -44,6 +44,7 @@ from numpy.typing import NDArray
 
 from uavplan.planners.core.base import separated_problem
 from uavplan.planners.core.flight import (
+    ClearAt,
     Flight,
     candidate_flights,
     check_flights,
@@ -238,18 +239,7 @@ def _first_slot(
         # each is one path of a batched table query, and a UAV waits only as long as it must
         more = np.arange(starts[-2] + fill, starts[-1], fill)
         starts = [*starts[:-1], *(float(x) for x in more), starts[-1]]
-    W = np.asarray(starts, dtype=np.float64) - starts[0]
-    free: dict[tuple[int, int], NDArray[np.bool_]] = {}
-
-    def clear(fi: int, si: int) -> bool:  # separation alone reads time: a chunk of starts
-        key = (fi, si // SLOT_CHUNK)
-        if key not in free:
-            f = flights[fi]
-            ws = W[key[1] * SLOT_CHUNK : (key[1] + 1) * SLOT_CHUNK]
-            P = as_3d(f.points)
-            free[key] = ~table.conflicts(np.broadcast_to(P[None], (len(ws), *P.shape)),
-                                         f.times[None] + ws[:, None])  # fmt: skip
-        return bool(free[key][si % SLOT_CHUNK])
+    slots = ClearAt(table, [x - starts[0] for x in starts], SLOT_CHUNK)
 
     for si, start in enumerate(starts):
         wait = start - starts[0]
@@ -257,7 +247,7 @@ def _first_slot(
         v: Any = None
         for fi, f in enumerate(flights):
             ts = f.times + wait
-            if batched and not clear(fi, si):
+            if batched and not slots.clear(fi, f, si):
                 continue
             if v is None:
                 v = flight_validator(scenario, later, table)

@@ -624,7 +624,12 @@ class PrioritizedPlanner(FleetPlanner):
         was seeded from, then the best three feasible ones (four at most). Under a
         drifting schedule the steps go on past ``max_delays`` to the first free slot, at worst
         one after every UAV in the table has landed (:meth:`ReservationTable.clear_time`)."""
-        from uavplan.planners.core.flight import candidate_flights, check_flights, flight_validator
+        from uavplan.planners.core.flight import (
+            ClearAt,
+            candidate_flights,
+            check_flights,
+            flight_validator,
+        )
 
         cfg = self.config
         timing = "constant" if scenario.moving_obstacles else cfg.smooth_timing
@@ -668,24 +673,15 @@ class PrioritizedPlanner(FleetPlanner):
             if clear > waits[-1]:
                 more = np.arange(waits[-1] + cfg.delay_step, clear, cfg.delay_step)
                 waits += [float(w) for w in more] + [float(math.floor(clear) + 1.0)]
-        W = np.asarray(waits, dtype=np.float64)
-        free: dict[tuple[int, int], NDArray[np.bool_]] = {}
         batched = time_checks == ["separation"] and len(table) > 0
-        CHUNK = 8  # waits per table query: most UAVs find their slot in the first few
+        # waits per table query: most UAVs find their slot in the first few
+        slots = ClearAt(table, waits, 8)
 
         def clear_at(f: Flight, w_i: int, v: Any, skip: list[str]) -> bool:
             if not batched:
-                ts = f.times + W[w_i]
+                ts = f.times + waits[w_i]
                 return bool(len(v.passing(v.batch(f.points[None], ts[None]), skip=skip)))
-            # separation alone reads time: the flight at a chunk of waits in one table query
-            key = (id(f), w_i // CHUNK)
-            if key not in free:
-                ws = W[key[1] * CHUNK : (key[1] + 1) * CHUNK]
-                P = as_3d(f.points)
-                free[key] = ~table.conflicts(
-                    np.broadcast_to(P[None], (len(ws), *P.shape)), f.times[None] + ws[:, None]
-                )
-            return bool(free[key][w_i % CHUNK])
+            return slots.clear(id(f), f, w_i)  # separation alone reads time
 
         for w_i, wait in enumerate(waits):
             later = replace(task, start_time=task.start_time + wait)
