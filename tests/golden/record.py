@@ -55,11 +55,12 @@ COLUMNS = (
     "violations",
 )
 RTOL = 1e-9
-#: Evaluation counts to 0.1 %: HR-MAGA's depend on ties between agents whose losses differ in
+#: Evaluation counts to 0.5 %: HR-MAGA's depend on ties between agents whose losses differ in
 #: the last ulp from one CPU to another (the same commit, 57f38eb, gave 20,368 evaluations for
-#: one smoke mission on the machine that recorded the file and 20,366 on a later one; every
-#: cost, path and history equal). Every other integer is compared exactly.
-EVALUATIONS_RTOL = 1e-3
+#: one smoke mission on the machine that recorded the file and 20,366 on a later one; 5940c51
+#: gave 37,276 instead of 37,350 for `hrmaga-compare-paper`'s virtual mission on an AMD EPYC,
+#: 0.2 %; every cost, path and history equal). Every other integer is compared exactly.
+EVALUATIONS_RTOL = 5e-3
 
 
 def _plain(v: Any) -> Any:

@@ -234,3 +234,88 @@ def test_the_verifiers_ground_within_reach_bounds_it_brute_force(seed: int, how:
     at_q = bilinear_height(T, q[:, 0], q[:, 1])
     assert np.all(bilinear_height(hi, p[:, 0], p[:, 1]) >= at_q - 1e-9)
     assert np.all(bilinear_height(lo, p[:, 0], p[:, 1]) <= at_q + 1e-9)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_the_ground_within_reach_at_a_flights_nodes_is_the_whole_grids(seed: int) -> None:
+    """The margins read the ground moved within reach at the nodes under one flight, from a
+    table of block extremes, not a filter of the whole grid: the same values bit for bit as
+    the filter's (any window, at the grid's edges too), and the same clearances along a
+    random flight that leaves the grid, as the whole filtered grid (cut to the flight's cells)
+    gives."""
+    from dataclasses import replace
+
+    from uavplan.verify.robust import _cells_under, _Grid, vertical_clearance
+    from uavplan.verify.terrain import terrain_clearance_extrema, within_reach
+    from uavplan.world.obstacles import AltitudeBand
+    from uavplan.world.scenario import Bounds
+    from uavplan.world.terrain import Terrain
+
+    rng = np.random.default_rng(seed)
+    ny, nx = (int(v) for v in rng.integers(2, 40, 2))
+    du, dv = (float(v) for v in rng.uniform(0.3, 5.0, 2))
+    H = rng.normal(0.0, 5.0, (ny, nx))
+    for how in ("height", "slope"):
+        for highest in (True, False):
+            reach = float(rng.choice([rng.uniform(0.01, 3.0), rng.uniform(3.0, 60.0), 1000.0]))
+            rows, cols = rng.integers(0, ny, 50), rng.integers(0, nx, 50)
+            whole = within_reach(H, du, dv, reach, highest, how)
+            got = within_reach(H, du, dv, reach, highest, how, nodes=(rows, cols))
+            assert np.array_equal(got, whole[rows, cols])
+    m = int(rng.integers(2, 30))
+    span = np.array([du * (nx - 1), dv * (ny - 1)])
+    xy = rng.uniform(-0.2 * span, 1.2 * span, (m, 2))
+    if rng.random() < 0.3:  # on the grid's lines
+        xy = np.round(xy / [du, dv]) * [du, dv]
+    P = np.column_stack([xy, rng.uniform(20.0, 40.0, m)])
+    tr = Trajectory("u", P, np.arange(m, dtype=np.float64), True)
+    T = Terrain(H, 0.0, 0.0, du, dv)
+    sc = replace(resolve("spso"), terrain=T, cylinders=(),
+                 altitude=AltitudeBand(5.0, 60.0, "ground"),
+                 bounds=Bounds((-1e4, -1e4, -100.0), (1e4, 1e4, 100.0)))  # fmt: skip
+    for reach in (0.0, float(rng.uniform(0.1, 3.0)), float(rng.uniform(3.0, 50.0))):
+        got = vertical_clearance(tr, sc, None, terrain_clearance_extrema, reach, within_reach, {})
+        low, high = -math.inf, math.inf
+        cut = _cells_under(P, T)  # the kernels read the grid cut to the flight's cells
+        for how in ("height", "slope") if reach > 0 else ("",):
+            floor = within_reach(H, du, dv, reach, True, how) if how else H
+            top = within_reach(H, du, dv, reach, False, how) if how else H
+            ends = (P[:-1], P[1:])
+            low = max(low, float(np.min(terrain_clearance_extrema(*ends, _Grid(
+                floor[cut], T, cut))[:, 0])))  # fmt: skip
+            high = min(high, float(np.max(terrain_clearance_extrema(*ends, _Grid(
+                top[cut], T, cut))[:, 2])))  # fmt: skip
+        z = P[:, 2]
+        want = min((float(min(np.min(z + 100.0), np.min(100.0 - z))), "bounds"),
+                   (low, "terrain"), (low - 5.0, "altitude band's floor"),
+                   (60.0 - high, "altitude band's ceiling"))  # fmt: skip
+        assert got == (max(want[0], 0.0), want[1])
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_the_close_pairs_are_every_pair_near_in_space_and_time_once(seed: int) -> None:
+    """The verifier's pair search (a grid in space and time, each pair tested in the first
+    cell it shares) finds exactly the segment pairs of different UAVs closer than the gap
+    whose windows under the search's take-off and speed limits meet, each once, as a brute
+    force over every pair does."""
+    from uavplan.verify.robust import _close_pairs, _pack, _seg_dist2
+
+    rng = np.random.default_rng(seed)
+    trajs = []
+    for k in range(int(rng.integers(2, 7))):
+        m = int(rng.integers(2, 9))
+        P = np.cumsum(rng.normal(0.0, 25.0, (m, 3)), axis=0) + rng.uniform(0, 80, 3)
+        t = float(rng.uniform(-50.0, 300.0)) + np.cumsum(rng.uniform(0.5, 20.0, m))
+        trajs.append(Trajectory(f"u{k}", P, t))
+    P, T, owner, valid = _pack(trajs)
+    take = np.array([t.times[0] for t in trajs])[np.maximum(owner, 0)]
+    gap, cell, dcap, rcap = float(rng.uniform(5, 60)), float(rng.uniform(20, 80)), 20.0, 0.1
+    got = _close_pairs(P, owner, valid, gap, max(cell, gap), T, take, dcap, rcap)
+    lo = take - dcap + (T - take) / (1 + rcap)
+    hi = take + dcap + (np.roll(T, -1) - take) / (1 - rcap)
+    want = [(i, j) for i in range(len(P) - 1) for j in range(i + 1, len(P) - 1)
+            if valid[i] and valid[j] and owner[i] != owner[j]
+            and lo[i] <= hi[j] and lo[j] <= hi[i] and _seg_dist2(P, i, j) < gap * gap]  # fmt: skip
+    assert [tuple(r) for r in got.tolist()] == sorted(want)

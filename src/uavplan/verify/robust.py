@@ -213,7 +213,8 @@ def _close_pairs(P, owner, valid, gap, cell, T, take, dcap, rcap):  # pragma: no
     time holds each segment in the cells its box grown by ``gap`` towards +x, +y, +z and its
     window touch (two segments closer than ``gap`` have such boxes overlapping on every axis,
     at the larger of their closest coordinates, and two meeting windows a time cell in
-    common, so they share a cell)."""
+    common, so they share a cell). A pair is tested in one of its common cells only, the
+    first, and its windows are compared exactly before its distance is computed."""
     n = P.shape[0] - 1
     wlo = np.empty(n)
     whi = np.empty(n)
@@ -243,34 +244,30 @@ def _close_pairs(P, owner, valid, gap, cell, T, take, dcap, rcap):  # pragma: no
     for d in range(3):
         dims[d] = int((hi[d] - lo[d] + gap) / cell) + 2
     dims[3] = int((t_hi - t_lo) / tcell) + 2
+    # each segment's cells: x in [lo0, hi0], y [lo1, hi1], z [lo2, hi2], time [lo3, hi3]
+    box = np.empty((n, 8), dtype=np.int64)
     count = 0
     for i in range(n):
         if not valid[i]:
             continue
-        c = int((whi[i] - t_lo) / tcell) - int((wlo[i] - t_lo) / tcell) + 1
+        c = 1
         for d in range(3):
-            a = int((min(P[i, d], P[i + 1, d]) - lo[d]) / cell)
-            b = int((max(P[i, d], P[i + 1, d]) + gap - lo[d]) / cell)
-            c *= b - a + 1
-        count += c
+            box[i, d] = int((min(P[i, d], P[i + 1, d]) - lo[d]) / cell)
+            box[i, 4 + d] = int((max(P[i, d], P[i + 1, d]) + gap - lo[d]) / cell)
+            c *= box[i, 4 + d] - box[i, d] + 1
+        box[i, 3] = int((wlo[i] - t_lo) / tcell)
+        box[i, 7] = int((whi[i] - t_lo) / tcell)
+        count += c * (box[i, 7] - box[i, 3] + 1)
     keys = np.empty(count, dtype=np.int64)
     segs = np.empty(count, dtype=np.int64)
     e = 0
     for i in range(n):
         if not valid[i]:
             continue
-        a0 = int((min(P[i, 0], P[i + 1, 0]) - lo[0]) / cell)
-        a1 = int((max(P[i, 0], P[i + 1, 0]) + gap - lo[0]) / cell)
-        b0 = int((min(P[i, 1], P[i + 1, 1]) - lo[1]) / cell)
-        b1 = int((max(P[i, 1], P[i + 1, 1]) + gap - lo[1]) / cell)
-        c0 = int((min(P[i, 2], P[i + 1, 2]) - lo[2]) / cell)
-        c1 = int((max(P[i, 2], P[i + 1, 2]) + gap - lo[2]) / cell)
-        d0 = int((wlo[i] - t_lo) / tcell)
-        d1 = int((whi[i] - t_lo) / tcell)
-        for x in range(a0, a1 + 1):
-            for y in range(b0, b1 + 1):
-                for z in range(c0, c1 + 1):
-                    for w in range(d0, d1 + 1):
+        for x in range(box[i, 0], box[i, 4] + 1):
+            for y in range(box[i, 1], box[i, 5] + 1):
+                for z in range(box[i, 2], box[i, 6] + 1):
+                    for w in range(box[i, 3], box[i, 7] + 1):
                         keys[e] = ((x * dims[1] + y) * dims[2] + z) * dims[3] + w
                         segs[e] = i
                         e += 1
@@ -281,15 +278,29 @@ def _close_pairs(P, owner, valid, gap, cell, T, take, dcap, rcap):  # pragma: no
     segs = segs[order]
     found = []
     g2 = gap * gap
+    here = np.empty(4, dtype=np.int64)
     s = 0
     while s < e:
         t = s
         while t < e and keys[t] == keys[s]:
             t += 1
+        k = keys[s]
+        for d in range(3, -1, -1):
+            here[d] = k % dims[d]
+            k //= dims[d]
         for p in range(s, t):
             for q in range(p + 1, t):
                 i, j = segs[p], segs[q]
                 if owner[i] == owner[j]:
+                    continue
+                # a pair is tested once, in the first cell the two share (where the larger
+                # of their lower cells lies on every axis), and only when its windows meet
+                once = True
+                for d in range(4):
+                    if max(box[i, d], box[j, d]) != here[d]:
+                        once = False
+                        break
+                if not once or wlo[i] > whi[j] or wlo[j] > whi[i]:
                     continue
                 if owner[i] > owner[j]:
                     i, j = j, i
@@ -325,6 +336,16 @@ def _group_min(P, T, pairs, take, da, ra, db, rb, start, stop, stop_below):  # p
             if math.sqrt(best) < stop_below:
                 break
     return math.sqrt(best), at, bu, bw
+
+
+@njit(cache=True)
+def _pair_dists(P, pairs):  # pragma: no cover - numba
+    """The untimed distance of each segment pair (a lower bound of its distance under any
+    timing)."""
+    out = np.empty(pairs.shape[0])
+    for k in range(pairs.shape[0]):
+        out[k] = math.sqrt(_seg_dist2(P, pairs[k, 0], pairs[k, 1]))
+    return out
 
 
 # ================================================================================ records
@@ -464,11 +485,17 @@ def separation_under(
     cuts = np.flatnonzero(np.diff(key)) + 1
     starts = np.concatenate([[0], cuts])
     stops = np.concatenate([cuts, [len(key)]])
+    # whether a pair fails is decided by its segment pairs that are closer than required
+    # without any timing (a timed distance is never less): the bisections read those alone
+    near = _pair_dists(P, pairs) < required - TOL + 1e-6
+    close = np.ascontiguousarray(pairs[near])
+    at = np.concatenate([[0], np.cumsum(near)])
     out: list[Violation] = []
     margins: list[PairMargin] = []
     for s, e in zip(starts, stops, strict=True):
         a, b = trajs[int(owner[pairs[s, 0]])], trajs[int(owner[pairs[s, 1]])]
-        m = _pair_margin(P, T, pairs, take, int(s), int(e), required, timing, a.id, b.id, False)
+        m = _pair_margin(P, T, pairs, take, int(s), int(e), required, timing, a.id, b.id, False,
+                         (close, int(at[s]), int(at[e])))  # fmt: skip
         margins.append(m)
         if not m.ok:
             out.append(Violation(
@@ -491,17 +518,24 @@ def _show(v: float) -> str:
 def _pair_margin(
     P: FloatArray, T: FloatArray, pairs: IntArray, take: FloatArray, s: int, e: int,
     required: float, timing: Timing, a: str, b: str, moving: bool,
+    close: tuple[IntArray, int, int] | None = None,
 ) -> PairMargin:  # fmt: skip
     """One pair's least distance under the model and its margins (module docstring);
-    ``moving``: the second side is a moving obstacle on its own schedule (no error)."""
+    ``moving``: the second side is a moving obstacle on its own schedule (no error);
+    ``close``: the segment pairs (rows ``[start, stop)``) that alone can fail, if known."""
     d0, r0 = timing.delta0, timing.rho
+    fp, fs, fe = (pairs, s, e) if close is None else close
 
     def dist(delta: float, rho: float, stop: float = -1.0) -> tuple[float, int, float, float]:
         db, rb = (0.0, 0.0) if moving else (delta, rho)
         return _group_min(P, T, pairs, take, delta, rho, db, rb, s, e, stop)
 
     def fails(delta: float, rho: float) -> bool:
-        return dist(delta, rho, required - TOL)[0] < required - TOL
+        if fs >= fe:
+            return False
+        db, rb = (0.0, 0.0) if moving else (delta, rho)
+        got = _group_min(P, T, fp, take, delta, rho, db, rb, fs, fe, required - TOL)
+        return bool(got[0] < required - TOL)
 
     passes = not fails(d0, r0)  # the model's own errors: a known lower end of each search
     takeoff = _largest(lambda x: fails(x, r0), TAKEOFF_CAP, d0 if passes else 0.0)
@@ -634,7 +668,7 @@ def horizontal_clearance(
 
 def vertical_clearance(
     traj: Trajectory, scenario: Any, source: Any, extrema: Any, reach: float = 0.0,
-    within: Any = None,
+    within: Any = None, scratch: dict[str, Any] | None = None,
 ) -> tuple[float, str]:  # fmt: skip
     """The largest vertical tracking error the UAV's flight tolerates (exact for ``reach``
     0): the least of its height above the ground (the raster's own, ``source``, else the
@@ -644,7 +678,9 @@ def vertical_clearance(
     the highest and lowest within reach, ``within``, :func:`~uavplan.verify.terrain.
     within_reach`). ``extrema``: the verifier's grid clearance function
     (``terrain_clearance_extrema``); ``source``: ``source(traj, reach)``, the clearances over
-    the raster (:func:`~uavplan.verify.source_terrain.source_clearance`), or None."""
+    the raster (:func:`~uavplan.verify.source_terrain.source_clearance`), or None.
+    ``scratch``: a dict kept by the caller for one flight over many reaches (a margin's
+    bisection): the grid nodes the clearances read and the grids they are written into."""
     if traj.dim != 3:
         return math.inf, ""
     z = traj.points[:, 2]
@@ -659,20 +695,21 @@ def vertical_clearance(
         a, b = traj.points[:-1], traj.points[1:]
         floor0 = terrain.heights
         top0 = terrain.heights if terrain.lower is None else terrain.lower
-        # the clearances read only the cells under the flight: each grid is cut to them (and
-        # one node around) before it is offset, so a margin's bisection over a fleet does not
-        # rebuild whole rasters per UAV and step; the values read are the same
-        cut = _cells_under(traj.points, terrain)
+        # the clearances read only the nodes at the cells under the flight: the grids moved
+        # within reach are computed there alone (one table query per node, not a filter of
+        # the whole raster per UAV and step) into grids cut to those cells (and one node
+        # around); the values read are the same
+        view = None if scratch is None else scratch.get("view")
+        if view is None:
+            view = _GroundView(traj, terrain, a, b)
+            if scratch is not None:
+                scratch["view"] = view
         low_c, high_c = -math.inf, math.inf
         for how in ("height", "slope") if reach > 0 and within is not None else ("",):
-            if how:
-                floor = within(floor0, terrain.dx, terrain.dy, reach, True, how, cut)
-                top = within(top0, terrain.dx, terrain.dy, reach, False, how, cut)
-            else:
-                floor, top = floor0[cut], top0[cut]
-            # each construction bounds the ground within reach: the better bound holds
-            low_c = max(low_c, float(np.min(extrema(a, b, _Grid(floor, terrain, cut))[:, 0])))
-            high_c = min(high_c, float(np.max(extrema(a, b, _Grid(top, terrain, cut))[:, 2])))
+            floor = view.moved(floor0, reach, True, how, within)
+            low_c = max(low_c, float(np.min(extrema(a, b, floor)[:, 0])))
+            top = view.moved(top0, reach, False, how, within)
+            high_c = min(high_c, float(np.max(extrema(a, b, top)[:, 2])))
     elif band is not None and band.reference == "ground":  # flat ground at 0
         low_c, high_c = float(z.min()), float(z.max())
     if math.isfinite(low_c):
@@ -696,6 +733,34 @@ class _Grid:
         self.dx, self.dy = float(terrain.dx), float(terrain.dy)
         self.x0 = float(terrain.x0) + cut[1].start * self.dx
         self.y0 = float(terrain.y0) + cut[0].start * self.dy
+
+
+class _GroundView:
+    """One flight's view of a terrain grid: the cut of the grid under it (:func:`_cells_under`),
+    the nodes there that the clearance kernel reads (``nodes``, the whole grid's rows and
+    columns; ``local``, the cut's), and two grids of the cut's shape that hold the ground moved
+    within reach at those nodes (NaN elsewhere: never read)."""
+
+    def __init__(self, traj: Trajectory, terrain: Any, a: FloatArray, b: FloatArray) -> None:
+        from uavplan.verify.terrain import nodes_read
+
+        self.terrain = terrain
+        self.cut = _cells_under(traj.points, terrain)
+        self.nodes = nodes_read(a, b, terrain, self.cut)
+        self.local = (self.nodes[0] - self.cut[0].start, self.nodes[1] - self.cut[1].start)
+        shape = (self.cut[0].stop - self.cut[0].start, self.cut[1].stop - self.cut[1].start)
+        self.floor = np.full(shape, np.nan)
+        self.top = np.full(shape, np.nan)
+
+    def moved(self, H: FloatArray, reach: float, highest: bool, how: str, within: Any) -> _Grid:
+        """The grid ``H`` (the terrain's floor or top) moved within ``reach`` as ``how`` says
+        (``within(..., nodes=)``), at the nodes read; ``how`` "": ``H`` as it is."""
+        if not how:
+            return _Grid(H[self.cut], self.terrain, self.cut)
+        buf = self.floor if highest else self.top
+        t = self.terrain
+        buf[self.local] = within(H, t.dx, t.dy, reach, highest, how, nodes=self.nodes)
+        return _Grid(buf, t, self.cut)
 
 
 def _cells_under(points: FloatArray, terrain: Any) -> tuple[slice, slice]:

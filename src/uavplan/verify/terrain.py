@@ -137,6 +137,42 @@ def _terrain_extrema(A, B, H, x0, y0, dx, dy):  # pragma: no cover - numba
     return out
 
 
+@njit(cache=True)
+def _mark_nodes_read(A, B, x0, y0, dx, dy, ny, nx, mask, r0, c0):  # pragma: no cover - numba
+    """Mark in ``mask`` (its node ``[0, 0]`` is the grid's ``[r0, c0]``) every node that
+    :func:`_terrain_extrema` reads along ``A[m] -> B[m]`` (the corners of the cells between
+    each segment's ends, clamped as it clamps them), and one node more on each side."""
+    mr, mc = mask.shape
+    for q in range(A.shape[0]):
+        u0 = (A[q, 0] - x0) / dx
+        u1 = (B[q, 0] - x0) / dx
+        v0 = (A[q, 1] - y0) / dy
+        v1 = (B[q, 1] - y0) / dy
+        i0 = min(math.floor(min(max(min(u0, u1), 0.0), nx - 1.0)), nx - 2) - 1
+        i1 = min(math.floor(min(max(max(u0, u1), 0.0), nx - 1.0)), nx - 2) + 2
+        j0 = min(math.floor(min(max(min(v0, v1), 0.0), ny - 1.0)), ny - 2) - 1
+        j1 = min(math.floor(min(max(max(v0, v1), 0.0), ny - 1.0)), ny - 2) + 2
+        for j in range(max(j0 - r0, 0), min(j1 - r0, mr - 1) + 1):
+            for i in range(max(i0 - c0, 0), min(i1 - c0, mc - 1) + 1):
+                mask[j, i] = True
+
+
+def nodes_read(
+    a: FloatArray, b: FloatArray, terrain: Terrain, cut: tuple[slice, slice]
+) -> tuple[IntArray, IntArray]:
+    """(rows, columns) of ``terrain``'s grid, within ``cut``: the nodes the clearance kernel
+    reads along the segments ``a[m] -> b[m]``, and one more around (a grid that is right at
+    these nodes gives the clearances of the whole grid)."""
+    mask = np.zeros((cut[0].stop - cut[0].start, cut[1].stop - cut[1].start), dtype=np.bool_)
+    ny, nx = np.shape(terrain.heights)
+    _mark_nodes_read(np.ascontiguousarray(a, dtype=np.float64).reshape(-1, 3),
+                     np.ascontiguousarray(b, dtype=np.float64).reshape(-1, 3),
+                     float(terrain.x0), float(terrain.y0), float(terrain.dx),
+                     float(terrain.dy), ny, nx, mask, cut[0].start, cut[1].start)  # fmt: skip
+    rows, cols = np.nonzero(mask)
+    return rows + cut[0].start, cols + cut[1].start
+
+
 def terrain_clearance_extrema(a: FloatArray, b: FloatArray, terrain: Terrain) -> FloatArray:
     """Exact minimum and maximum of ``z - h(x, y)`` along each segment over the bilinear DEM.
 
@@ -164,7 +200,7 @@ def terrain_clearance_extrema(a: FloatArray, b: FloatArray, terrain: Terrain) ->
 
 def within_reach(
     H: FloatArray, du: float, dv: float, reach: float, highest: bool, how: str = "height",
-    cut: tuple[slice, slice] | None = None,
+    cut: tuple[slice, slice] | None = None, nodes: tuple[IntArray, IntArray] | None = None,
 ) -> FloatArray:  # fmt: skip
     """The verifier's own bound on the ground within ``reach`` horizontally of any point: a
     grid whose bilinear surface at a point is at least (``highest``; at most otherwise) the
@@ -174,15 +210,27 @@ def within_reach(
     are all that close to each corner of the point's own cell). ``how="slope"``: each node
     moved by ``reach`` times the steepest cell gradient within that many cells (a cell's
     gradient is at most the hypot of its larger x-edge and y-edge slopes, and the surface is
-    continuous). Either holds alone; the verifier uses the better clearance of the two. Kept
-    per grid and window (the margins' bisections ask for the same windows again). ``cut``: the
-    rows and columns of the result wanted (the whole grid is filtered all the same, once per
-    window, so that the nodes at the cut's edges are the whole grid's)."""
+    continuous). Either holds alone; the verifier uses the better clearance of the two.
+    ``cut``: the rows and columns of the result wanted (the nodes at the cut's edges are the
+    whole grid's). ``nodes``: (rows, columns) of the whole grid: the result at those nodes
+    alone, a 1-D array (the margins' bisections read a flight's few hundred nodes at many
+    reaches: each is a query of :class:`_Extremes`, not a filter of the whole grid)."""
     G = np.asarray(H, dtype=np.float64)
     if reach <= 0:
+        if nodes is not None:
+            return G[nodes]
         return G if cut is None else G[cut]
     ku = math.ceil(reach / du) + 1
     kv = math.ceil(reach / dv) + 1
+    if nodes is not None:
+        table = _extremes(H, G, du, dv, highest, how, kv, ku)
+        if table is not None:
+            near = table.at(nodes[0], nodes[1], kv, ku)
+            if how == "height":
+                return near
+            g = G[nodes]
+            return g + reach * near if highest else g - reach * near
+        return within_reach(H, du, dv, reach, highest, how)[nodes]
     # the filtered grid depends on the window alone (for "slope", the steepest gradient
     # near each node, which the reach then scales): kept per grid and window
     key = (id(H), ku, kv, bool(highest) if how == "height" else True, how)
@@ -198,13 +246,8 @@ def within_reach(
             f = maximum_filter if highest else minimum_filter
             near = np.asarray(f(G, size=size, mode="nearest"))
         else:
-            ny, nx = G.shape
-            su = np.abs(G[:, 1:] - G[:, :-1]) / du
-            sv = np.abs(G[1:, :] - G[:-1, :]) / dv
-            steep = np.zeros((ny + 1, nx + 1))
-            steep[1:ny, 1:nx] = np.sqrt(np.maximum(su[1:], su[:-1]) ** 2
-                                        + np.maximum(sv[:, 1:], sv[:, :-1]) ** 2)  # fmt: skip
-            near = maximum_filter(steep, size=size, mode="constant", cval=0.0)[:ny, :nx]
+            near = maximum_filter(_steepest(G, du, dv), size=size, mode="constant",
+                                  cval=0.0)[: G.shape[0], : G.shape[1]]  # fmt: skip
         while len(_WITHIN) >= 64:  # the least recently used go first
             del _WITHIN[next(iter(_WITHIN))]
         _WITHIN[key] = (H, near)
@@ -215,7 +258,140 @@ def within_reach(
     return G + reach * near if highest else G - reach * near
 
 
+def _steepest(G: FloatArray, du: float, dv: float) -> FloatArray:
+    """(ny + 1, nx + 1): at node (r, c) the bound on the gradient of the cell whose far corner
+    it is (zero on the border rows and columns): the hypot of the cell's larger x-edge and
+    larger y-edge slopes."""
+    ny, nx = G.shape
+    su = np.abs(G[:, 1:] - G[:, :-1]) / du
+    sv = np.abs(G[1:, :] - G[:-1, :]) / dv
+    steep = np.zeros((ny + 1, nx + 1))
+    steep[1:ny, 1:nx] = np.sqrt(np.maximum(su[1:], su[:-1]) ** 2
+                                + np.maximum(sv[:, 1:], sv[:, :-1]) ** 2)  # fmt: skip
+    return steep
+
+
 _WITHIN: dict[tuple[int, int, int, bool, str], tuple[FloatArray, FloatArray]] = {}
+
+#: The most memory the window tables of :func:`within_reach` may hold (bytes); a grid whose
+#: table would need more is filtered whole per window instead.
+TABLE_BYTES = 768 * 2**20
+
+
+class _Extremes:
+    """A sparse table of a grid's extremes over square blocks: ``S[k, r, c]`` is the largest
+    (smallest) value over rows ``r .. r + 2^k - 1`` and columns ``c .. c + 2^k - 1`` (cut at the
+    grid's end). Any window's extreme is that of a few blocks of the largest size that fits
+    its shorter side (overlaps change nothing in a maximum): the same value as the filter's,
+    bit for bit, read at a few nodes in microseconds. Built up to the level the windows ask."""
+
+    def __init__(self, base: FloatArray, highest: bool, levels: int) -> None:
+        self.base, self.highest = base, highest
+        self.S = _extreme_levels(base, levels, highest)
+
+    @property
+    def levels(self) -> int:
+        return int(self.S.shape[0])
+
+    def at(self, rows: IntArray, cols: IntArray, kv: int, ku: int) -> FloatArray:
+        """The extreme over rows ``rows -kv .. +kv`` and columns ``cols -ku .. +ku`` (cut at the
+        grid's edges; a filter's ``nearest`` edge adds no other value)."""
+        out = np.empty(rows.shape[0])
+        _window_extremes(self.S, rows, cols, kv, ku, self.highest, out)
+        return out
+
+
+def _levels_for(ny: int, nx: int, kv: int, ku: int) -> int:
+    """The levels a window of half-sizes ``kv``, ``ku`` needs on a ``ny`` x ``nx`` grid."""
+    side = min(2 * kv + 1, 2 * ku + 1, ny, nx)
+    return math.floor(math.log2(side)) + 1
+
+
+def _extremes(
+    H: FloatArray, G: FloatArray, du: float, dv: float, highest: bool, how: str, kv: int, ku: int
+) -> _Extremes | None:
+    """The table for ``within_reach``'s windows over ``H`` (its nodes' heights for ``height``,
+    the steepest gradients for ``slope``), kept per grid; None when it would need more than
+    :data:`TABLE_BYTES`."""
+    high = bool(highest) if how == "height" else True
+    key = (id(H), high, how)
+    hit = _TABLES.get(key)
+    ny, nx = G.shape if how == "height" else (G.shape[0] + 1, G.shape[1] + 1)
+    need = _levels_for(ny, nx, kv, ku)
+    if hit is not None and hit[0] is H and hit[1].levels >= need:
+        return hit[1]
+    # built to the deepest level any window on this grid can use (one build per grid) when
+    # that fits beside the other grids' tables; else to this window's, the others dropped
+    size = ny * nx * 8
+    others = sum(t.S.nbytes for k, (_, t) in _TABLES.items() if k != key)
+    levels = _levels_for(ny, nx, ny, nx)
+    if levels * size + others > TABLE_BYTES:
+        levels = need
+    if levels * size > TABLE_BYTES:
+        return None
+    if levels * size + others > TABLE_BYTES:
+        _TABLES.clear()
+    base = G if how == "height" else _steepest(G, du, dv)
+    table = _Extremes(base, high, levels)
+    _TABLES[key] = (H, table)
+    return table
+
+
+_TABLES: dict[tuple[int, bool, str], tuple[FloatArray, _Extremes]] = {}
+
+
+@njit(cache=True)
+def _extreme_levels(G, levels, highest):  # pragma: no cover - numba
+    """``S[k]``: the extreme of ``G`` over each 2^k x 2^k block (cut at the grid's end)."""
+    ny, nx = G.shape
+    S = np.empty((levels, ny, nx))
+    S[0] = G
+    for k in range(1, levels):
+        h = 1 << (k - 1)
+        for r in range(ny):
+            r2 = min(r + h, ny - 1)
+            for c in range(nx):
+                c2 = min(c + h, nx - 1)
+                a = S[k - 1, r, c]
+                b = S[k - 1, r2, c]
+                d = S[k - 1, r, c2]
+                e = S[k - 1, r2, c2]
+                if highest:
+                    S[k, r, c] = max(max(a, b), max(d, e))
+                else:
+                    S[k, r, c] = min(min(a, b), min(d, e))
+    return S
+
+
+@njit(cache=True)
+def _window_extremes(S, rows, cols, kv, ku, highest, out):  # pragma: no cover - numba
+    """``out[n]``: the extreme of the table's grid over rows ``rows[n] -kv .. +kv`` and columns
+    ``cols[n] -ku .. +ku`` (cut at the edges), from blocks of the largest size that fits."""
+    ny, nx = S.shape[1], S.shape[2]
+    for n in range(rows.shape[0]):
+        r0 = max(rows[n] - kv, 0)
+        r1 = min(rows[n] + kv, ny - 1)
+        c0 = max(cols[n] - ku, 0)
+        c1 = min(cols[n] + ku, nx - 1)
+        side = min(r1 - r0 + 1, c1 - c0 + 1)
+        a = 0
+        while (2 << a) <= side:
+            a += 1
+        s = 1 << a
+        best = S[a, r0, c0]
+        rr = r0
+        while True:
+            cc = c0
+            while True:
+                v = S[a, rr, cc]
+                best = max(best, v) if highest else min(best, v)
+                if cc + s - 1 >= c1:
+                    break
+                cc = min(cc + s, c1 - s + 1)
+            if rr + s - 1 >= r1:
+                break
+            rr = min(rr + s, r1 - s + 1)
+        out[n] = best
 
 
 def bilinear_height(terrain: Terrain, x: FloatArray, y: FloatArray) -> FloatArray:

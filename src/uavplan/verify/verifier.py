@@ -267,9 +267,12 @@ def _under_model(
     for tr in trajs:
         m = margins[tr.id]
 
-        def vertical(reach: float, tr: Trajectory = tr) -> tuple[float, str]:
+        scratch: dict[str, Any] = {}  # the flight's grid nodes, kept over its bisections
+
+        def vertical(reach: float, tr: Trajectory = tr, scratch: dict[str, Any] = scratch
+                     ) -> tuple[float, str]:  # fmt: skip
             return R.vertical_clearance(tr, sc, src, terrain_clearance_extrema, reach,
-                                        within_reach)  # fmt: skip
+                                        within_reach, scratch)  # fmt: skip
 
         def ground(e: float, vertical: Any = vertical) -> str:
             # a horizontal error moves the ground under the UAV: the ground checks must
