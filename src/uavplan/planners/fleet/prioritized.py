@@ -677,22 +677,27 @@ class PrioritizedPlanner(FleetPlanner):
         # waits per table query: most UAVs find their slot in the first few
         slots = ClearAt(table, waits, 8)
 
-        def clear_at(f: Flight, w_i: int, v: Any, skip: list[str]) -> bool:
-            if not batched:
-                ts = f.times + waits[w_i]
-                return bool(len(v.passing(v.batch(f.points[None], ts[None]), skip=skip)))
-            return slots.clear(id(f), f, w_i)  # separation alone reads time
-
-        for w_i, wait in enumerate(waits):
+        def validator_at(wait: float) -> tuple[Task, Any, list[str]]:
             later = replace(task, start_time=task.start_time + wait)
             v = flight_validator(scenario, later, table)
-            skip = [n for n in v.checks() if n not in time_checks]
+            return later, v, [n for n in v.checks() if n not in time_checks]
+
+        for w_i, wait in enumerate(waits):
+            at = None  # the validator at this wait, made when a check needs it (most waits
+            # of a long search are answered by the batched table queries alone)
             for c, good in per_cand:
                 for f in good:
-                    ts = f.times + wait
-                    clear = clear_at(f, w_i, v, skip)
+                    if batched:  # separation alone reads time
+                        clear = slots.clear(id(f), f, w_i)
+                    else:
+                        at = at or validator_at(wait)
+                        v, skip = at[1], at[2]
+                        ts = (f.times + wait)[None]
+                        clear = bool(len(v.passing(v.batch(f.points[None], ts), skip=skip)))
                     if clear:
-                        flight = check_flights(v, [replace(f, times=ts)])[0]
+                        at = at or validator_at(wait)
+                        later, v = at[0], at[1]
+                        flight = check_flights(v, [replace(f, times=f.times + wait)])[0]
                         if not flight.ok:  # the full check disagrees: keep searching
                             continue
                         waited = self._waited(scenario, later, table, _One(c))[0]
