@@ -253,6 +253,25 @@ def test_simulate_command(small_plan: Path, tmp_path: Path) -> None:
     assert bad.exit_code == 2 and "--turbulence 'gale'" in bad.output
 
 
+def test_simulating_a_refused_plan_says_so_and_exits_1(small_plan: Path, tmp_path: Path) -> None:
+    """A plan whose own checks fail for a UAV is simulated all the same (to see how it would
+    fly), but the command says loudly that it is not flyable and exits 1 even when no run
+    violates."""
+    doc = json.loads((small_plan / "plan.json").read_text())
+    doc["uavs"][1]["feasible"] = False
+    doc["uavs"][1]["flown"]["feasible"] = False
+    doc["uavs"][1]["flown"]["violations"] = ["climb"]
+    bad = tmp_path / "refused" / "plan.json"
+    bad.parent.mkdir()
+    bad.write_text(json.dumps(doc))
+    r = CliRunner().invoke(app, ["simulate", str(bad), "--runs", "1", "--executor", "serial",
+                                 "--out", str(tmp_path / "sim")])  # fmt: skip
+    assert r.exit_code == 1, r.output
+    uid = doc["uavs"][1]["id"]
+    assert "NOT FLYABLE as planned" in r.output
+    assert f"1 of 4 UAVs' flights fail a check ({uid})" in r.output
+
+
 def test_the_batched_multirotor_agrees_with_rotorpy() -> None:
     """The batched model (with the reference controller's gains) and rotorpy's quadrotor under
     its SE(3) controller fly the same L-shaped mission: their cross-track errors agree along

@@ -101,6 +101,14 @@ def simulate(
     sweep = simulation_plan(str(shown.resolve()), ref, runs, options, name=f"simulate-{ident}")
     model = dict(plan.execution or {})
     d0 = takeoff if takeoff is not None else float(model.get("takeoff_s", 0.0))
+    refused = [u.id for u in plan.uavs
+               if (u.flown_feasible if u.flown is not None else u.feasible) is False]  # fmt: skip
+    if refused or plan.feasible is False:
+        listed = ", ".join(refused[:5]) + (", ..." if len(refused) > 5 else "")
+        err.print(f"NOT FLYABLE as planned: {shown} says {len(refused)} of {len(plan.uavs)} "
+                  f"UAVs' flights fail a check ({listed or 'the plan is infeasible'}); "
+                  "simulated all the same, to see how it would fly (exit 1 whatever the runs "
+                  "show)", markup=False)  # fmt: skip
     out.print(f"{shown}: {len(plan.uavs)} UAV(s), airframe {af.name} ({af.kind}); "
               f"{runs} run(s): take-off ±{d0:g} s, "
               f"wind up to {wind:g} m/s, {turbulence} turbulence, navigation error "
@@ -172,6 +180,10 @@ def simulate(
                       markup=False)  # fmt: skip
         raise typer.Exit(1)
     if s["errors"]:
+        raise typer.Exit(1)
+    if refused or plan.feasible is False:
+        err.print(f"NOT FLYABLE as planned ({listed or 'the plan is infeasible'}): no run "
+                  "violated, but the plan's own checks fail", markup=False)  # fmt: skip
         raise typer.Exit(1)
 
 
