@@ -717,7 +717,10 @@ def test_stays_within_agrees_with_max_clearance(seed: int) -> None:
     finite = np.isfinite(top)
     for ceiling in (np.nanmedian(np.where(finite, top, np.nan)), float(np.max(top[finite])) + 1):
         got = T.stays_within(segs, ceiling)
-        np.testing.assert_array_equal(got[finite], top[finite] <= ceiling)
+        # a segment whose top is the ceiling to within rounding may go either way (the two
+        # kernels round differently: seed 61503 has one 5e-15 m over a median ceiling of 3)
+        clear = finite & (np.abs(top - ceiling) > 1e-9 * (1.0 + abs(ceiling)))
+        np.testing.assert_array_equal(got[clear], top[clear] <= ceiling)
 
 
 def test_height_kernel_equals_the_numpy_reference():
