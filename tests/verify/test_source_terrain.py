@@ -300,3 +300,41 @@ def test_the_ground_within_a_small_reach_is_bounded_tightly_on_a_coarse_raster()
     assert source_clearance(tr, src, 3.0) == pytest.approx((low, high))  # the best bound
     exact = source_clearance(tr, src, 0.0)
     assert exact[0] - low < 1.0 and high - exact[1] < 1.0
+
+
+def test_the_small_reach_bound_holds_along_random_flights_over_a_real_raster() -> None:
+    """The bound of the ground within reach takes the steepest slope over each piece's own
+    neighbourhood in a cell (not the whole cell's): over random short flights across
+    Luxembourg, at reaches of 1-30 m, every ground point sampled within the reach of the
+    flight stands inside it."""
+    from uavplan.scenarios import resolve
+    from uavplan.verify.source_terrain import _piece_reach_bound, read_source
+
+    sc = resolve("luxembourg")
+    src = read_source(sc.terrain)
+    assert src is not None
+    rng = np.random.default_rng(11)
+    lo, hi = np.asarray(sc.bounds.lower[:2]), np.asarray(sc.bounds.upper[:2])
+    for _ in range(12):
+        start = rng.uniform(lo + 3000.0, hi - 3000.0)
+        xy = start + np.cumsum(rng.normal(0.0, 700.0, (4, 2)), axis=0)
+        xy = np.clip(xy, lo + 100.0, hi - 100.0)
+        z = np.array([sc.terrain.height(*p) for p in xy]) + rng.uniform(20.0, 200.0, 4)
+        tr = Trajectory("a", np.column_stack([xy, z]), np.arange(4.0) * 100, True)
+        reach = float(rng.uniform(1.0, 30.0))
+        low, high = _piece_reach_bound(tr, src, reach, 150.0)
+        if not (np.isfinite(low) and np.isfinite(high)):
+            continue
+        s = np.linspace(0, 1, 1501)
+        P = np.concatenate([tr.points[k] + s[:, None] * (tr.points[k + 1] - tr.points[k])
+                            for k in range(3)])  # fmt: skip
+        ang = rng.uniform(0, 2 * np.pi, (len(P), 12))
+        rad = reach * np.sqrt(rng.uniform(0, 1, (len(P), 12)))
+        rad[:, 0] = reach  # on the reach's edge too
+        u, v = src.to_samples((P[:, 0:1] + rad * np.cos(ang)).ravel(),
+                              (P[:, 1:2] + rad * np.sin(ang)).ravel())  # fmt: skip
+        z_rep = np.repeat(P[:, 2], 12)
+        floor = Terrain(src.hi, 0.0, 0.0, 1.0, 1.0, "s").height(u, v)
+        ceiling = Terrain(src.lo, 0.0, 0.0, 1.0, 1.0, "s").height(u, v)
+        assert (z_rep - floor).min() >= low - 1e-6
+        assert (z_rep - ceiling).max() <= high + 1e-6

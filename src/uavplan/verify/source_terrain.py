@@ -282,11 +282,13 @@ def _piece_reach_bound(
     """The least and largest height above the ground within ``reach`` metres of the flight,
     bounded per piece of at most a sample: the exact extrema over the ground under the piece,
     less (plus) ``reach`` times the steepest the ground can be in metres along any direction in
-    the cells the piece's neighbourhood touches. In a cell the bilinear surface's slopes per
-    sample are at most its larger x-edge difference ``gx`` and y-edge difference ``gy``; the
-    map from metres to samples has the Jacobian ``J`` (measured at the piece's ends, the
-    larger of each entry, times 1.1 for its change across the piece), so a metre moves the
-    ground by at most ``hypot(|J00| gx + |J10| gy, |J01| gx + |J11| gy)``. Tight where the reach
+    the piece's neighbourhood (the piece's box grown by the reach). In a cell the bilinear
+    surface's slope per sample along x at height ``y`` interpolates its two x-edge
+    differences, along y at ``x`` its two y-edge differences; the map from metres to samples
+    has the Jacobian ``J`` (measured at the piece's ends, the larger of each entry, times 1.1
+    for its change across the piece), so a metre moves the ground by at most ``hypot(|J00|
+    |gx| + |J10| |gy|, |J01| |gx| + |J11| |gy|)``, a convex function of the point: its largest
+    over the neighbourhood's part of each cell is at a corner of that part. Tight where the reach
     is a small part of a sample, as a tracking error of metres is on a coarse raster; (-inf,
     inf) (no bound) where the neighbourhood would reach past the adjacent cells."""
     if not math.isfinite(piece):
@@ -316,19 +318,28 @@ def _piece_reach_bound(
     B = np.column_stack([ub, vb, pb[:, 2]])
     out = []
     for grid, col in ((source.hi, 0), (source.lo, 2)):
-        ex = np.abs(np.diff(grid, axis=1))  # x-edges (rows, cols - 1)
-        ey = np.abs(np.diff(grid, axis=0))  # y-edges (rows - 1, cols)
-        gx_cell = np.maximum(ex[:-1], ex[1:])  # (rows - 1, cols - 1)
-        gy_cell = np.maximum(ey[:, :-1], ey[:, 1:])
-        gx = np.zeros(len(pa))
-        gy = np.zeros(len(pa))
+        ex = np.diff(grid, axis=1)  # x-edges (rows, cols - 1), signed
+        ey = np.diff(grid, axis=0)  # y-edges (rows - 1, cols)
+        per_m = np.zeros(len(pa))
         for dj in range(3):
             for di in range(3):
                 ok = (j0 + dj <= j1) & (i0 + di <= i1)
                 jj, ii = np.minimum(j0 + dj, rows - 2), np.minimum(i0 + di, cols - 2)
-                gx = np.where(ok, np.maximum(gx, gx_cell[jj, ii]), gx)
-                gy = np.where(ok, np.maximum(gy, gy_cell[jj, ii]), gy)
-        per_m = np.hypot(J[:, 0, 0] * gx + J[:, 1, 0] * gy, J[:, 0, 1] * gx + J[:, 1, 1] * gy)
+                # the piece's neighbourhood in this cell, in the cell's own [0, 1] coordinates
+                x0 = np.clip(np.minimum(ua, ub) - r - ii, 0.0, 1.0)
+                x1 = np.clip(np.maximum(ua, ub) + r - ii, 0.0, 1.0)
+                y0 = np.clip(np.minimum(va, vb) - r - jj, 0.0, 1.0)
+                y1 = np.clip(np.maximum(va, vb) + r - jj, 0.0, 1.0)
+                # the x-slope at height y interpolates the cell's two x-edges, the y-slope at
+                # x its two y-edges; the bound is convex in the point, so its largest over the
+                # neighbourhood's box is at one of the box's corners
+                for fy in (y0, y1):
+                    gx = np.abs((1.0 - fy) * ex[jj, ii] + fy * ex[jj + 1, ii])
+                    for fx in (x0, x1):
+                        gy = np.abs((1.0 - fx) * ey[jj, ii] + fx * ey[jj, ii + 1])
+                        at = np.hypot(J[:, 0, 0] * gx + J[:, 1, 0] * gy,
+                                      J[:, 0, 1] * gx + J[:, 1, 1] * gy)  # fmt: skip
+                        per_m = np.where(ok, np.maximum(per_m, at), per_m)
         ext = terrain_clearance_extrema(A, B, Terrain(grid, 0.0, 0.0, 1.0, 1.0, source.name))
         out.append(ext[:, col] + (1.0 if col == 2 else -1.0) * reach * per_m)
     return float(np.min(out[0])), float(np.max(out[1]))
