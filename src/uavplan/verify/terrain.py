@@ -286,7 +286,7 @@ class _Extremes:
     bit for bit, read at a few nodes in microseconds. Built up to the level the windows ask."""
 
     def __init__(self, base: FloatArray, highest: bool, levels: int) -> None:
-        self.base, self.highest = base, highest
+        self.highest = highest
         self.S = _extreme_levels(base, levels, highest)
 
     @property

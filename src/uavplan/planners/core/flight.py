@@ -30,7 +30,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import itertools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,7 +38,7 @@ from numpy.typing import NDArray
 
 from uavplan.planners.core.results import PlanResult
 from uavplan.problems.path_problem import lookup_for
-from uavplan.problems.validity import MotionValidator, greedy_shortcut
+from uavplan.problems.validity import TIME_CHECKS, MotionValidator, greedy_shortcut
 from uavplan.smoothing.dubins import (
     SmoothedPath,
     drop_consecutive_duplicates,
@@ -264,6 +264,54 @@ class ClearAt:
                 np.broadcast_to(P[None], (len(ws), *P.shape)), f.times[None] + ws[:, None]
             )
         return bool(self._free[k][i % self.chunk])
+
+
+def only_separation_reads_time(scenario: Scenario, task: Task, table: ReservationTable) -> bool:
+    """Whether, of ``task``'s checks against ``table``, separation is the only one that reads
+    time (no moving obstacles) and the table holds flights: then a flight's take-off times can
+    be tried in batched table queries (:class:`ClearAt`)."""
+    checks = flight_validator(scenario, task, table).checks()
+    return [n for n in TIME_CHECKS if n in checks] == ["separation"] and len(table) > 0
+
+
+def first_clear(
+    scenario: Scenario,
+    table: ReservationTable,
+    flights: Sequence[Flight],
+    waits: Sequence[float],
+    task_at: Callable[[int], Task],
+    chunk: int,
+) -> tuple[int, int, Task, Flight] | None:
+    """The first wait, then the first of ``flights`` (in the orders given), at which the
+    flight, its times moved ``waits[i]`` seconds later, passes every check in full:
+    ``(i, flight index, task_at(i), the flight as checked)``; None if at none. ``task_at(i)``:
+    the task taking off at that wait. The flights are already clear of everything that does
+    not read time; where separation is the only check that does, the waits are answered by
+    batched table queries (:class:`ClearAt`, ``chunk`` waits a query) and a validator is made
+    only at a wait where a flight is clear, else each flight is asked at each wait."""
+    task0 = task_at(0) if len(waits) else None
+    if task0 is None:
+        return None
+    batched = only_separation_reads_time(scenario, task0, table)
+    slots = ClearAt(table, waits, chunk)
+    for i, wait in enumerate(waits):
+        later: Task | None = None
+        v: MotionValidator | None = None
+        for k, f in enumerate(flights):
+            if batched and not slots.clear(k, f, i):
+                continue
+            if v is None:
+                later = task_at(i)
+                v = flight_validator(scenario, later, table)
+            if not batched:
+                skip = [n for n in v.checks() if n not in TIME_CHECKS]
+                if not len(v.passing(v.batch(f.points[None], (f.times + wait)[None]), skip=skip)):
+                    continue
+            flight = check_flights(v, [dataclasses.replace(f, times=f.times + wait)])[0]
+            if flight.ok:  # else the full check disagrees: keep searching
+                assert later is not None
+                return i, k, later, flight
+    return None
 
 
 def best_flight(flights: Sequence[Flight]) -> Flight | None:

@@ -44,13 +44,14 @@ from numpy.typing import NDArray
 
 from uavplan.planners.core.base import separated_problem
 from uavplan.planners.core.flight import (
-    ClearAt,
     Flight,
     candidate_flights,
     check_flights,
     declare,
+    first_clear,
     flight_validator,
     fly,
+    only_separation_reads_time,
 )
 from uavplan.planners.core.results import FleetResult, PlanResult, make_result
 from uavplan.problems.validity import TIME_CHECKS, greedy_shortcut
@@ -231,36 +232,24 @@ def _first_slot(
         made = [dataclasses.replace(f, times=f.times + starts[0] - task.start_time)
                 for f in flights]  # fmt: skip
     flights = sorted((f for f in check_flights(world, made) if f.ok), key=lambda f: f.length)
-    time_checks = [n for n in TIME_CHECKS
-                   if n in flight_validator(scenario, first, table).checks()]  # fmt: skip
-    batched = time_checks == ["separation"] and len(table) > 0
-    if batched and fill is not None and len(starts) > 1:
+    if fill is not None and len(starts) > 1 and only_separation_reads_time(scenario, first, table):
         # every step between the last of the delays and the take-off after all have landed:
         # each is one path of a batched table query, and a UAV waits only as long as it must
         more = np.arange(starts[-2] + fill, starts[-1], fill)
         starts = [*starts[:-1], *(float(x) for x in more), starts[-1]]
-    slots = ClearAt(table, [x - starts[0] for x in starts], SLOT_CHUNK)
-
-    for si, start in enumerate(starts):
-        wait = start - starts[0]
-        later = dataclasses.replace(task, start_time=start)
-        v: Any = None
-        for fi, f in enumerate(flights):
-            ts = f.times + wait
-            if batched and not slots.clear(fi, f, si):
-                continue
-            if v is None:
-                v = flight_validator(scenario, later, table)
-            if not batched:
-                skip = [n for n in v.checks() if n not in TIME_CHECKS]
-                if not len(v.passing(v.batch(f.points[None], ts[None]), skip=skip)):
-                    continue
-            flight = check_flights(v, [dataclasses.replace(f, times=ts)])[0]
-            if not flight.ok:  # the full check disagrees: keep searching
-                continue
-            return _declared(scenario, later, old, path, table, opts, flight,
-                             how(start - task.start_time))  # fmt: skip
-    return None
+    found = first_clear(
+        scenario,
+        table,
+        flights,
+        [x - starts[0] for x in starts],
+        lambda i: dataclasses.replace(task, start_time=starts[i]),
+        SLOT_CHUNK,
+    )
+    if found is None:
+        return None
+    i, _, later, flight = found
+    return _declared(scenario, later, old, path, table, opts, flight,
+                     how(starts[i] - task.start_time))  # fmt: skip
 
 
 def _rrt_path(scenario: Scenario, task: Task, seed: int) -> FloatArray | None:

@@ -625,9 +625,9 @@ class PrioritizedPlanner(FleetPlanner):
         drifting schedule the steps go on past ``max_delays`` to the first free slot, at worst
         one after every UAV in the table has landed (:meth:`ReservationTable.clear_time`)."""
         from uavplan.planners.core.flight import (
-            ClearAt,
             candidate_flights,
             check_flights,
+            first_clear,
             flight_validator,
         )
 
@@ -662,8 +662,6 @@ class PrioritizedPlanner(FleetPlanner):
             good = [f for f in check_flights(world, flights) if f.ok]
             good.sort(key=lambda f: f.length)
             per_cand.append((c, good))
-        time_checks = [n for n in TIME_CHECKS if n in flight_validator(
-            scenario, task, table).checks()]  # fmt: skip
         waits = [k * cfg.delay_step for k in range(1, cfg.max_delays + 1)]
         if table.timed and cfg.max_delays and len(table) and any(g for _, g in per_cand):
             # under a drifting schedule the tubes of the UAVs before it may fill every slot
@@ -673,40 +671,26 @@ class PrioritizedPlanner(FleetPlanner):
             if clear > waits[-1]:
                 more = np.arange(waits[-1] + cfg.delay_step, clear, cfg.delay_step)
                 waits += [float(w) for w in more] + [float(math.floor(clear) + 1.0)]
-        batched = time_checks == ["separation"] and len(table) > 0
+        flat = [(c, f) for c, good in per_cand for f in good]
         # waits per table query: most UAVs find their slot in the first few
-        slots = ClearAt(table, waits, 8)
-
-        def validator_at(wait: float) -> tuple[Task, Any, list[str]]:
-            later = replace(task, start_time=task.start_time + wait)
-            v = flight_validator(scenario, later, table)
-            return later, v, [n for n in v.checks() if n not in time_checks]
-
-        for w_i, wait in enumerate(waits):
-            at = None  # the validator at this wait, made when a check needs it (most waits
-            # of a long search are answered by the batched table queries alone)
-            for c, good in per_cand:
-                for f in good:
-                    if batched:  # separation alone reads time
-                        clear = slots.clear(id(f), f, w_i)
-                    else:
-                        at = at or validator_at(wait)
-                        v, skip = at[1], at[2]
-                        ts = (f.times + wait)[None]
-                        clear = bool(len(v.passing(v.batch(f.points[None], ts), skip=skip)))
-                    if clear:
-                        at = at or validator_at(wait)
-                        later, v = at[0], at[1]
-                        flight = check_flights(v, [replace(f, times=f.times + wait)])[0]
-                        if not flight.ok:  # the full check disagrees: keep searching
-                            continue
-                        waited = self._waited(scenario, later, table, _One(c))[0]
-                        d = declare(waited, flight)
-                        cost = d.cost
-                        if not math.isfinite(cost) and "cost_unchecked" in waited.info:
-                            cost = float(waited.info["cost_unchecked"])
-                        return replace(d, cost=cost, info={**d.info, "rescue": "wait"}), wait
-        return None
+        found = first_clear(
+            scenario,
+            table,
+            [f for _, f in flat],
+            waits,
+            lambda i: replace(task, start_time=task.start_time + waits[i]),
+            8,
+        )
+        if found is None:
+            return None
+        i, k, later, flight = found
+        c = flat[k][0]
+        waited = self._waited(scenario, later, table, _One(c))[0]
+        d = declare(waited, flight)
+        cost = d.cost
+        if not math.isfinite(cost) and "cost_unchecked" in waited.info:
+            cost = float(waited.info["cost_unchecked"])
+        return replace(d, cost=cost, info={**d.info, "rescue": "wait"}), waits[i]
 
     def _in_loop_flight(
         self,
