@@ -12,25 +12,34 @@ from uavplan.planners.sampling import _tighten_kernels as T
 from uavplan.planners.sampling.rrt_star import RRTStarConfig, RRTStarTree, validity_problem
 from uavplan.problems.validity import MotionValidator
 from uavplan.scenarios import resolve
-from uavplan.world import AltitudeBand, Bounds, Circle, Cylinder, Scenario, Task
+from uavplan.world import AltitudeBand, Bounds, Circle, Cylinder, Polygon, Scenario, Task
 
 from .test_planners import easy_3d
 
 
-def random_world(seed: int, n_cyl: int, band: str | None) -> Scenario:
-    """A 400 x 300 x 200 m box with ``n_cyl`` cylinders (some finite), start and goal clear."""
+def random_world(seed: int, n_cyl: int, band: str | None, n_poly: int = 0) -> Scenario:
+    """A 400 x 300 x 200 m box with ``n_cyl`` cylinders (some finite) and ``n_poly`` no-fly
+    polygons (some non-convex, some with a margin), start and goal clear."""
     rng = np.random.default_rng(seed)
     cyl = []
     for _ in range(n_cyl):
         c = (float(rng.uniform(60, 340)), float(rng.uniform(0, 300)))
         top = float(rng.uniform(40, 250)) if rng.random() < 0.5 else np.inf
         cyl.append(Cylinder(c, float(rng.uniform(5, 30)), 0.0, top))
+    poly = []
+    arrow = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.5, 0.3], [0.0, 1.0]])
+    for _ in range(n_poly):
+        c = np.array([rng.uniform(60, 300), rng.uniform(0, 260)])
+        shape = arrow if rng.random() < 0.5 else arrow[[0, 1, 2, 4]]
+        v = c + rng.uniform(15, 40) * shape
+        poly.append(Polygon(tuple(map(tuple, v)), margin=float(rng.choice([0.0, 4.0]))))
     altitude = None if band is None else AltitudeBand(20.0, 180.0, band)
     return Scenario(
         name="random",
         bounds=Bounds((0.0, 0.0, 0.0), (400.0, 300.0, 200.0)),
         tasks=(Task("u", (10.0, 150.0, 50.0), (390.0, float(rng.uniform(20, 280)), 60.0)),),
         cylinders=tuple(cyl),
+        polygons=tuple(poly),
         altitude=altitude,
         cost="length",
     )
@@ -55,6 +64,7 @@ def assert_same_tree(a: RRTStarTree, b: RRTStarTree) -> None:
 @given(
     seed=st.integers(0, 10_000),
     n_cyl=st.integers(0, 20),
+    n_poly=st.integers(0, 3),
     band=st.sampled_from([None, "absolute"]),
     informed=st.booleans(),
     goal_bias=st.sampled_from([0.0, 0.05, 0.3]),
@@ -64,13 +74,14 @@ def assert_same_tree(a: RRTStarTree, b: RRTStarTree) -> None:
 def test_numba_loop_builds_the_reference_tree(
     seed: int,
     n_cyl: int,
+    n_poly: int,
     band: str | None,
     informed: bool,
     goal_bias: float,
     step: float,
     stop_at_goal: bool,
 ) -> None:
-    sc = random_world(seed, n_cyl, band)
+    sc = random_world(seed, n_cyl, band, n_poly)
     cfg = RRTStarConfig(step=step, informed=informed, goal_bias=goal_bias, goal_radius=step)
     fast = RRTStarTree(sc, None, cfg, np.random.default_rng(seed))
     ref = RRTStarTree(sc, None, cfg, np.random.default_rng(seed), fast=False)
@@ -108,6 +119,17 @@ def test_segment_kernel_where_it_applies() -> None:
     seg = lo + rng.random((500, 2, 3)) * (hi - lo)
     kernel, args = sk
     assert np.array_equal(kernel(seg, args), v.paths_valid(seg))
+    # no-fly polygons and circles in 3-D: their ground tracks, in the same kernel
+    walled = random_world(1, 6, "absolute", n_poly=3)
+    walled = Scenario(walled.name, walled.bounds, walled.tasks, cylinders=walled.cylinders,
+                      polygons=walled.polygons, circles=(Circle((200, 150), 20),),
+                      altitude=walled.altitude)  # fmt: skip
+    v = validity_problem(walled)
+    assert v.segment_kernel is not None and {"circles", "polygons"} <= set(v.checks())
+    kernel, args = v.segment_kernel
+    seg = walled.bounds.lo + rng.random((4000, 2, 3)) * (walled.bounds.hi - walled.bounds.lo)
+    want = v.paths_valid(seg)
+    assert np.array_equal(kernel(seg, args), want) and 0 < want.mean() < 1
     # not where another check must run, nor with the cylinder grid
     flat = Scenario("flat", Bounds((0, 0), (10, 10)), (Task("u", (1, 1), (9, 9)),),
                     circles=(Circle((5, 5), 1),))  # fmt: skip

@@ -218,7 +218,8 @@ def test_bad_shapes_are_refused() -> None:
 
 
 @pytest.mark.parametrize(
-    "name", ["ppswarm2", "spso", "jacksboro", "open", "topobathy", "w3s", "many"]
+    "name",
+    ["ppswarm2", "spso", "jacksboro", "open", "topobathy", "w3s", "w3c", "many", "manyp"],
 )
 @pytest.mark.parametrize("strict", [False, True])
 @pytest.mark.parametrize("lookup", ["bilinear", "nearest"])
@@ -226,16 +227,32 @@ def test_bad_shapes_are_refused() -> None:
 def test_fused_static_checks_agree_with_the_checks_one_by_one(
     name: str, strict: bool, lookup: str, climb: bool
 ) -> None:
-    """``passing`` (one fused kernel for bounds, cylinders, terrain and band in 3-D, and the
-    segments' climb angles when the validator checks them) gives exactly the verdicts of the
-    checks run one by one (:meth:`violations`); ``many``: 300 cylinders, which the
-    grid-indexed check tests after the kernel."""
+    """``passing`` (one fused kernel for bounds, cylinders, circles, polygons, terrain and
+    band in 3-D, and the segments' climb angles when the validator checks them) gives exactly
+    the verdicts of the checks run one by one (:meth:`violations`); ``many``: 300 cylinders,
+    which the grid-indexed check tests after the kernel; ``manyp``: 80 polygons and circles,
+    which the 2-D scene pass tests after it on its obstacle grid."""
     import dataclasses
 
-    from uavplan.world import Cylinder
+    from uavplan.world import Circle, Cylinder
 
     if name == "w3s":  # finite cylinders, no polygons, no moving obstacles
         sc = dataclasses.replace(world3(), polygons=(), moving_obstacles=())
+    elif name == "w3c":  # circles, and polygons convex and not, with and without a margin
+        sc = dataclasses.replace(
+            world3(),
+            polygons=(
+                *world3().polygons,
+                Polygon(((20.0, 20.0), (60.0, 20.0), (60.0, 60.0), (40.0, 30.0), (20.0, 60.0))),
+                Polygon(((150.0, 150.0), (190.0, 150.0), (170.0, 190.0)), margin=6.0),
+                Polygon(
+                    ((20.0, 150.0), (60.0, 150.0), (60.0, 190.0), (40.0, 160.0), (20.0, 190.0)),
+                    margin=4.0,
+                ),
+            ),
+            circles=(Circle((100.0, 30.0), 12.0), Circle((30.0, 100.0), 8.0, margin=3.0)),
+            moving_obstacles=(),
+        )
     elif name == "many":  # enough cylinders for the grid, some finite
         sc = resolve("spso")
         r = np.random.default_rng(3)
@@ -245,10 +262,19 @@ def test_fused_static_checks_agree_with_the_checks_one_by_one(
             for z in r.choice([np.inf, 300.0, 600.0], 300)
         ]
         sc = dataclasses.replace(sc, cylinders=tuple(cyl))
+    elif name == "manyp":  # enough circles and polygons for the obstacle grid
+        sc = resolve("spso")
+        r = np.random.default_rng(5)
+        lo2, hi2 = np.asarray(sc.bounds.lo[:2]), np.asarray(sc.bounds.hi[:2])
+        c = r.uniform(lo2, hi2, (80, 2))
+        tri = np.array([[0.0, 0.0], [1.0, 0.0], [0.5, 1.0]])
+        sc = dataclasses.replace(
+            sc,
+            polygons=tuple(Polygon(tuple(map(tuple, q + 8.0 * tri))) for q in c[:60]),
+            circles=tuple(Circle(tuple(q), 5.0) for q in c[60:]),
+        )
     else:
-        sc = resolve(name)
-    if name == "jacksboro":  # finite cylinders on a real DEM; its revealed area is a polygon
-        sc = dataclasses.replace(sc, uncertain_areas=())
+        sc = resolve(name)  # jacksboro: finite cylinders on a real DEM, a revealed polygon
     if climb:  # limits that many of the random segments break
         sc = dataclasses.replace(
             sc, uav=dataclasses.replace(sc.uav, max_climb_angle=40.0, max_descent_angle=55.0)
@@ -286,4 +312,15 @@ def test_fused_static_checks_agree_with_the_checks_one_by_one(
         assert (others & ~want).any()
     if name == "many":
         assert v._cylinders_by_grid and v.violations(b)["cylinders"][:200].any()
+    if name in ("w3c", "manyp"):  # the circles and polygons decide some paths
+        scene = ("circles", "polygons")
+        fails = [bad for check, bad in v.violations(b).items() if check in scene]
+        others = np.ones(len(paths), dtype=bool)
+        for check, bad in v.violations(b).items():
+            others &= ~bad if check not in scene else True
+        assert (others & np.any(fails, axis=0)).any()
+        assert v._scene_by_grid is (name == "manyp")
+        assert (v.segment_kernel is None) is (name == "manyp")
+    if name == "jacksboro":
+        assert v.segment_kernel is not None and "polygons" in v.checks()
     np.testing.assert_array_equal(v.paths_valid(paths), want)

@@ -1,14 +1,15 @@
 """One Numba pass over a batch of 3-D paths for the world's static checks.
 
 :meth:`uavplan.problems.validity.MotionValidator.passing` (the yes/no question every planner
-asks most) runs the bounds, cylinder, terrain and altitude-band checks of a 3-D world (and the
-segments' climb angles where the validator checks them) in this single kernel, path by path,
-stopping at a path's first failure, instead of one NumPy pass per check. It calls the same
-scalar functions as the per-check kernels (:func:`uavplan.world.geometry.seg_cyl_dist`, the
-terrain's branch-and-bound ``_segment_min_clearance``,
-:func:`uavplan.world._terrain_kernels.ground_one`), so its verdicts are those of
-:meth:`~uavplan.problems.validity.MotionValidator.violations`; the tests compare the two on
-random batches.
+asks most) runs the bounds, cylinder, circle, polygon, terrain and altitude-band checks of a
+3-D world (and the segments' climb angles where the validator checks them) in this single
+kernel, path by path, stopping at a path's first failure, instead of one NumPy pass per check.
+It calls the same scalar functions as the per-check kernels
+(:func:`uavplan.world.geometry.seg_cyl_dist`, the 2-D scene pass's
+:func:`~uavplan.world.geometry.scene2d.segment_scene_hit`, the terrain's branch-and-bound
+``_segment_min_clearance``, :func:`uavplan.world._terrain_kernels.ground_one`), so its
+verdicts are those of :meth:`~uavplan.problems.validity.MotionValidator.violations`; the tests
+compare the two on random batches.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from numba import njit, prange
 from uavplan.kernel_builds import population_kernel
 from uavplan.world._terrain_kernels import _segment_min_clearance, ground_one, snap_one
 from uavplan.world.geometry import seg_cyl_dist
+from uavplan.world.geometry.scene2d import segment_scene_hit
 from uavplan.world.tolerances import ANGLE_TOL_DEG
 
 
@@ -28,7 +30,7 @@ def static_path_ok(paths, p, args, waypoint_band=True):  # pragma: no cover - nu
     (:func:`static_world_ok`'s test of one path; the fleet's fused objective calls it too).
     ``args``: the tuple ``(lo, hi, bounds_tol, cyl_c, cyl_r, cyl_lo, cyl_hi, has_terrain, H,
     flat, off, shp, nH, nflat, noff, nshp, grid, need, has_band, band_ground, nearest, bmin, bmax,
-    band_tol, strict, max_climb, max_descent)``
+    band_tol, strict, max_climb, max_descent, scene)``
     (:meth:`~uavplan.problems.validity.MotionValidator.static_kernel_args`; the climb and
     descent limits in degrees, inf where not checked, as
     :func:`~uavplan.problems.validity.climb_violations` tests them).
@@ -41,7 +43,10 @@ def static_path_ok(paths, p, args, waypoint_band=True):  # pragma: no cover - nu
     segments); ``need``: the least clearance above the terrain; the band
     ``[bmin, bmax]`` above ground (``band_ground``; at the waypoints the ground is read at the
     ``nearest`` node, else bilinear) or absolute, within ``band_tol``, and along whole segments
-    when ``strict`` (ground band over terrain only).
+    when ``strict`` (ground band over terrain only); ``scene``: ``(verts, starts, circ, poly,
+    convex, edges, hull_s, maxv)``, the circles and polygons whose ground tracks it tests
+    (:func:`uavplan.world.geometry.scene2d.segment_scene_hit`, empty where the validator
+    leaves them to the 2-D scene pass).
     """
     (
         lo,
@@ -71,7 +76,9 @@ def static_path_ok(paths, p, args, waypoint_band=True):  # pragma: no cover - nu
         strict,
         max_climb,
         max_descent,
+        scene,
     ) = args
+    verts, starts, circ, poly, convex, edges, hull_s, maxv = scene
     N = paths.shape[1]
     J = cyl_c.shape[0]
     x0, y0, dx, dy = grid[0], grid[1], grid[2], grid[3]
@@ -114,6 +121,14 @@ def static_path_ok(paths, p, args, waypoint_band=True):  # pragma: no cover - nu
                     break
             if not ok:
                 break
+    if ok and (circ.shape[1] > 0 or starts.shape[0] > 1):  # circles and polygons (ground track)
+        ts = np.empty(maxv + 2)
+        for s in range(N - 1):
+            if segment_scene_hit(paths[p, s, 0], paths[p, s, 1], paths[p, s + 1, 0],
+                                 paths[p, s + 1, 1], verts, starts, circ, poly, convex, edges,
+                                 hull_s, ts):  # fmt: skip
+                ok = False
+                break
     if ok and has_terrain:  # the terrain, and the band's ceiling, along the segments
         for s in range(N - 1):
             u0 = snap_one((paths[p, s, 0] - x0) / dx, nx1, tol_u)
@@ -138,8 +153,8 @@ def static_path_ok(paths, p, args, waypoint_band=True):  # pragma: no cover - nu
 
 @population_kernel()
 def static_world_ok(paths, args):  # pragma: no cover - numba
-    """(P,) whether each path (P, N, 3) passes bounds, cylinders, terrain and the band
-    (:func:`static_path_ok` of each, with its ``args``)."""
+    """(P,) whether each path (P, N, 3) passes bounds, cylinders, circles, polygons, terrain and
+    the band (:func:`static_path_ok` of each, with its ``args``)."""
     P = paths.shape[0]
     out = np.zeros(P, dtype=np.bool_)
     for p in prange(P):

@@ -424,13 +424,44 @@ class MotionValidator:
     def _cylinders_by_grid(self) -> bool:
         return len(self.world.cyl_radii) >= G.GRID_MIN_CYLINDERS
 
+    @property
+    def _scene_by_grid(self) -> bool:
+        """Whether the world's circles and polygons are many enough for the 2-D scene pass's
+        obstacle grid, which :meth:`passing` then asks after the fused kernel."""
+        w = self.world
+        return len(w.circ_radii) + w.n_polygons >= G.GRID_MIN_OBSTACLES
+
+    @cached_property
+    def _static_scene(self) -> tuple[object, ...]:
+        """The circles and polygons the fused static kernel tests (their ground tracks, as
+        :func:`uavplan.world.geometry.segment_scene_hit`): all of them, or none where the
+        world has enough for the obstacle grid."""
+        w = self.world
+        if self._scene_by_grid or not (len(w.circ_radii) or w.n_polygons):
+            verts, starts = np.zeros((0, 2)), np.zeros(1, dtype=np.int64)
+            prep = G.scene_prep(np.zeros((0, 2)), np.zeros(0), verts, starts, np.zeros(0))
+        else:
+            verts, starts, prep = w.poly_verts, w.poly_starts, w.scene_prep
+        circ, poly, convex, edges, hull_s, maxv = prep[:6]
+        arrays = (verts, starts, circ, poly, convex, edges, hull_s)
+        return (*(np.ascontiguousarray(a) for a in arrays), int(maxv))
+
+    @property
+    def _static_fused(self) -> frozenset[str]:
+        """The checks the fused static kernel answers alone in this world."""
+        fused = STATIC | {"circles", "polygons"}
+        if self._cylinders_by_grid:
+            fused -= {"cylinders"}
+        if self._scene_by_grid:
+            fused -= {"circles", "polygons"}
+        return fused
+
     @cached_property
     def _static_args(self) -> tuple[object, ...] | None:
         """The arguments of the fused static-world kernel, or None where it does not apply
-        (2-D, circles or polygons)."""
+        (2-D)."""
         sc = self.scenario
-        w = self.world
-        if self.dim != 3 or len(w.circ_radii) or w.n_polygons > 0:
+        if self.dim != 3:
             return None
         terrain = sc.terrain
         if terrain is not None and self.lookup not in ("bilinear", "nearest"):
@@ -464,7 +495,7 @@ class MotionValidator:
             band is not None, ground, self.lookup == "nearest",
             float(band.min) if band is not None else 0.0,
             float(band.max) if band is not None else 0.0,
-            BAND_TOL, strict, *self._climb_limits,
+            BAND_TOL, strict, *self._climb_limits, self._static_scene,
         )  # fmt: skip
 
     @property
@@ -481,11 +512,12 @@ class MotionValidator:
         """``(kernel, args)`` such that ``kernel(paths, args)`` is :meth:`paths_valid` of
         untimed 3-D paths, callable from other Numba code without a Python round trip (the fused
         static kernel's serial build), where that kernel answers every applicable check alone:
-        a 3-D world of bounds, fewer than ``GRID_MIN_CYLINDERS`` cylinders, terrain read
-        bilinearly and the altitude band. None elsewhere (2-D, circles, polygons, moving
-        obstacles, reservations, kinematics, the cylinder grid): then ask :meth:`paths_valid`."""
+        a 3-D world of bounds, fewer than ``GRID_MIN_CYLINDERS`` cylinders, fewer than
+        ``GRID_MIN_OBSTACLES`` circles and polygons, terrain read bilinearly and the altitude
+        band. None elsewhere (2-D, moving obstacles, reservations, kinematics, the obstacle
+        grids): then ask :meth:`paths_valid`."""
         args = self._static_args
-        if args is None or self._cylinders_by_grid or not set(self.checks()) <= STATIC:
+        if args is None or not set(self.checks()) <= self._static_fused:
             return None
         return VK.static_world_ok.serial, args
 
@@ -493,13 +525,11 @@ class MotionValidator:
         """The fused static kernel's arguments after the paths
         (:func:`uavplan.problems._validity_kernels.static_path_ok`'s after ``p``) when that
         kernel alone is :meth:`passing` but for ``separation`` (a 3-D world whose every other
-        check it makes: no circles, polygons, moving obstacles or indexed cylinders, no
+        check it makes: no moving obstacles, no indexed cylinders, circles or polygons, no
         kinematics), else None: what a kernel that checks a whole population in one pass
         needs."""
         args = self._static_args
-        if args is None or self._cylinders_by_grid:
-            return None
-        if set(self.checks()) - {"separation"} - STATIC:
+        if args is None or set(self.checks()) - {"separation"} - self._static_fused:
             return None
         return args
 
@@ -507,18 +537,19 @@ class MotionValidator:
         """The rows of ``b`` that pass every applicable check (but ``skip``), found by
         cascading: the cheap checks first, each later one only on the paths still passing
         (the same verdicts as :meth:`violations`, without telling the failures apart). In a
-        3-D world the bounds, cylinder, terrain and band checks run as one fused kernel
-        (:mod:`uavplan.problems._validity_kernels`); from 64 cylinders on the kernel leaves
-        the cylinders to the indexed check that follows it."""
+        3-D world the bounds, cylinder, circle, polygon, terrain and band checks run as one
+        fused kernel (:mod:`uavplan.problems._validity_kernels`); from 64 cylinders on the
+        kernel leaves the cylinders to the indexed check that follows it, and from
+        ``GRID_MIN_OBSTACLES`` circles and polygons those to the 2-D scene pass."""
         skipped = set(skip)
         applicable = self.checks()
         names = [c for c in CASCADE if c in applicable and c not in skipped]
         names += [c for c in applicable if c not in names and c not in skipped]
         idx = np.arange(b.paths.shape[0])
         args = self._static_args
-        if args is not None and not skipped & STATIC:
+        fused = self._static_fused
+        if args is not None and not skipped & fused:
             idx = idx[VK.static_world_ok(b.paths, args)]
-            fused = STATIC - {"cylinders"} if self._cylinders_by_grid else STATIC
             names = [c for c in names if c not in fused]
         for c in names:
             if not idx.size:

@@ -200,6 +200,37 @@ def _circle_pair(ax, ay, dx, dy, A, inv_a, L, cx, cy, r):  # pragma: no cover - 
     return True, _chord(fx, fy, dx, dy, A, fx * fx + fy * fy - r * r) * L
 
 
+@njit(cache=True, inline="always")
+def segment_scene_hit(
+    ax, ay, bx, by, verts, starts, circ, poly, convex, edges, hull_s, ts
+):  # pragma: no cover - numba
+    """Whether the ground track a->b of one segment comes closer than its radius to a circle's
+    centre, or touches a polygon or comes closer than its margin (:func:`scene_prep`'s data;
+    ``ts``: scratch of the most vertices + 2): one segment's ``circle_hit | polygon_hit`` of
+    :func:`scene2d_kernel`, by the same box test and :func:`_polygon_exact`, for the fused
+    static kernel of 3-D paths (:mod:`uavplan.problems._validity_kernels`)."""
+    dx = bx - ax
+    dy = by - ay
+    A = dx * dx + dy * dy
+    inv_a = 1.0 / A if A > 0.0 else 0.0
+    L = np.sqrt(A)
+    for j in range(circ.shape[1]):
+        if _circle_pair(ax, ay, dx, dy, A, inv_a, L, circ[0, j], circ[1, j], circ[2, j])[0]:
+            return True
+    sx0, sx1 = min(ax, bx), max(ax, bx)
+    sy0, sy1 = min(ay, by), max(ay, by)
+    for k in range(starts.shape[0] - 1):
+        g2 = _box_gap2(sx0, sy0, sx1, sy1, poly, k)
+        if g2 > 0.0 and g2 >= poly[5, k]:
+            continue
+        hit = _polygon_exact(
+            ax, ay, bx, by, A, L, verts, starts, poly, convex, edges, hull_s, k, g2, False, ts
+        )[0]
+        if hit:
+            return True
+    return False
+
+
 def scene2d_batch(
     paths: FloatArray,
     centers: FloatArray,
