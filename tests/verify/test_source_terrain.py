@@ -338,3 +338,52 @@ def test_the_small_reach_bound_holds_along_random_flights_over_a_real_raster() -
         ceiling = Terrain(src.lo, 0.0, 0.0, 1.0, 1.0, "s").height(u, v)
         assert (z_rep - floor).min() >= low - 1e-6
         assert (z_rep - ceiling).max() <= high + 1e-6
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_directional_bound_holds_along_flights_that_hug_cell_edges(seed: int) -> None:
+    """Flights running along and across the raster's rows and columns of samples (where a
+    line from the flight enters a neighbouring cell after a few metres, the case the
+    directional bound and the cuts at the cells are for), at reaches of 1-12 m: every ground
+    point sampled within the reach stands inside the bound, with and without refinement
+    toward targets, and refining never loosens it."""
+    from uavplan.scenarios import resolve
+    from uavplan.verify.source_terrain import _piece_reach_bound, read_source
+
+    sc = resolve("luxembourg")
+    src = read_source(sc.terrain)
+    assert src is not None
+    rng = np.random.default_rng(seed)
+    lo, hi = np.asarray(sc.bounds.lower[:2]), np.asarray(sc.bounds.upper[:2])
+    floor = Terrain(src.hi, 0.0, 0.0, 1.0, 1.0, "s")
+    ceiling = Terrain(src.lo, 0.0, 0.0, 1.0, 1.0, "s")
+    for _ in range(6):
+        start = rng.uniform(lo + 5000.0, hi - 5000.0)
+        u, _ = src.to_samples(start[:1], start[1:])
+        per_m = float(src.to_samples(start[:1] + 1.0, start[1:])[0][0] - u[0])  # du / dx
+        # to within a few metres of a column of samples, then along it or across it
+        u_edge = np.round(u) + rng.uniform(-0.006, 0.006)
+        x_edge = start[0] + (u_edge[0] - u[0]) / per_m
+        along = rng.random() < 0.5
+        d = np.array([0.0, 1.0]) if along else np.array([1.0, 0.0])
+        xy = np.array([[x_edge, start[1]]]) + np.linspace(0.0, 1200.0, 4)[:, None] * d
+        z = np.array([sc.terrain.height(*p) for p in xy]) + rng.uniform(40.0, 120.0, 4)
+        tr = Trajectory("a", np.column_stack([xy, z]), np.arange(4.0) * 100, True)
+        reach = float(rng.uniform(1.0, 12.0))
+        low, high = _piece_reach_bound(tr, src, reach, 150.0)
+        s = np.linspace(0, 1, 2001)
+        P = np.concatenate([tr.points[k] + s[:, None] * (tr.points[k + 1] - tr.points[k])
+                            for k in range(3)])  # fmt: skip
+        ang = rng.uniform(0, 2 * np.pi, (len(P), 12))
+        rad = reach * np.sqrt(rng.uniform(0, 1, (len(P), 12)))
+        rad[:, :4] = reach  # on the reach's edge
+        qu, qv = src.to_samples((P[:, 0:1] + rad * np.cos(ang)).ravel(),
+                                (P[:, 1:2] + rad * np.sin(ang)).ravel())  # fmt: skip
+        z_rep = np.repeat(P[:, 2], 12)
+        true_low = float((z_rep - floor.height(qu, qv)).min())
+        true_high = float((z_rep - ceiling.height(qu, qv)).max())
+        assert np.isfinite(low) and np.isfinite(high)
+        assert true_low >= low - 1e-6 and true_high <= high + 1e-6
+        # refined toward targets just inside the truth: still sound, never looser
+        rl, rh = _piece_reach_bound(tr, src, reach, 150.0, (true_low - 0.01, true_high + 0.01))
+        assert low - 1e-9 <= rl <= true_low + 1e-6 and true_high - 1e-6 <= rh <= high + 1e-9

@@ -34,6 +34,7 @@ from __future__ import annotations
 import math
 import os
 import warnings
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import lru_cache
@@ -276,83 +277,330 @@ def _source_extrema(traj: Trajectory, source: SourceGround) -> tuple[Any, ...]:
     return pa, pb, seg, span, ua, va, ub, vb, lo_ext, hi_ext
 
 
-def _piece_reach_bound(
-    traj: Trajectory, source: SourceGround, reach: float, piece: float
-) -> tuple[float, float]:
-    """The least and largest height above the ground within ``reach`` metres of the flight,
-    bounded per piece of at most a sample: the exact extrema over the ground under the piece,
-    less (plus) ``reach`` times the steepest the ground can be in metres along any direction in
-    the piece's neighbourhood (the piece's box grown by the reach). In a cell the bilinear
-    surface's slope per sample along x at height ``y`` interpolates its two x-edge
-    differences, along y at ``x`` its two y-edge differences; the map from metres to samples
-    has the Jacobian ``J`` (measured at the piece's ends, the larger of each entry, times 1.1
-    for its change across the piece), so a metre moves the ground by at most ``hypot(|J00|
-    |gx| + |J10| |gy|, |J01| |gx| + |J11| |gy|)``, a convex function of the point: its largest
-    over the neighbourhood's part of each cell is at a corner of that part. Tight where the reach
-    is a small part of a sample, as a tracking error of metres is on a coarse raster; (-inf,
-    inf) (no bound) where the neighbourhood would reach past the adjacent cells."""
-    if not math.isfinite(piece):
-        return -math.inf, math.inf
-    a, b = traj.points[:-1], traj.points[1:]
-    pa, pb, _, _ = _pieces(a, b, piece)
+def _cut_at_cells(pa: FloatArray, pb: FloatArray, source: SourceGround) -> tuple[FloatArray, ...]:
+    """The pieces ``pa -> pb`` (each at most a sample long) cut where they cross a row or a
+    column of samples, so that each lies in one cell (to within the mapping's bend): the bound
+    of the ground within reach then reads only the cells a line from the piece can enter."""
     ua, va = source.to_samples(pa[:, 0], pa[:, 1])
     ub, vb = source.to_samples(pb[:, 0], pb[:, 1])
-    J = np.zeros((len(pa), 2, 2))
-    for p, (u0, v0) in ((pa, (ua, va)), (pb, (ub, vb))):
+    cuts = [np.zeros(len(pa)), np.ones(len(pa))]
+    for x0, x1 in ((ua, ub), (va, vb)):
+        k = np.floor(np.maximum(x0, x1))
+        crosses = (np.minimum(x0, x1) < k) & (k < np.maximum(x0, x1))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cuts.append(np.where(crosses, (k - x0) / (x1 - x0), np.nan))
+    t = np.sort(np.column_stack(cuts), axis=1)  # nan last
+    t0, t1 = t[:, :-1], t[:, 1:]
+    keep = np.isfinite(t1) & (t1 > t0)
+    rows = np.nonzero(keep)[0]
+    d = pb - pa
+    return pa[rows] + t0[keep][:, None] * d[rows], pa[rows] + t1[keep][:, None] * d[rows]
+
+
+_EDGES: dict[int, tuple[Any, FloatArray, FloatArray]] = {}
+
+
+def _edges(grid: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The raster's x-edges (rows, cols - 1) and y-edges (rows - 1, cols), signed height
+    differences, worked out once per grid (a flight's bounds ask for them at every step of a
+    margin's bisection); kept while the grid lives."""
+    got = _EDGES.get(id(grid))
+    if got is None or got[0]() is not grid:
+        for key in [k for k, v in _EDGES.items() if v[0]() is None]:
+            del _EDGES[key]
+        got = _EDGES[id(grid)] = (weakref.ref(grid), np.diff(grid, axis=1), np.diff(grid, axis=0))
+    return got[1], got[2]
+
+
+#: :func:`_directional_change`: the directions a straight line may take, in arcs of 2 pi / this.
+DIRECTIONS = 32
+
+
+def _arc_range(lo: FloatArray, hi: FloatArray, f: Callable[[Any], Any]) -> tuple[Any, Any]:
+    """The least and largest of ``f`` (cos or sin) over each arc ``[lo, hi]`` (radians,
+    shorter than a quarter turn): at its ends, or where the arc holds an extremum."""
+    a, b = f(lo), f(hi)
+    least, most = np.minimum(a, b), np.maximum(a, b)
+    for k in range(-1, 5):  # the extrema of cos at k pi, of sin at k pi + pi / 2
+        at = k * math.pi + (0.0 if f is np.cos else 0.5 * math.pi)
+        inside = (lo <= at) & (at <= hi)
+        value = f(at)
+        least = np.where(inside, np.minimum(least, value), least)
+        most = np.where(inside, np.maximum(most, value), most)
+    return least, most
+
+
+def _slab(c_lo: Any, c_hi: Any, p_lo: Any, p_hi: Any, k: Any) -> tuple[Any, Any, Any]:
+    """A straight line from a point in ``[p_lo, p_hi]`` (samples along one axis) whose speed
+    along that axis (samples per metre) lies in ``[c_lo, c_hi]``: the least length at which it
+    can enter the slab ``[k, k + 1]``, the largest at which it can leave it, and whether it can
+    reach it at all (lengths in metres)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ahead = k - p_hi  # > 0: the slab lies ahead along +
+        behind = p_lo - (k + 1.0)  # > 0: the slab lies ahead along -
+        t_in = np.where(
+            ahead > 0,
+            ahead / np.where(c_hi > 0, c_hi, 1.0),
+            np.where(behind > 0, behind / np.where(c_lo < 0, -c_lo, 1.0), 0.0),
+        )
+        reach = ~(((ahead > 0) & (c_hi <= 0)) | ((behind > 0) & (c_lo >= 0)))
+        out_pos = (k + 1.0 - p_lo) / np.where(c_lo > 0, c_lo, 1.0)
+        out_neg = (p_hi - k) / np.where(c_hi < 0, -c_hi, 1.0)
+        t_out = np.where(c_lo > 0, out_pos, np.where(c_hi < 0, out_neg, np.inf))
+    return t_in, t_out, reach & (t_out > 0)
+
+
+def _speed(J: FloatArray, D: FloatArray, row: int, cos: tuple[Any, Any], sin: tuple[Any, Any]
+           ) -> tuple[Any, Any]:  # fmt: skip
+    """The range of sample axis ``row``'s speed (samples per metre) along the metric
+    directions of each arc (``cos``, ``sin``: their ranges, (K,)), the map's Jacobian within
+    ``J`` +- ``D`` (n, 2, 2): interval arithmetic, (n, K) each."""
+    lo = np.zeros((J.shape[0], len(cos[0])))
+    hi = np.zeros_like(lo)
+    for col, (a, b) in enumerate((cos, sin)):
+        j = J[:, row, col][:, None]
+        lo += np.minimum(j * a, j * b)
+        hi += np.maximum(j * a, j * b)
+        spread = D[:, row, col][:, None] * np.maximum(np.abs(a), np.abs(b))
+        lo -= spread
+        hi += spread
+    return lo, hi
+
+
+def _directional_change(
+    grid: FloatArray, box: tuple[FloatArray, ...], cells: tuple[FloatArray, ...],
+    ok: BoolArray, J: FloatArray, D: FloatArray, reach: float, up: bool,
+) -> FloatArray:  # fmt: skip
+    """How far the bilinear surface ``grid`` (samples) can fall (rise, ``up``) along a
+    straight line of at most ``reach`` metres from a point of each piece's box ``(u_min,
+    u_max, v_min, v_max)`` (n,) in samples, through the cells ``(ii, jj, x0, x1, y0, y1)`` (9,
+    n) (the cell's column and row, and the box grown by the reach in the cell's own
+    coordinates), those with ``ok``; the map from metres to samples has its Jacobian within
+    ``J`` +- ``D`` (n, 2, 2). A line has one direction: per arc of :data:`DIRECTIONS` metric
+    directions, the line's speed along each sample axis has a range (:func:`_speed`), the
+    surface's rate along the line is linear in that speed and, in a cell, affine in the point
+    (the x-slope interpolates the two x-edges along y, the y-slope the y-edges along x), so its
+    largest is at a corner of the cell's part and an end of each speed's range; the line's
+    length inside a cell is bounded by where it can enter and leave the cell's column and row
+    (:func:`_slab`). The bound: the rates times those lengths summed, or the largest rate
+    times ``reach``, the smaller; the largest over the arcs."""
+    u_min, u_max, v_min, v_max = box
+    ii, jj, x0, x1, y0, y1 = cells
+    K = DIRECTIONS
+    half = math.pi / K
+    phi = (np.arange(K, dtype=np.float64) + 0.5) * (2.0 * math.pi / K)
+    cos = _arc_range(phi - half, phi + half, np.cos)
+    sin = _arc_range(phi - half, phi + half, np.sin)
+    su = _speed(J, D, 0, cos, sin)
+    sv = _speed(J, D, 1, cos, sin)
+    ex, ey = _edges(grid)
+    sign = 1.0 if up else -1.0
+    total = np.zeros((len(u_min), K))
+    steepest = np.zeros((len(u_min), K))
+    for c in range(ii.shape[0]):
+        i, j = ii[c], jj[c]
+        rate = np.zeros((len(u_min), K))
+        for fy in (y0[c], y1[c]):
+            gx = sign * ((1.0 - fy) * ex[j, i] + fy * ex[j + 1, i])
+            for fx in (x0[c], x1[c]):
+                gy = sign * ((1.0 - fx) * ey[j, i] + fx * ey[j, i + 1])
+                for a in su:
+                    for b in sv:
+                        rate = np.maximum(rate, gx[:, None] * a + gy[:, None] * b)
+        tu_in, tu_out, ru = _slab(*su, u_min[:, None], u_max[:, None], i[:, None])
+        tv_in, tv_out, rv = _slab(*sv, v_min[:, None], v_max[:, None], j[:, None])
+        inside = np.minimum(np.minimum(tu_out, tv_out), reach)
+        inside = np.maximum(inside - np.maximum(tu_in, tv_in), 0.0)
+        inside = np.where(ru & rv & ok[c][:, None], inside, 0.0)
+        total += rate * inside
+        steepest = np.maximum(steepest, np.where(inside > 0, rate, 0.0))
+    return np.asarray(np.minimum(total, steepest * reach).max(axis=1))
+
+
+def _piece_bounds(
+    pa: FloatArray, pb: FloatArray, source: SourceGround, reach: float,
+    want: tuple[float, float] = (math.inf, -math.inf),
+) -> tuple[FloatArray, ...] | None:  # fmt: skip
+    """Per piece ``pa -> pb`` (each in one cell, at most a sample long): bounds of the least
+    height above the highest ground within ``reach`` metres of it and of the largest above the
+    lowest; None where a neighbourhood would reach past the adjacent cells
+    (:func:`_piece_reach_bound`). The directional bound only where the first misses ``want``,
+    the least and largest heights wanted (by default everywhere)."""
+    ua, va = source.to_samples(pa[:, 0], pa[:, 1])
+    ub, vb = source.to_samples(pb[:, 0], pb[:, 1])
+    ends = np.zeros((2, len(pa), 2, 2))  # the map's Jacobian at each end, signed
+    for e, (p, (u0, v0)) in enumerate(((pa, (ua, va)), (pb, (ub, vb)))):
         for col, (ddx, ddy) in enumerate(((1.0, 0.0), (0.0, 1.0))):
             u1, v1 = source.to_samples(p[:, 0] + ddx, p[:, 1] + ddy)
-            J[:, 0, col] = np.maximum(J[:, 0, col], np.abs(u1 - u0))
-            J[:, 1, col] = np.maximum(J[:, 1, col], np.abs(v1 - v0))
-    J *= 1.1
+            ends[e, :, 0, col] = u1 - u0
+            ends[e, :, 1, col] = v1 - v0
+    J = 1.1 * np.abs(ends).max(axis=0)
+    # the signed Jacobian across the piece: between its ends' values, give or take a tenth
+    J_mid = ends.mean(axis=0)
+    J_spread = 0.5 * np.abs(ends[0] - ends[1]) + (J - np.abs(ends).max(axis=0))
     r = reach * np.sqrt(np.max(np.sum(J * J, axis=1), axis=1))  # the reach in samples, at most
     if np.any(r > 0.5):
-        return -math.inf, math.inf
+        return None
     rows, cols = source.hi.shape
     i0 = np.clip(np.floor(np.minimum(ua, ub) - r), 0, cols - 2).astype(np.int64)
     i1 = np.clip(np.floor(np.maximum(ua, ub) + r), 0, cols - 2).astype(np.int64)
     j0 = np.clip(np.floor(np.minimum(va, vb) - r), 0, rows - 2).astype(np.int64)
     j1 = np.clip(np.floor(np.maximum(va, vb) + r), 0, rows - 2).astype(np.int64)
     if np.any(i1 - i0 > 2) or np.any(j1 - j0 > 2):
-        return -math.inf, math.inf
+        return None
     A = np.column_stack([ua, va, pa[:, 2]])
     B = np.column_stack([ub, vb, pb[:, 2]])
+    box = (np.minimum(ua, ub), np.maximum(ua, ub), np.minimum(va, vb), np.maximum(va, vb))
+    cells = np.zeros((6, 9, len(pa)))
+    ok = np.zeros((9, len(pa)), dtype=bool)
+    for c in range(9):
+        dj, di = divmod(c, 3)
+        ok[c] = (j0 + dj <= j1) & (i0 + di <= i1)
+        jj, ii = np.minimum(j0 + dj, rows - 2), np.minimum(i0 + di, cols - 2)
+        # the piece's neighbourhood in this cell, in the cell's own [0, 1] coordinates
+        cells[:, c] = (ii, jj, np.clip(box[0] - r - ii, 0.0, 1.0),
+                       np.clip(box[1] + r - ii, 0.0, 1.0), np.clip(box[2] - r - jj, 0.0, 1.0),
+                       np.clip(box[3] + r - jj, 0.0, 1.0))  # fmt: skip
+    ii, jj, x0, x1, y0, y1 = cells
+    ii, jj = ii.astype(np.int64), jj.astype(np.int64)
+    # where the neighbourhood stays on the raster, a line's one direction bounds it too
+    on = (box[0] - r >= 0) & (box[1] + r <= cols - 1) & (box[2] - r >= 0) & (box[3] + r <= rows - 1)
     out = []
     for grid, col in ((source.hi, 0), (source.lo, 2)):
-        ex = np.diff(grid, axis=1)  # x-edges (rows, cols - 1), signed
-        ey = np.diff(grid, axis=0)  # y-edges (rows - 1, cols)
+        ex, ey = _edges(grid)
         per_m = np.zeros(len(pa))
-        for dj in range(3):
-            for di in range(3):
-                ok = (j0 + dj <= j1) & (i0 + di <= i1)
-                jj, ii = np.minimum(j0 + dj, rows - 2), np.minimum(i0 + di, cols - 2)
-                # the piece's neighbourhood in this cell, in the cell's own [0, 1] coordinates
-                x0 = np.clip(np.minimum(ua, ub) - r - ii, 0.0, 1.0)
-                x1 = np.clip(np.maximum(ua, ub) + r - ii, 0.0, 1.0)
-                y0 = np.clip(np.minimum(va, vb) - r - jj, 0.0, 1.0)
-                y1 = np.clip(np.maximum(va, vb) + r - jj, 0.0, 1.0)
-                # the x-slope at height y interpolates the cell's two x-edges, the y-slope at
-                # x its two y-edges; the bound is convex in the point, so its largest over the
-                # neighbourhood's box is at one of the box's corners
-                for fy in (y0, y1):
-                    gx = np.abs((1.0 - fy) * ex[jj, ii] + fy * ex[jj + 1, ii])
-                    for fx in (x0, x1):
-                        gy = np.abs((1.0 - fx) * ey[jj, ii] + fx * ey[jj, ii + 1])
-                        at = np.hypot(J[:, 0, 0] * gx + J[:, 1, 0] * gy,
-                                      J[:, 0, 1] * gx + J[:, 1, 1] * gy)  # fmt: skip
-                        per_m = np.where(ok, np.maximum(per_m, at), per_m)
+        for c in range(9):
+            # the x-slope at height y interpolates the cell's two x-edges, the y-slope at
+            # x its two y-edges; the bound is convex in the point, so its largest over the
+            # neighbourhood's box is at one of the box's corners
+            for fy in (y0[c], y1[c]):
+                gx = np.abs((1.0 - fy) * ex[jj[c], ii[c]] + fy * ex[jj[c] + 1, ii[c]])
+                for fx in (x0[c], x1[c]):
+                    gy = np.abs((1.0 - fx) * ey[jj[c], ii[c]] + fx * ey[jj[c], ii[c] + 1])
+                    at = np.hypot(J[:, 0, 0] * gx + J[:, 1, 0] * gy,
+                                  J[:, 0, 1] * gx + J[:, 1, 1] * gy)  # fmt: skip
+                    per_m = np.where(ok[c], np.maximum(per_m, at), per_m)
+        change = reach * per_m
         ext = terrain_clearance_extrema(A, B, Terrain(grid, 0.0, 0.0, 1.0, 1.0, source.name))
-        out.append(ext[:, col] + (1.0 if col == 2 else -1.0) * reach * per_m)
-    return float(np.min(out[0])), float(np.max(out[1]))
+        side = 1.0 if col == 2 else -1.0
+        # the directional bound (costlier) where the first misses its target
+        miss = on & (side * (ext[:, col] + side * change) > side * want[col // 2])
+        if miss.any():
+            s = np.flatnonzero(miss)
+            along = _directional_change(
+                grid, tuple(b[s] for b in box), (ii[:, s], jj[:, s], x0[:, s], x1[:, s],
+                y0[:, s], y1[:, s]), ok[:, s], J_mid[s], J_spread[s], reach, up=col == 0,
+            )  # fmt: skip
+            change[s] = np.minimum(change[s], along)
+        out.append(ext[:, col] + side * change)
+    return out[0], out[1]
+
+
+#: :func:`_piece_reach_bound`: rounds of refinement and the pieces cut per round (each into
+#: eight).
+REFINE_ROUNDS, REFINE_PIECES = 6, 32
+
+
+def _probe(
+    pa: FloatArray, pb: FloatArray, source: SourceGround, reach: float
+) -> tuple[float, float]:
+    """The least height of the pieces' ends above the highest ground and the largest above the
+    lowest, read at the ends and at 16 points ``reach`` metres around each: heights a flight
+    within its reach really has (so the true extremes are at least this far out)."""
+    ang = np.linspace(0.0, 2.0 * np.pi, 16, endpoint=False)
+    off = np.concatenate([[[0.0, 0.0]], reach * np.column_stack([np.cos(ang), np.sin(ang)])])
+    p = np.concatenate([pa, pb])
+    x = (p[:, None, 0] + off[None, :, 0]).ravel()
+    y = (p[:, None, 1] + off[None, :, 1]).ravel()
+    z = np.repeat(p[:, 2], len(off))
+    u, v = source.to_samples(x, y)
+    rows, cols = source.hi.shape
+    on = (u >= 0) & (u <= cols - 1) & (v >= 0) & (v <= rows - 1)
+    if not on.any():
+        return math.inf, -math.inf
+    hi = Terrain(source.hi, 0.0, 0.0, 1.0, 1.0, source.name).height(u[on], v[on])
+    lo = Terrain(source.lo, 0.0, 0.0, 1.0, 1.0, source.name).height(u[on], v[on])
+    return float(np.min(z[on] - hi)), float(np.max(z[on] - lo))
+
+
+def _piece_reach_bound(
+    traj: Trajectory, source: SourceGround, reach: float, piece: float,
+    targets: tuple[float, float] | None = None,
+) -> tuple[float, float]:  # fmt: skip
+    """The least and largest height above the ground within ``reach`` metres of the flight,
+    bounded per piece of at most a sample cut where it crosses a row or column of samples
+    (:func:`_cut_at_cells`): the exact extrema over the ground under the piece, less (plus)
+    how far the ground can rise (fall) within the reach of it, the smaller of two bounds:
+
+    * the steepest the ground can be in metres along any direction in the piece's
+      neighbourhood (the piece's box grown by the reach) times the reach. In a cell the
+      bilinear surface's slope per sample along x at height ``y`` interpolates its two
+      x-edge differences, along y at ``x`` its two y-edge differences; the map from metres to
+      samples has the Jacobian ``J`` (measured at the piece's ends, the larger of each entry,
+      times 1.1 for its change across the piece), so a metre moves the ground by at most
+      ``hypot(|J00| |gx| + |J10| |gy|, |J01| |gx| + |J11| |gy|)``, a convex function of the
+      point: its largest over the neighbourhood's part of each cell is at a corner of that
+      part;
+    * along one direction at a time (:func:`_directional_change`): a line from the piece
+      enters only the cells ahead of it, and falls there only where the ground falls that way
+      (a valley floor under the flight is not charged the far slope's steepness).
+
+    A long piece's bound pairs its highest point with the steepest ground anywhere near it:
+    with ``targets`` (the least and largest heights the flight must keep), the pieces whose
+    bounds miss them are cut into eight, the worst :data:`REFINE_PIECES` per round for up to
+    :data:`REFINE_ROUNDS` rounds, until every bound meets its target or points within the
+    reach of the flight (:func:`_probe`) show that it cannot. Tight where the reach is a small
+    part of a sample, as a tracking error of metres is on a coarse raster; (-inf, inf) (no
+    bound) where the neighbourhood would reach past the adjacent cells."""
+    if not math.isfinite(piece):
+        return -math.inf, math.inf
+    a, b = traj.points[:-1], traj.points[1:]
+    pa, pb, _, _ = _pieces(a, b, piece)
+    pa, pb = _cut_at_cells(pa, pb, source)
+    want = targets if targets is not None else (math.inf, -math.inf)
+    got = _piece_bounds(pa, pb, source, reach, want)
+    if got is None:
+        return -math.inf, math.inf
+    low, high = got[0], got[1]
+    want_low, want_high = targets if targets is not None else (-math.inf, math.inf)
+    for _ in range(REFINE_ROUNDS if targets is not None else 0):
+        cut_low = np.argsort(low)[:REFINE_PIECES]
+        cut_low = cut_low[low[cut_low] < want_low]
+        cut_high = np.argsort(-high)[:REFINE_PIECES]
+        cut_high = cut_high[high[cut_high] > want_high]
+        probe = _probe(pa[np.r_[cut_low, cut_high]], pb[np.r_[cut_low, cut_high]], source, reach)
+        if probe[0] < want_low:  # the flight really comes this close: cutting cannot help
+            cut_low = cut_low[:0]
+        if probe[1] > want_high:
+            cut_high = cut_high[:0]
+        cut = np.union1d(cut_low, cut_high)
+        if not cut.size:
+            break
+        t = np.linspace(0.0, 1.0, 9)
+        d = pb[cut] - pa[cut]
+        qa = (pa[cut][:, None] + t[:-1, None] * d[:, None]).reshape(-1, pa.shape[1])
+        qb = (pa[cut][:, None] + t[1:, None] * d[:, None]).reshape(-1, pa.shape[1])
+        more = _piece_bounds(qa, qb, source, reach, want)
+        if more is None:
+            break
+        keep = np.setdiff1d(np.arange(len(pa)), cut)
+        pa, pb = np.concatenate([pa[keep], qa]), np.concatenate([pb[keep], qb])
+        low = np.concatenate([low[keep], more[0]])
+        high = np.concatenate([high[keep], more[1]])
+    return float(np.min(low)), float(np.max(high))
 
 
 def source_clearance(
-    traj: Trajectory, source: SourceGround, reach: float = 0.0
-) -> tuple[float, float]:
+    traj: Trajectory, source: SourceGround, reach: float = 0.0,
+    targets: tuple[float, float] | None = None,
+) -> tuple[float, float]:  # fmt: skip
     """The least and the largest height above the raster's own ground along the flight (over
     the floor's and the ceiling's void fills), metres; with ``reach`` > 0, above the highest
-    and lowest ground within ``reach`` metres horizontally of the flight (a bound: the
-    samples moved to the highest and lowest within the reach in samples, the local metres'
-    largest stretch into samples about the flight, measured, times 1.1)."""
+    and lowest ground within ``reach`` metres horizontally of the flight (a bound: the best of
+    :func:`_piece_reach_bound`, refined toward ``targets``, the least and largest heights the
+    flight must keep, and the samples moved to the highest and lowest within the reach in
+    samples, the local metres' largest stretch into samples about the flight, measured, times
+    1.1)."""
     if traj.dim != 3 or len(traj.points) < 2:
         return math.inf, -math.inf
     if reach > 0:
@@ -365,7 +613,8 @@ def source_clearance(
         # both unit steps' images bound the map's stretch within sqrt(2) in any direction
         r = 1.1 * math.sqrt(2.0) * stretch * reach
         # each bounds the ground within reach: the best of them
-        low, high = _piece_reach_bound(traj, source, reach, min(source.piece, 1.0 / stretch))
+        low, high = _piece_reach_bound(traj, source, reach, min(source.piece, 1.0 / stretch),
+                                       targets)  # fmt: skip
         for how in ("height", "slope"):
             s = replace(source, hi=within_reach(source.hi, 1.0, 1.0, r, True, how),
                         lo=within_reach(source.lo, 1.0, 1.0, r, False, how))  # fmt: skip

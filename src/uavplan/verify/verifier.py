@@ -259,7 +259,15 @@ def _under_model(
     out: list[Violation] = []
     margins = {t.id: R.UAVMargin(t.id) for t in trajs}
     checks = (check_cylinders, check_circles, check_polygons)
-    src = None if source is None else (lambda tr, reach: source_clearance(tr, source, reach))
+    # the heights above the raster's ground a flight must keep to leave the model's vertical
+    # error (over the ground, and inside a band above it): what the bound of the ground
+    # within reach is refined toward
+    band = sc.altitude
+    targets = (timing.track_v, float("inf"))
+    if band is not None and band.reference == "ground":
+        targets = (max(timing.track_v, band.min + timing.track_v), band.max - timing.track_v)
+    src = None if source is None else (
+        lambda tr, reach: source_clearance(tr, source, reach, targets))  # fmt: skip
     what_model = (f"the execution model's tracking error ({timing.track_h:g} m horizontal, "
                   f"{timing.track_v:g} m vertical)")  # fmt: skip
     ground_refs = sc.terrain is not None or (
