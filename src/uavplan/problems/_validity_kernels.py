@@ -26,8 +26,9 @@ from uavplan.world.tolerances import ANGLE_TOL_DEG
 
 @njit(cache=True, inline="always")
 def static_path_ok(paths, p, args, waypoint_band=True):  # pragma: no cover - numba
-    """Whether path ``p`` of ``paths`` (P, N, 3) passes bounds, cylinders, terrain and the band
-    (:func:`static_world_ok`'s test of one path; the fleet's fused objective calls it too).
+    """Whether path ``p`` of ``paths`` (P, N, 3) passes bounds, cylinders, circles, polygons,
+    terrain and the band (:func:`static_world_ok`'s test of one path; the fleet's fused
+    objective calls it too).
     ``args``: the tuple ``(lo, hi, bounds_tol, cyl_c, cyl_r, cyl_lo, cyl_hi, has_terrain, H,
     flat, off, shp, nH, nflat, noff, nshp, grid, need, has_band, band_ground, nearest, bmin, bmax,
     band_tol, strict, max_climb, max_descent, scene)``

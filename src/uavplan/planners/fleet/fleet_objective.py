@@ -4,10 +4,11 @@
 Each of a UAV's ``N_iter`` low-level iterations evaluates its whole swarm: decode the genes
 into paths (:class:`~uavplan.problems.encoding.CartesianEncoding`: heights above ground turned
 into altitudes), the cost F1-F4 of the ``ppswarm`` preset (Eqs. 2-10,
-:mod:`uavplan.problems.costs`), the world's checks (bounds, cylinders, terrain and the band
-along whole segments, :func:`uavplan.problems._validity_kernels.static_path_ok`) and F5, the
-separation from the UAVs planned before it (:func:`uavplan.world.reservations.path_query`),
-under the ``"inf"`` rule (Sect. 2: any violation costs infinity). The reference is
+:mod:`uavplan.problems.costs`), the world's checks (bounds, cylinders, circles and polygons,
+terrain and the band along whole segments,
+:func:`uavplan.problems._validity_kernels.static_path_ok`) and F5, the separation from the
+UAVs planned before it (:func:`uavplan.world.reservations.path_query`), under the ``"inf"``
+rule (Sect. 2: any violation costs infinity). The reference is
 :meth:`uavplan.problems.path_problem.PathProblem.evaluate_cv` (NumPy terms, one kernel per
 check); :class:`FleetObjective` does the same per particle in one kernel, without the
 intermediate arrays and Python calls of about thirty NumPy operations per swarm.
