@@ -419,13 +419,13 @@ def _directional_change(
 
 def _piece_bounds(
     pa: FloatArray, pb: FloatArray, source: SourceGround, reach: float,
-    want: tuple[float, float] = (math.inf, -math.inf),
+    want: tuple[float, float] = (math.inf, -math.inf), directional: bool = True,
 ) -> tuple[FloatArray, ...] | None:  # fmt: skip
     """Per piece ``pa -> pb`` (each in one cell, at most a sample long): bounds of the least
     height above the highest ground within ``reach`` metres of it and of the largest above the
     lowest; None where a neighbourhood would reach past the adjacent cells
-    (:func:`_piece_reach_bound`). The directional bound only where the first misses ``want``,
-    the least and largest heights wanted (by default everywhere)."""
+    (:func:`_piece_reach_bound`). The directional bound (unless not ``directional``) only where
+    the first misses ``want``, the least and largest heights wanted (by default everywhere)."""
     ua, va = source.to_samples(pa[:, 0], pa[:, 1])
     ub, vb = source.to_samples(pb[:, 0], pb[:, 1])
     ends = np.zeros((2, len(pa), 2, 2))  # the map's Jacobian at each end, signed
@@ -485,7 +485,7 @@ def _piece_bounds(
         side = 1.0 if col == 2 else -1.0
         # the directional bound (costlier) where the first misses its target
         miss = on & (side * (ext[:, col] + side * change) > side * want[col // 2])
-        if miss.any():
+        if directional and miss.any():
             s = np.flatnonzero(miss)
             along = _directional_change(
                 grid, tuple(b[s] for b in box), (ii[:, s], jj[:, s], x0[:, s], x1[:, s],
@@ -498,7 +498,7 @@ def _piece_bounds(
 
 #: :func:`_piece_reach_bound`: rounds of refinement and the pieces cut per round (each into
 #: eight).
-REFINE_ROUNDS, REFINE_PIECES = 6, 32
+REFINE_ROUNDS, REFINE_PIECES = 2, 32
 
 
 def _probe(
@@ -558,11 +558,23 @@ def _piece_reach_bound(
     pa, pb, _, _ = _pieces(a, b, piece)
     pa, pb = _cut_at_cells(pa, pb, source)
     want = targets if targets is not None else (math.inf, -math.inf)
-    got = _piece_bounds(pa, pb, source, reach, want)
+    got = _piece_bounds(pa, pb, source, reach, want, directional=targets is None)
     if got is None:
         return -math.inf, math.inf
     low, high = got[0], got[1]
     want_low, want_high = targets if targets is not None else (-math.inf, math.inf)
+    if targets is not None:  # the first bound alone, then the directional one where it misses
+        miss = np.flatnonzero((low < want_low) | (high > want_high))
+        if not miss.size:
+            return float(np.min(low)), float(np.max(high))
+        worst = np.union1d(np.argsort(low)[:REFINE_PIECES], np.argsort(-high)[:REFINE_PIECES])
+        probe = _probe(pa[worst], pb[worst], source, reach)
+        if probe[0] < want_low or probe[1] > want_high:  # the flight really misses them
+            return float(np.min(low)), float(np.max(high))
+        more = _piece_bounds(pa[miss], pb[miss], source, reach, want)
+        if more is None:
+            return -math.inf, math.inf
+        low[miss], high[miss] = more
     for _ in range(REFINE_ROUNDS if targets is not None else 0):
         cut_low = np.argsort(low)[:REFINE_PIECES]
         cut_low = cut_low[low[cut_low] < want_low]
