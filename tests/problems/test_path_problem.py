@@ -497,3 +497,35 @@ def test_length_preset_is_the_path_length_and_keeps_feasibility() -> None:
     L = np.linalg.norm(np.diff(P, axis=1), axis=2).sum(axis=1)
     np.testing.assert_allclose(a.cost, L, rtol=1e-12)  # violations travel apart from the cost
     assert np.array_equal(a.feasible, b.feasible)  # the preset changes the cost, not the checks
+
+
+def test_below_with_a_term_s_lower_bound_gives_the_same_answers() -> None:
+    """HR-MAGA's terrain term has a cheaper lower bound: ``evaluate_cv(below=...)`` skips the
+    exact term for rows whose bounded cost is already not below ``below``, and answers every
+    row as without the bound, bit for bit (the skipped ones ``(inf, 1)`` either way); some rows
+    are skipped."""
+    import dataclasses
+
+    from uavplan.scenarios import resolve
+
+    sc = resolve("hrmaga-spso")
+    problem = PathProblem(sc)
+    assert any(t.lower is not None for t in problem.terms)
+    plain = PathProblem(sc)
+    plain.terms = tuple(dataclasses.replace(t, lower=None) for t in plain.terms)
+    rng = np.random.default_rng(3)
+    lo, hi = np.asarray(sc.bounds.lo), np.asarray(sc.bounds.hi)
+    task = sc.tasks[0]
+    line = np.linspace(task.start, task.goal, 12)
+    paths = np.clip(line + rng.normal(0.0, 1.0, (500, 1, 1)) * rng.normal(0, 40, (500, 12, 3)),
+                    lo, hi)  # fmt: skip
+    paths[:, 0], paths[:, -1] = task.start, task.goal
+    ref_cost = plain._total(plain.validator.batch(paths), checks_too=False)
+    for below in (np.full(500, np.inf), ref_cost * rng.uniform(0.98, 1.02, 500),
+                  np.full(500, np.median(ref_cost))):  # fmt: skip
+        got = problem.evaluate_cv(paths, exact=False, below=below)
+        want = plain.evaluate_cv(paths, exact=False, below=below)
+        np.testing.assert_array_equal(got[0], want[0])
+        np.testing.assert_array_equal(got[1], want[1])
+    kept = problem._maybe_below(problem.validator.batch(paths), np.full(500, np.median(ref_cost)))
+    assert 0 < kept.size < 500

@@ -750,3 +750,29 @@ def test_fast_cell_coordinates_equal_the_numpy_ones():
     u2, v2 = t._uv_snapped(p[..., 0], p[..., 1])
     np.testing.assert_array_equal(u, u2)
     np.testing.assert_array_equal(v, v2)
+
+
+@pytest.mark.parametrize("name", ["hrmaga-spso", "jacksboro", "topobathy"])
+def test_the_mean_height_bound_is_never_above_the_exact_mean(name: str) -> None:
+    """``mean_height_lower`` (the block minima under each segment) is at most ``mean_height``
+    on random paths: long and short segments, repeated points, points off the grid; and its
+    blocks hold the least node of each block, edges included (brute force)."""
+    from uavplan.scenarios import resolve
+
+    sc = resolve(name)
+    t = sc.terrain
+    assert t is not None
+    lo, hi = np.asarray(sc.bounds.lo), np.asarray(sc.bounds.hi)
+    span = hi - lo
+    rng = np.random.default_rng(7)
+    P = rng.uniform(lo - 0.1 * span, hi + 0.1 * span, (400, 10, 3))
+    P[:150, :, :2] = P[:150, :1, :2] + rng.uniform(-3 * t.dx, 3 * t.dx, (150, 10, 2))
+    P[150:200, 4] = P[150:200, 3]  # a repeated point: a segment of length 0
+    exact, low = t.mean_height(P), t.mean_height_lower(P)
+    assert np.all(low <= exact)
+    assert np.mean(exact - low) < np.ptp(t.heights)  # a bound, not a constant
+    B, H = t.LOWER_BLOCK, t.heights
+    blocks = t._block_min
+    for j, i in ((0, 0), (blocks.shape[0] - 1, blocks.shape[1] - 1), (1, 2)):
+        want = H[j * B : j * B + B + 1, i * B : i * B + B + 1].min()
+        assert blocks[j, i] == want

@@ -71,13 +71,16 @@ class Term:
     ``check``: the name of a :class:`~uavplan.problems.validity.MotionValidator` check that
     this term mirrors (it is infinite exactly when that check fails, 0 otherwise, as PPSwarm's
     F5 and the separation check): :meth:`PathProblem.evaluate_cv` leaves such a term out of the
-    cost, since the check (the constraint) decides it.
+    cost, since the check (the constraint) decides it. ``lower``: a cheaper lower bound of
+    ``fn`` (never above it, row by row), with which :meth:`PathProblem.evaluate_cv`'s
+    ``below`` skips the exact term where even the bound leaves the cost too high.
     """
 
     name: str
     weight: float
     fn: TermFn
     check: str | None = None
+    lower: TermFn | None = None
 
 
 # ---------------------------------------------------------------------------- term functions
@@ -137,6 +140,13 @@ def _t_hrmaga_altitude(ctx: Batch) -> FloatArray:
     return C.hrmaga_altitude_cost(terrain.mean_height(ctx.paths))
 
 
+def _t_hrmaga_altitude_lower(ctx: Batch) -> FloatArray:
+    terrain = ctx.validator.cost_terrain
+    if terrain is None:
+        return np.zeros(ctx.paths.shape[0])
+    return C.hrmaga_altitude_cost(terrain.mean_height_lower(ctx.paths))
+
+
 def _t_danger(ctx: Batch) -> FloatArray:
     areas = ctx.scenario.danger_areas
     centers = np.array([a.center for a in areas]).reshape(-1, 2)
@@ -163,7 +173,7 @@ PRESETS: dict[str, tuple[Term, ...]] = {
     ),
     "hrmaga": (
         Term("length", 1.0, _t_length),
-        Term("terrain_height", 10.0, _t_hrmaga_altitude),
+        Term("terrain_height", 10.0, _t_hrmaga_altitude, lower=_t_hrmaga_altitude_lower),
         Term("danger", 15.0, _t_danger),
     ),
     "length2d": (Term("length", 1.0, _t_length2d),),
@@ -480,9 +490,16 @@ class PathProblem:
         """:meth:`evaluate_cv` with ``below``: the cost of every row, the checks of the rows
         whose cost is below ``below`` (the same cascade, on those rows only)."""
         n = b.paths.shape[0]
-        f = self._total(b, checks_too=False)
         total = np.full(n, np.inf)
         cv = np.ones(n)
+        rows = self._maybe_below(b, below)
+        if rows.size < n:  # the exact cost of the rows the bounds leave
+            sub = b if rows.size == n else b.subset(rows)
+            f = np.full(n, np.inf)
+            if rows.size:
+                f[rows] = self._total(sub, checks_too=False)
+        else:
+            f = self._total(b, checks_too=False)
         rows = np.flatnonzero(f < below)
         if rows.size:
             sub = b if rows.size == n else b.subset(rows)
@@ -493,6 +510,23 @@ class PathProblem:
             total[rows[ok]] = f[rows[ok]]
             cv[rows[ok]] = 0.0
         return total, cv
+
+    def _maybe_below(self, b: Batch, below: FloatArray) -> NDArray[np.intp]:
+        """The rows whose cost may be below ``below``: all of them, unless some term has a
+        lower bound (:attr:`Term.lower`, with a weight >= 0, no fused leading terms); then the
+        cost with those terms at their bounds (a lower bound of the cost) must be below
+        ``below`` (with a relative 1e-9 for the sums' order)."""
+        n = b.paths.shape[0]
+        terms = [t for t in self.terms if t.check is None]
+        if self.fused is not None or not any(t.lower is not None for t in terms):
+            return np.arange(n)
+        if any(t.lower is not None and t.weight < 0 for t in terms):
+            return np.arange(n)
+        bound = np.zeros(n)
+        for t in terms:
+            fn = t.lower if t.lower is not None else t.fn
+            bound = bound + t.weight * np.asarray(fn(b), dtype=np.float64)
+        return np.flatnonzero(~(bound > below + 1e-9 * np.abs(below)))
 
     def feasible(self, paths: FloatArray) -> BoolArray:
         return self.validator.paths_valid(paths)

@@ -321,6 +321,41 @@ class Terrain:
             tk.mean_height_batch(self.heights, np.ascontiguousarray(u), np.ascontiguousarray(v))
         )
 
+    #: :meth:`mean_height_lower`: the blocks' side, in cells.
+    LOWER_BLOCK = 8
+
+    @cached_property
+    def _block_min(self) -> FloatArray:
+        """The least node of each block of ``LOWER_BLOCK`` x ``LOWER_BLOCK`` cells, its edges'
+        nodes included."""
+        B = self.LOWER_BLOCK
+        H = self.heights
+        out = H
+        for axis in (0, 1):
+            n = out.shape[axis]
+            starts = np.arange(0, max(n - 1, 1), B)
+            m = np.minimum.reduceat(out, starts, axis=axis)
+            nxt = np.take(out, np.minimum(starts[1:], n - 1), axis=axis)  # the far edge's nodes
+            if axis == 0:
+                m[:-1] = np.minimum(m[:-1], nxt)
+            else:
+                m[:, :-1] = np.minimum(m[:, :-1], nxt)
+            out = m
+        return np.ascontiguousarray(out)
+
+    def mean_height_lower(self, paths: ArrayLike) -> FloatArray:
+        """A lower bound of :meth:`mean_height` at a ``LOWER_BLOCK``-th of its cost (the
+        mean of the terrain's block minima under each segment), (pop, n_points - 1): what lets
+        a search skip the exact mean where even the bound is too high."""
+        p = np.asarray(paths, dtype=np.float64)
+        u, v = self._uv(p[..., 0], p[..., 1])
+        H = self.heights
+        slack = 1e-9 * (1.0 + float(np.max(np.abs(H))))
+        return np.asarray(tk.mean_height_lower_batch(
+            self._block_min, float(self.LOWER_BLOCK), slack, np.ascontiguousarray(u),
+            np.ascontiguousarray(v),
+        ))  # fmt: skip
+
     def downsample(self, factor: int) -> Terrain:
         """Every ``factor``-th node (a coarser map for multi-resolution planners)."""
         if factor < 1:
