@@ -488,40 +488,48 @@ class PathProblem:
 
     def _evaluate_below(self, b: Batch, below: FloatArray) -> tuple[FloatArray, FloatArray]:
         """:meth:`evaluate_cv` with ``below``: the cost of every row, the checks of the rows
-        whose cost is below ``below`` (the same cascade, on those rows only)."""
+        whose cost is below ``below`` (the same cascade, on those rows only). Where a term has
+        a cheaper lower bound (:attr:`Term.lower`: an expensive term), the rows the bound
+        leaves (:meth:`_maybe_below`) are checked first (but for separation) and the exact
+        cost is computed only for those that pass: a row's answer is the same either way."""
         n = b.paths.shape[0]
         total = np.full(n, np.inf)
         cv = np.ones(n)
+
+        def part(rows: NDArray[np.intp]) -> Batch:
+            return b if rows.size == n else b.subset(rows)
+
         rows = self._maybe_below(b, below)
-        if rows.size < n:  # the exact cost of the rows the bounds leave
-            sub = b if rows.size == n else b.subset(rows)
+        if rows is None:  # the cost first: cheap beside the checks
+            f = self._total(b, checks_too=False)
+            rows = np.flatnonzero(f < below)
+            if rows.size:
+                rows = rows[self.validator.passing(part(rows), skip=("separation",))]
+        else:  # the world's checks first, then the expensive cost where they pass
+            if rows.size:
+                rows = rows[self.validator.passing(part(rows), skip=("separation",))]
             f = np.full(n, np.inf)
             if rows.size:
-                f[rows] = self._total(sub, checks_too=False)
-        else:
-            f = self._total(b, checks_too=False)
-        rows = np.flatnonzero(f < below)
-        if rows.size:
-            sub = b if rows.size == n else b.subset(rows)
-            ok = self.validator.passing(sub, skip=("separation",))
-            table = self.validator.reservations
-            if ok.size and table is not None and len(table):
-                ok = ok[~(sub if ok.size == rows.size else sub.subset(ok)).conflicts]
-            total[rows[ok]] = f[rows[ok]]
-            cv[rows[ok]] = 0.0
+                f[rows] = self._total(part(rows), checks_too=False)
+            rows = rows[f[rows] < below[rows]]
+        table = self.validator.reservations
+        if rows.size and table is not None and len(table):
+            rows = rows[~part(rows).conflicts]
+        total[rows] = f[rows]
+        cv[rows] = 0.0
         return total, cv
 
-    def _maybe_below(self, b: Batch, below: FloatArray) -> NDArray[np.intp]:
-        """The rows whose cost may be below ``below``: all of them, unless some term has a
-        lower bound (:attr:`Term.lower`, with a weight >= 0, no fused leading terms); then the
-        cost with those terms at their bounds (a lower bound of the cost) must be below
-        ``below`` (with a relative 1e-9 for the sums' order)."""
+    def _maybe_below(self, b: Batch, below: FloatArray) -> NDArray[np.intp] | None:
+        """The rows whose cost may be below ``below`` where some term has a lower bound
+        (:attr:`Term.lower`, with a weight >= 0, and no fused leading terms): the cost with
+        those terms at their bounds (a lower bound of the cost) below ``below`` (with a
+        relative 1e-9 for the sums' order). None where no term has one."""
         n = b.paths.shape[0]
         terms = [t for t in self.terms if t.check is None]
         if self.fused is not None or not any(t.lower is not None for t in terms):
-            return np.arange(n)
+            return None
         if any(t.lower is not None and t.weight < 0 for t in terms):
-            return np.arange(n)
+            return None
         bound = np.zeros(n)
         for t in terms:
             fn = t.lower if t.lower is not None else t.fn
