@@ -522,7 +522,7 @@ def test_below_with_a_term_s_lower_bound_gives_the_same_answers() -> None:
     paths[:, 0], paths[:, -1] = task.start, task.goal
     ref_cost = plain._total(plain.validator.batch(paths), checks_too=False)
     for below in (np.full(500, np.inf), ref_cost * rng.uniform(0.98, 1.02, 500),
-                  np.full(500, np.median(ref_cost))):  # fmt: skip
+                  np.full(500, np.median(ref_cost)), np.full(500, -np.inf)):  # fmt: skip
         got = problem.evaluate_cv(paths, exact=False, below=below)
         want = plain.evaluate_cv(paths, exact=False, below=below)
         np.testing.assert_array_equal(got[0], want[0])

@@ -534,7 +534,8 @@ class PathProblem:
         for t in terms:
             fn = t.lower if t.lower is not None else t.fn
             bound = bound + t.weight * np.asarray(fn(b), dtype=np.float64)
-        return np.flatnonzero(~(bound > below + 1e-9 * np.abs(below)))
+        slack = 1e-9 * np.abs(np.where(np.isfinite(below), below, 0.0))
+        return np.flatnonzero(~(bound > below + slack))
 
     def feasible(self, paths: FloatArray) -> BoolArray:
         return self.validator.paths_valid(paths)
