@@ -446,7 +446,7 @@ class MotionValidator:
         arrays = (verts, starts, circ, poly, convex, edges, hull_s)
         return (*(np.ascontiguousarray(a) for a in arrays), int(maxv))
 
-    @property
+    @cached_property
     def _static_fused(self) -> frozenset[str]:
         """The checks the fused static kernel answers alone in this world."""
         fused = STATIC | {"circles", "polygons"}

@@ -297,19 +297,21 @@ def _cut_at_cells(pa: FloatArray, pb: FloatArray, source: SourceGround) -> tuple
     return pa[rows] + t0[keep][:, None] * d[rows], pa[rows] + t1[keep][:, None] * d[rows]
 
 
-_EDGES: dict[int, tuple[Any, FloatArray, FloatArray]] = {}
+_VIEWS: dict[int, tuple[Any, FloatArray, FloatArray, Terrain]] = {}
 
 
-def _edges(grid: FloatArray) -> tuple[FloatArray, FloatArray]:
+def _views(grid: FloatArray) -> tuple[FloatArray, FloatArray, Terrain]:
     """The raster's x-edges (rows, cols - 1) and y-edges (rows - 1, cols), signed height
-    differences, worked out once per grid (a flight's bounds ask for them at every step of a
-    margin's bisection); kept while the grid lives."""
-    got = _EDGES.get(id(grid))
+    differences, and the grid as a terrain in sample coordinates, made once per grid (a
+    flight's bounds ask for them at every step of a margin's bisection); kept while the grid
+    lives."""
+    got = _VIEWS.get(id(grid))
     if got is None or got[0]() is not grid:
-        for key in [k for k, v in _EDGES.items() if v[0]() is None]:
-            del _EDGES[key]
-        got = _EDGES[id(grid)] = (weakref.ref(grid), np.diff(grid, axis=1), np.diff(grid, axis=0))
-    return got[1], got[2]
+        for key in [k for k, v in _VIEWS.items() if v[0]() is None]:
+            del _VIEWS[key]
+        got = _VIEWS[id(grid)] = (weakref.ref(grid), np.diff(grid, axis=1), np.diff(grid, axis=0),
+                                  Terrain(grid, 0.0, 0.0, 1.0, 1.0, "samples"))  # fmt: skip
+    return got[1], got[2], got[3]
 
 
 #: :func:`_directional_change`: the directions a straight line may take, in arcs of 2 pi / this.
@@ -393,7 +395,7 @@ def _directional_change(
     sin = _arc_range(phi - half, phi + half, np.sin)
     su = _speed(J, D, 0, cos, sin)
     sv = _speed(J, D, 1, cos, sin)
-    ex, ey = _edges(grid)
+    ex, ey, _ = _views(grid)
     sign = 1.0 if up else -1.0
     total = np.zeros((len(u_min), K))
     steepest = np.zeros((len(u_min), K))
@@ -467,7 +469,7 @@ def _piece_bounds(
     on = (box[0] - r >= 0) & (box[1] + r <= cols - 1) & (box[2] - r >= 0) & (box[3] + r <= rows - 1)
     out = []
     for grid, col in ((source.hi, 0), (source.lo, 2)):
-        ex, ey = _edges(grid)
+        ex, ey, samples = _views(grid)
         per_m = np.zeros(len(pa))
         for c in range(9):
             # the x-slope at height y interpolates the cell's two x-edges, the y-slope at
@@ -481,7 +483,7 @@ def _piece_bounds(
                                   J[:, 0, 1] * gx + J[:, 1, 1] * gy)  # fmt: skip
                     per_m = np.where(ok[c], np.maximum(per_m, at), per_m)
         change = reach * per_m
-        ext = terrain_clearance_extrema(A, B, Terrain(grid, 0.0, 0.0, 1.0, 1.0, source.name))
+        ext = terrain_clearance_extrema(A, B, samples)
         side = 1.0 if col == 2 else -1.0
         # the directional bound (costlier) where the first misses its target
         miss = on & (side * (ext[:, col] + side * change) > side * want[col // 2])
@@ -518,8 +520,8 @@ def _probe(
     on = (u >= 0) & (u <= cols - 1) & (v >= 0) & (v <= rows - 1)
     if not on.any():
         return math.inf, -math.inf
-    hi = Terrain(source.hi, 0.0, 0.0, 1.0, 1.0, source.name).height(u[on], v[on])
-    lo = Terrain(source.lo, 0.0, 0.0, 1.0, 1.0, source.name).height(u[on], v[on])
+    hi = _views(source.hi)[2].height(u[on], v[on])
+    lo = _views(source.lo)[2].height(u[on], v[on])
     return float(np.min(z[on] - hi)), float(np.max(z[on] - lo))
 
 
@@ -557,25 +559,27 @@ def _piece_reach_bound(
     a, b = traj.points[:-1], traj.points[1:]
     pa, pb, _, _ = _pieces(a, b, piece)
     pa, pb = _cut_at_cells(pa, pb, source)
-    want = targets if targets is not None else (math.inf, -math.inf)
-    got = _piece_bounds(pa, pb, source, reach, want, directional=targets is None)
+    if targets is None:  # both bounds everywhere
+        got = _piece_bounds(pa, pb, source, reach)
+        return (-math.inf, math.inf) if got is None else (float(got[0].min()), float(got[1].max()))
+    want_low, want_high = targets
+    got = _piece_bounds(pa, pb, source, reach, targets, directional=False)
     if got is None:
         return -math.inf, math.inf
-    low, high = got[0], got[1]
-    want_low, want_high = targets if targets is not None else (-math.inf, math.inf)
-    if targets is not None:  # the first bound alone, then the directional one where it misses
-        miss = np.flatnonzero((low < want_low) | (high > want_high))
-        if not miss.size:
-            return float(np.min(low)), float(np.max(high))
-        worst = np.union1d(np.argsort(low)[:REFINE_PIECES], np.argsort(-high)[:REFINE_PIECES])
-        probe = _probe(pa[worst], pb[worst], source, reach)
-        if probe[0] < want_low or probe[1] > want_high:  # the flight really misses them
-            return float(np.min(low)), float(np.max(high))
-        more = _piece_bounds(pa[miss], pb[miss], source, reach, want)
-        if more is None:
-            return -math.inf, math.inf
-        low[miss], high[miss] = more
-    for _ in range(REFINE_ROUNDS if targets is not None else 0):
+    low, high = got
+    # the first bound alone, then the directional one where it misses
+    miss = np.flatnonzero((low < want_low) | (high > want_high))
+    if not miss.size:
+        return float(np.min(low)), float(np.max(high))
+    worst = np.union1d(np.argsort(low)[:REFINE_PIECES], np.argsort(-high)[:REFINE_PIECES])
+    probe = _probe(pa[worst], pb[worst], source, reach)
+    if probe[0] < want_low or probe[1] > want_high:  # the flight really misses them
+        return float(np.min(low)), float(np.max(high))
+    more = _piece_bounds(pa[miss], pb[miss], source, reach, targets)
+    if more is None:
+        return -math.inf, math.inf
+    low[miss], high[miss] = more
+    for _ in range(REFINE_ROUNDS):
         cut_low = np.argsort(low)[:REFINE_PIECES]
         cut_low = cut_low[low[cut_low] < want_low]
         cut_high = np.argsort(-high)[:REFINE_PIECES]
@@ -592,7 +596,7 @@ def _piece_reach_bound(
         d = pb[cut] - pa[cut]
         qa = (pa[cut][:, None] + t[:-1, None] * d[:, None]).reshape(-1, pa.shape[1])
         qb = (pa[cut][:, None] + t[1:, None] * d[:, None]).reshape(-1, pa.shape[1])
-        more = _piece_bounds(qa, qb, source, reach, want)
+        more = _piece_bounds(qa, qb, source, reach, targets)
         if more is None:
             break
         keep = np.setdiff1d(np.arange(len(pa)), cut)

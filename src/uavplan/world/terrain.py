@@ -327,7 +327,7 @@ class Terrain:
     @cached_property
     def _block_min(self) -> FloatArray:
         """The least node of each block of ``LOWER_BLOCK`` x ``LOWER_BLOCK`` cells, its edges'
-        nodes included."""
+        nodes included (read-only)."""
         B = self.LOWER_BLOCK
         H = self.heights
         out = H
@@ -341,7 +341,14 @@ class Terrain:
             else:
                 m[:, :-1] = np.minimum(m[:, :-1], nxt)
             out = m
-        return np.ascontiguousarray(out)
+        out = np.ascontiguousarray(out)
+        out.setflags(write=False)
+        return out
+
+    @cached_property
+    def _lower_slack(self) -> float:
+        """What :meth:`mean_height_lower` gives up for the round-off at a block's edge."""
+        return 1e-9 * (1.0 + float(np.max(np.abs(self.heights))))
 
     def mean_height_lower(self, paths: ArrayLike) -> FloatArray:
         """A lower bound of :meth:`mean_height` at a ``LOWER_BLOCK``-th of its cost (the
@@ -349,10 +356,8 @@ class Terrain:
         a search skip the exact mean where even the bound is too high."""
         p = np.asarray(paths, dtype=np.float64)
         u, v = self._uv(p[..., 0], p[..., 1])
-        H = self.heights
-        slack = 1e-9 * (1.0 + float(np.max(np.abs(H))))
         return np.asarray(tk.mean_height_lower_batch(
-            self._block_min, float(self.LOWER_BLOCK), slack, np.ascontiguousarray(u),
+            self._block_min, float(self.LOWER_BLOCK), self._lower_slack, np.ascontiguousarray(u),
             np.ascontiguousarray(v),
         ))  # fmt: skip
 
