@@ -7,7 +7,7 @@ import itertools
 import numpy as np
 import pytest
 
-from uavplan.world.reservations import ReservationTable, split_pieces
+from uavplan.world.reservations import ReservationTable, _split, split_pieces, window_min_dist2
 
 LO = np.array([0.0, 0.0, 0.0])
 HI = np.array([400.0, 400.0, 100.0])
@@ -287,3 +287,51 @@ def test_box_separation_rejects_bad_axes():
         ReservationTable(LO, HI, separation=(50.0, 0.0, 20.0))
     with pytest.raises(ValueError, match="separation"):
         ReservationTable(LO, HI, separation=(50.0, 20.0))
+
+
+@pytest.mark.parametrize(
+    ("timing", "axes"), [(None, False), (None, True), ((2.0, 0.03), False)]
+)  # a per-axis separation has no execution model
+def test_the_first_free_take_off_is_the_first_wait_without_a_conflict(timing, axes):
+    """:meth:`ReservationTable.first_free` gives the first wait at which :meth:`conflicts`
+    says the path, taking off that much later, is clear (whatever segment the search starts
+    on), and the segment it names is one where the path conflicts at the last blocked
+    wait: alone in the nominal table (its other segments left out); under the model, a
+    window reading the path's take-off, against every reserved piece by brute force."""
+    rng = np.random.default_rng(5 + 2 * axes + (timing is not None))
+    sep = (10.0, 10.0, 4.0) if axes else 10.0
+    table = ReservationTable(LO, HI, separation=sep, dt=1.0, timing=timing)
+    spread, n = (20.0, 12) if timing is None else (120.0, 4)  # a drifting schedule: wide windows
+    for i in range(n):
+        p = _random_path(rng)
+        table.add(f"u{i}", p, _times(p, t0=rng.uniform(0, spread)))
+    waits = np.arange(0.0, 200.0, 2.5)
+    checked = found = 0
+    for _ in range(30):
+        c = _random_path(rng, 9)
+        t = _times(c, t0=rng.uniform(0, 5))
+        hit = table.conflicts(np.broadcast_to(c, (len(waits), *c.shape)), t + waits[:, None])
+        for start, stop, first in ((0, len(waits), 0), (3, 40, 5), (10, 12, 99)):
+            i, seg = table.first_free(c, t, waits, start, stop, first)
+            free = np.flatnonzero(~hit[start:stop])
+            assert i == (start + free[0] if free.size else -1)
+            checked += 1
+            if seg == first or (i >= 0 and i == start):
+                continue  # no conflict found: the hint is handed back
+            found += 1
+            last = (i if i >= 0 else stop) - 1  # the last blocked wait searched
+            tl = t + waits[last]
+            if timing is None:
+                assert table.conflicts(c[seg : seg + 2][None], tl[seg : seg + 2][None])[0]
+                continue
+            a0, a1, t0, t1, _ = _split(c[seg : seg + 2], tl[seg : seg + 2], 1.0)
+            d2 = min(
+                window_min_dist2(a0[k], a1[k], t0[k], t1[k], table._p0[j], table._p1[j],
+                                 table._t0[j], table._t1[j], tl[0], *timing,
+                                 table._take[j], *timing)
+                for k in range(len(t0)) for j in range(table.n_pieces)
+            )  # fmt: skip
+            assert np.sqrt(d2) < table.separation
+    assert found > 10
+    empty = ReservationTable(LO, HI, separation=10.0)
+    assert empty.first_free(c, t, waits, 4, 9, 2) == (4, 2)

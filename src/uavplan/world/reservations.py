@@ -470,7 +470,19 @@ def _box_gap2(a0, a1, b0, b1):  # pragma: no cover - numba
 def path_query(paths, times, p, args):  # pragma: no cover - numba
     """:func:`_query` of path ``p`` of ``paths`` (P, N, 3) at ``times`` (P, N): the smallest
     distance to a reserved piece found within the searched cells, less the piece's pad (inf if
-    none), stopping at the first one below ``sep`` unless ``want_min``. ``args``: the tuple
+    none), stopping at the first one below ``sep`` unless ``want_min``
+    (:func:`path_query_from` from the first segment)."""
+    return path_query_from(paths, times, p, args, 0)[0]
+
+
+@njit(cache=True, inline="always")
+def path_query_from(paths, times, p, args, first):  # pragma: no cover - numba
+    """:func:`path_query` with the segments searched from segment ``first`` on (then from 0,
+    round to ``first``), and the segment where it stopped below ``sep`` (-1 if it did not):
+    ``(distance, segment)``. Whether a path comes closer than ``sep`` does not depend on
+    ``first`` (each segment is searched the same way whatever the order); a caller that asks
+    the same path at nearby take-off times starts where the last conflict was found, most
+    often found again at once. ``args``: the tuple
     ``(dt, origin, cell, dims, sep, tkey, tstart, tcount, e_idx, rp0, rp1, rt0, rt1, rpad,
     want_min, box, w, timed, delta0, rho, rtake, take_min, ekeys)``
     (:meth:`ReservationTable.query_args`; ``timed``: the pieces are compared under the
@@ -509,9 +521,14 @@ def path_query(paths, times, p, args):  # pragma: no cover - numba
     a0 = np.empty(3)
     a1 = np.empty(3)
     done = False
-    for s in range(N - 1):
+    found = -1
+    s0 = first if first >= 0 and first < N - 1 else 0
+    for j in range(N - 1):
         if done:
             break
+        s = s0 + j
+        if s >= N - 1:
+            s -= N - 1
         ta = times[p, s]
         tb = times[p, s + 1]
         if not tb > ta:
@@ -626,6 +643,7 @@ def path_query(paths, times, p, args):  # pragma: no cover - numba
                                         best = dist
                                         if best < sep and not want_min:
                                             done = True
+                                            found = s
                                             break
                                 if done:
                                     break
@@ -637,7 +655,7 @@ def path_query(paths, times, p, args):  # pragma: no cover - numba
                         break
             lo = hi
             k += 1
-    return best
+    return best, found
 
 
 @population_kernel()
@@ -651,6 +669,31 @@ def _query(paths, times, args):  # pragma: no cover - numba
     for p in prange(P):
         out[p] = path_query(paths, times, p, args)
     return out
+
+
+@njit(cache=True)
+def _first_free(points, times, waits, start, stop, args, first):  # pragma: no cover - numba
+    """The first ``i`` in ``start .. stop - 1`` at which the path ``points`` (n, 3), its
+    ``times`` (n,) moved ``waits[i]`` later, keeps the separation from every reserved piece
+    (:func:`path_query_from`), or -1; and the segment where the last conflict was found
+    (``first`` if none was): each wait's search starts there, where the conflict at the wait
+    before is most often found again at once."""
+    n = points.shape[0]
+    P = np.empty((1, n, 3))
+    T = np.empty((1, n))
+    for j in range(n):
+        for d in range(3):
+            P[0, j, d] = points[j, d]
+    sep = args[4]
+    hint = first
+    for i in range(start, stop):
+        for j in range(n):
+            T[0, j] = times[j] + waits[i]
+        dist, seg = path_query_from(P, T, 0, args, hint)
+        if not dist < sep:
+            return i, hint
+        hint = seg
+    return -1, hint
 
 
 class ReservationTable:
@@ -720,6 +763,7 @@ class ReservationTable:
         self._take = np.zeros(0)
         self._keys = np.zeros(0, dtype=np.int64)
         self._idx = np.zeros(0, dtype=np.int64)
+        self._args: dict[bool, tuple[Any, ...]] = {}  # query_args, per want_min
         self._owner = np.zeros(0, dtype=np.int64)
         self._build()
 
@@ -889,33 +933,69 @@ class ReservationTable:
         self._idx = self._idx[order]
         self._tkey, self._tstart, self._tcount = self._hash_table()
 
-    def _run(self, paths: FloatArray, times: FloatArray, want_min: bool) -> FloatArray:
+    @staticmethod
+    def _prepared(paths: FloatArray, times: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Paths (pop, n, 3) and times (pop, n) as the kernels take them."""
         p = np.ascontiguousarray(paths, dtype=np.float64)
         t = np.require(times, np.float64, ["C", "W"])  # one kernel signature: never read-only
         if p.ndim == 2:
             p, t = p[None], t[None]
         if p.ndim != 3 or p.shape[2] != 3 or t.shape != p.shape[:2]:
             raise ValueError(f"need paths (pop, n, 3) and times (pop, n), got {p.shape}, {t.shape}")
+        return p, t
+
+    def _run(self, paths: FloatArray, times: FloatArray, want_min: bool) -> FloatArray:
+        p, t = self._prepared(paths, times)
         if self.n_pieces == 0:
             return np.full(p.shape[0], np.inf)
         return np.asarray(_query(p, t, self.query_args(want_min)))
 
     def query_args(self, want_min: bool = False) -> tuple[Any, ...]:
         """The ``args`` of :func:`path_query`: the table as a kernel reads it (what a kernel
-        that checks paths against the table passes on)."""
-        return (
+        that checks paths against the table passes on); made once per state of the table
+        (every change of it builds a new hash table, :meth:`_hash_table`)."""
+        cached = self._args.get(bool(want_min))
+        if cached is not None and cached[5] is self._tkey:
+            return cached
+        args = (
             self.dt, self.origin, self.cell, self.dims, self.separation,
             self._tkey, self._tstart, self._tcount, self._idx,
             self._p0, self._p1, self._t0, self._t1, self._pad, bool(want_min),
             self.axes is not None, self._w, self.timed, self.delta0, self.rho, self._take,
             float(self._take.min()) if self._take.size else 0.0, self._keys,
         )  # fmt: skip
+        self._args[bool(want_min)] = args
+        return args
 
     def conflicts(self, paths: FloatArray, times: FloatArray) -> NDArray[np.bool_]:
         """Whether each timed path (pop, n, 3) at ``times`` (pop, n) comes closer than the
         separation to a reserved trajectory at some instant (closer than the separation plus
         the pad to a padded one), (pop,) bool."""
         return np.asarray(self._run(paths, times, False) < self.separation)
+
+    def first_free(
+        self,
+        points: FloatArray,
+        times: FloatArray,
+        waits: FloatArray,
+        start: int,
+        stop: int,
+        first: int = 0,
+    ) -> tuple[int, int]:
+        """The first ``i`` in ``start .. stop - 1`` at which the timed path ``points`` (n, 3)
+        at ``times`` (n,) taking off ``waits[i]`` seconds later does not conflict
+        (:meth:`conflicts` of each such path, the same answers), or -1; and the segment of the
+        path where the last conflict was found (``first`` if none was), where the search of
+        each later wait starts (pass it back as ``first``). In one kernel: a UAV that waits
+        for its slot asks hundreds of take-off times, most of them blocked by the traffic
+        found at the wait before."""
+        w = np.ascontiguousarray(waits, dtype=np.float64)
+        stop = min(int(stop), w.shape[0])
+        if self.n_pieces == 0:
+            return (int(start) if start < stop else -1), int(first)
+        p, t = self._prepared(points, times)
+        i, hint = _first_free(p[0], t[0], w, int(start), stop, self.query_args(False), int(first))
+        return int(i), int(hint)
 
     def min_distance(self, paths: FloatArray, times: FloatArray) -> FloatArray:
         """Exact minimum distance from each timed path to the reserved trajectories (less the

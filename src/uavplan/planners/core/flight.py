@@ -246,24 +246,34 @@ def check_flights(validator: MotionValidator, flights: Sequence[Flight]) -> list
 class ClearAt:
     """Whether a flight is clear of ``table``'s reserved flights taking off ``waits[i]`` seconds
     later than its times say, where separation is the only check that reads time: asked
-    lazily, ``chunk`` waits of one flight per table query (each wait one path of the batch).
+    lazily for increasing ``i`` per flight, each query runs through the flight's next
+    ``chunk`` waits up to the first clear one (:meth:`ReservationTable.first_free`, which
+    searches each wait from where the conflict at the wait before was found).
     ``clear(key, flight, i)``; ``key`` names the flight (answers are kept per key)."""
 
     def __init__(self, table: ReservationTable, waits: Sequence[float], chunk: int) -> None:
         self.table = table
         self.W = np.asarray(waits, dtype=np.float64)
         self.chunk = int(chunk)
-        self._free: dict[tuple[object, int], NDArray[np.bool_]] = {}
+        #: per key: every wait before this index is blocked; the index itself is clear unless
+        #: it is the end of what was asked
+        self._blocked: dict[object, int] = {}
+        self._clear: dict[object, int] = {}
+        self._hint: dict[object, int] = {}
 
     def clear(self, key: object, f: Flight, i: int) -> bool:
-        k = (key, i // self.chunk)
-        if k not in self._free:
-            ws = self.W[k[1] * self.chunk : (k[1] + 1) * self.chunk]
-            P = as_3d(f.points)
-            self._free[k] = ~self.table.conflicts(
-                np.broadcast_to(P[None], (len(ws), *P.shape)), f.times[None] + ws[:, None]
-            )
-        return bool(self._free[k][i % self.chunk])
+        if i < self._blocked.get(key, 0):
+            return False
+        if self._clear.get(key) == i:
+            return True
+        # waits before i are known (asked in order); search from i on
+        j, self._hint[key] = self.table.first_free(
+            as_3d(f.points), f.times, self.W, i, i + self.chunk, self._hint.get(key, 0)
+        )
+        self._blocked[key] = j if j >= 0 else i + self.chunk
+        if j >= 0:
+            self._clear[key] = j
+        return j == i
 
 
 def only_separation_reads_time(scenario: Scenario, task: Task, table: ReservationTable) -> bool:

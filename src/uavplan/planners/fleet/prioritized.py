@@ -672,14 +672,14 @@ class PrioritizedPlanner(FleetPlanner):
                 more = np.arange(waits[-1] + cfg.delay_step, clear, cfg.delay_step)
                 waits += [float(w) for w in more] + [float(math.floor(clear) + 1.0)]
         flat = [(c, f) for c, good in per_cand for f in good]
-        # waits per table query: most UAVs find their slot in the first few
+        # waits per table query (each query stops at the flight's first clear wait)
         found = first_clear(
             scenario,
             table,
             [f for _, f in flat],
             waits,
             lambda i: replace(task, start_time=task.start_time + waits[i]),
-            8,
+            64,
         )
         if found is None:
             return None
