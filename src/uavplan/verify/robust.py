@@ -97,6 +97,14 @@ def _clip(px, py, n, a, b, c, tol):  # pragma: no cover - numba
     return qx, qy, m
 
 
+@njit(cache=True, inline="always")
+def _corners_max(a, b, c):  # pragma: no cover - numba
+    """The largest of ``a + b u + c w`` over the unit square's corners, each summed as
+    :func:`_clip` sums it."""
+    return max(a + b * 0.0 + c * 0.0, a + b * 1.0 + c * 0.0, a + b * 1.0 + c * 1.0,
+               a + b * 0.0 + c * 1.0)  # fmt: skip
+
+
 @njit(cache=True)
 def _win_min(P, i, j, T, t0a, da, ra, t0b, db, rb):  # pragma: no cover - numba
     """``(d2, u, w)``: the least squared distance between segment ``i`` (of UAV ``A``) and
@@ -104,17 +112,28 @@ def _win_min(P, i, j, T, t0a, da, ra, t0b, db, rb):  # pragma: no cover - numba
     meet, and where; ``d2`` inf when none do."""
     ta0, ta1, tb0, tb1 = T[i], T[i + 1], T[j], T[j + 1]
     LA, LB = ta1 - ta0, tb1 - tb0
-    px = np.empty(8)
-    py = np.empty(8)
-    px[0], py[0], px[1], py[1], px[2], py[2], px[3], py[3] = 0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0
     tol = 1e-12 * (1.0 + abs(ta1) + abs(tb1))
     # A's earliest time no later than B's latest, and B's earliest no later than A's latest
     a1 = -((t0a - da + (ta0 - t0a) / (1.0 + ra)) - (t0b + db + (tb0 - t0b) / (1.0 - rb)))
-    px, py, n = _clip(px, py, 4, a1, -LA / (1.0 + ra), LB / (1.0 - rb), tol)
+    b1, c1 = -LA / (1.0 + ra), LB / (1.0 - rb)
+    a2 = -((t0b - db + (tb0 - t0b) / (1.0 + rb)) - (t0a + da + (ta0 - t0a) / (1.0 - ra)))
+    b2, c2 = LA / (1.0 - ra), -LB / (1.0 + rb)
+    # most pairs of a fleet's crossings pass at times too far apart for any window to meet:
+    # settled on the square's corners before the polygon is built. The first cut keeps
+    # nothing exactly when no corner passes it (the same sums _clip makes); the second cut's
+    # polygon lies in the square, so no corner within a margin far above round-off (the
+    # cut points of the first are a few ulps off the square's edges) means none of it passes
+    if _corners_max(a1, b1, c1) < -tol:
+        return np.inf, 0.0, 0.0
+    if _corners_max(a2, b2, c2) < -tol - 1e-9 * (1.0 + abs(a2) + abs(b2) + abs(c2)):
+        return np.inf, 0.0, 0.0
+    px = np.empty(8)
+    py = np.empty(8)
+    px[0], py[0], px[1], py[1], px[2], py[2], px[3], py[3] = 0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0
+    px, py, n = _clip(px, py, 4, a1, b1, c1, tol)
     if n == 0:
         return np.inf, 0.0, 0.0
-    a2 = -((t0b - db + (tb0 - t0b) / (1.0 + rb)) - (t0a + da + (ta0 - t0a) / (1.0 - ra)))
-    px, py, n = _clip(px, py, n, a2, LA / (1.0 - ra), -LB / (1.0 + rb), tol)
+    px, py, n = _clip(px, py, n, a2, b2, c2, tol)
     if n == 0:
         return np.inf, 0.0, 0.0
     # squared distance |(A0 + u eA) - (B0 + w eB)|^2
