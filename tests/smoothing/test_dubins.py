@@ -26,6 +26,7 @@ from uavplan.smoothing import (
     smooth_path,
     waypoint_headings,
 )
+from uavplan.smoothing.dubins import smooth_path_reference
 from uavplan.world.scenario import UAV
 
 FAST = settings(max_examples=150, deadline=None)
@@ -464,3 +465,53 @@ def test_sample_pieces_is_each_piece_sampled_bit_for_bit(seed: int) -> None:
     assert sample_pieces([], 1.0) == []
     with pytest.raises(ValueError):
         sample_pieces(pieces, 0.0)
+
+
+@SLOW
+@given(
+    seed=SEEDS,
+    n=st.integers(2, 14),
+    rho=st.floats(2.0, 80.0),
+    step=st.floats(0.3, 12.0),
+    given_headings=st.booleans(),
+)
+def test_the_compiled_smoothing_equals_the_python_one(seed, n, rho, step, given_headings):
+    """:func:`smooth_path` (one Numba pass) against :func:`smooth_path_reference` (the Python
+    words and :func:`sample_pieces`): the same samples to round-off (1e-9 m, headings 1e-9
+    rad), the same waypoints and waypoint index, the same piece lengths, on paths with
+    repeated waypoints, vertical segments, reversals and the headings given or bisected. A
+    word may differ only where two words are equally long to round-off (a straight run)."""
+    rng = np.random.default_rng(seed)
+    w = np.cumsum(rng.uniform(-80, 80, (n, 3)), axis=0)
+    if rng.random() < 0.3:  # a repeated waypoint, a vertical segment, a reversal
+        w[rng.integers(1, n)] = w[rng.integers(0, n)]
+    if rng.random() < 0.3 and n > 2:
+        k = rng.integers(1, n)
+        w[k, :2] = w[k - 1, :2]
+    if rng.random() < 0.2 and n > 2:  # back the way it came
+        w[2, :2] = w[0, :2]
+    heads = rng.uniform(-7, 7, n) if given_headings else None
+    a = smooth_path(w, rho, step, heads)
+    b = smooth_path_reference(w, rho, step, heads)
+    np.testing.assert_array_equal(a.waypoints, b.waypoints)
+    np.testing.assert_array_equal(a.waypoint_index, b.waypoint_index)
+    np.testing.assert_allclose(a.points, b.points, rtol=0, atol=1e-9)
+    dh = np.abs((a.headings - b.headings + math.pi) % TWO_PI - math.pi)
+    assert np.all(dh <= 1e-9)
+    np.testing.assert_allclose(a.horizontal_lengths, b.horizontal_lengths, rtol=1e-12, atol=1e-9)
+    for p, q in zip(a.pieces, b.pieces, strict=True):
+        if p.kind != q.kind:
+            assert abs(p.length - q.length) <= 1e-9 * (1.0 + q.length)
+            assert min(p.lengths[0], p.lengths[2], q.lengths[0], q.lengths[2]) <= 1e-9
+
+
+def test_the_compiled_smoothing_refuses_what_the_python_one_refuses():
+    """With only the inner-tangent words, poses whose circles overlap have no curve: both
+    raise the same error, naming the poses."""
+    w = np.array([[-50.0, 0.0, 10.0], [0.0, 0.0, 10.0], [0.0, 5.0, 10.0]])
+    heads = [0.0, 0.0, math.pi]  # the last two 5 m apart, turned back: the circles overlap
+    with pytest.raises(ValueError, match="no CSC Dubins curve") as got:
+        smooth_path(w, 20.0, 5.0, heads, kinds=("LSR", "RSL"))
+    with pytest.raises(ValueError, match="no CSC Dubins curve") as want:
+        smooth_path_reference(w, 20.0, 5.0, heads, kinds=("LSR", "RSL"))
+    assert str(got.value) == str(want.value)

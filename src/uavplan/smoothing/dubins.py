@@ -453,6 +453,8 @@ class SmoothedPath:
 def drop_consecutive_duplicates(p: FloatArray, atol: float) -> NDArray[np.intp]:
     """Indices of the rows of ``p`` (n, d) kept after dropping rows within ``atol`` m of the
     last kept row; returns (k,) int, first row always kept."""
+    if p.shape[0] > 1 and bool(np.all(np.linalg.norm(np.diff(p, axis=0), axis=1) > atol)):
+        return np.arange(p.shape[0], dtype=np.intp)  # no duplicates: each row's predecessor kept
     keep = [0]
     for i in range(1, p.shape[0]):
         if float(np.linalg.norm(p[i] - p[keep[-1]])) > atol:
@@ -484,7 +486,39 @@ def smooth_path(
     without repeating shared end points. Raises ``ValueError`` on bad shapes, non-finite input,
     a non-positive ``turn_radius`` or ``step``, or (only with a restricted ``kinds``) a pair
     of poses that no allowed word joins.
+
+    Computed in one Numba pass (:func:`uavplan.smoothing._dubins_kernels.smooth_kernel`);
+    :func:`smooth_path_reference` is the same in Python, to round-off.
     """
+    from uavplan.smoothing._dubins_kernels import smooth_kernel
+
+    wp, hd, rho, kinds = _smoothing_input(waypoints, turn_radius, step, headings, kinds,
+                                          duplicate_tol)  # fmt: skip
+    allowed = np.array([k in kinds for k in CSC_KINDS])
+    pts, heads, index, words, lengths, failed = smooth_kernel(
+        np.ascontiguousarray(wp), np.ascontiguousarray(hd, dtype=np.float64), rho, float(step),
+        allowed,
+    )  # fmt: skip
+    poses = [(float(x), float(y), float(h)) for x, y, h in zip(wp[:, 0], wp[:, 1], hd, strict=True)]
+    if failed >= 0:
+        _shortest_csc(poses[failed], poses[failed + 1], rho, kinds)  # raises, saying which
+    pieces = tuple(
+        DubinsPath(poses[i], poses[i + 1], rho, CSC_KINDS[w], (float(a), float(b), float(c)))
+        for i, (w, (a, b, c)) in enumerate(zip(words.tolist(), lengths.tolist(), strict=True))
+    )
+    return SmoothedPath(pts, heads, wp, np.asarray(index, dtype=np.intp), pieces, rho)
+
+
+def _smoothing_input(
+    waypoints: ArrayLike,
+    turn_radius: float,
+    step: float,
+    headings: ArrayLike | None,
+    kinds: Sequence[str],
+    duplicate_tol: float,
+) -> tuple[FloatArray, FloatArray, float, tuple[str, ...]]:
+    """:func:`smooth_path`'s arguments checked: the distinct waypoints (k, 3), their headings
+    (k,), the radius and the kinds."""
     p = np.asarray(waypoints, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != 3 or p.shape[0] < 1:
         raise ValueError(f"waypoints must be (n, 3) with n >= 1, got shape {p.shape}")
@@ -498,15 +532,31 @@ def smooth_path(
     keep = drop_consecutive_duplicates(p, duplicate_tol)
     wp = p[keep].copy()
     if headings is None:
-        hd = waypoint_headings(wp)
+        from uavplan.smoothing._dubins_kernels import headings_kernel
+
+        hd = headings_kernel(wp)  # waypoint_headings, to round-off
     else:
         h_in = np.asarray(headings, dtype=np.float64).reshape(-1)
         if h_in.shape != (p.shape[0],) or not np.all(np.isfinite(h_in)):
             raise ValueError(f"headings must be ({p.shape[0]},) finite, got {h_in.shape}")
         hd = h_in[keep]
+    return wp, np.asarray(hd, dtype=np.float64), rho, _checked_kinds(kinds)
 
-    kinds = _checked_kinds(kinds)
-    xs, ys, hs = wp[:, 0].tolist(), wp[:, 1].tolist(), np.asarray(hd, dtype=np.float64).tolist()
+
+def smooth_path_reference(
+    waypoints: ArrayLike,
+    turn_radius: float,
+    step: float = 5.0,
+    headings: ArrayLike | None = None,
+    *,
+    kinds: Sequence[str] = CSC_KINDS,
+    duplicate_tol: float = DUPLICATE_TOL,
+) -> SmoothedPath:
+    """:func:`smooth_path` in Python: the words by :func:`_shortest_csc`, the samples by
+    :func:`sample_pieces` (what the kernel is tested against)."""
+    wp, hd, rho, kinds = _smoothing_input(waypoints, turn_radius, step, headings, kinds,
+                                          duplicate_tol)  # fmt: skip
+    xs, ys, hs = wp[:, 0].tolist(), wp[:, 1].tolist(), hd.tolist()
     pieces = [
         _shortest_csc((xs[i], ys[i], hs[i]), (xs[i + 1], ys[i + 1], hs[i + 1]), rho, kinds)
         for i in range(wp.shape[0] - 1)
