@@ -100,6 +100,7 @@ class Results:
     def __init__(self, root: str | Path) -> None:
         self.root = Path(root)
         self._cache: dict[str, pd.DataFrame | None] = {}
+        self._derived: dict[tuple[str, str], Any] = {}
 
     def has(self, plan: str) -> bool:
         return (self.root / plan / "runs").is_dir()
@@ -118,6 +119,14 @@ class Results:
         if found is None:
             raise KeyError(plan)
         return found
+
+    def derived(self, what: str, plan: str, make: Callable[[pd.DataFrame], Any]) -> Any:
+        """``make(self.frame(plan))``, computed once per ``what`` and plan (several claims
+        read the same measures of one plan's runs)."""
+        key = (what, plan)
+        if key not in self._derived:
+            self._derived[key] = make(self.frame(plan))
+        return self._derived[key]
 
 
 #: Every registered claim, in registration order (paper by paper).

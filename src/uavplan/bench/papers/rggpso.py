@@ -99,8 +99,8 @@ def measures(df: pd.DataFrame) -> pd.DataFrame:
         lambda s: stats.normalized_lengths(s.to_numpy(), nonfinite=PENALTY)
     )
     bounds = ok.groupby("scenario")["final_length"].agg(stats.normalization_bounds)
-    lo = ok["scenario"].map(lambda s: bounds[s][0]).astype(float)
-    hi = ok["scenario"].map(lambda s: bounds[s][1]).astype(float)
+    lo = ok["scenario"].map(bounds.map(lambda b: b[0])).astype(float)  # per scene, then joined
+    hi = ok["scenario"].map(bounds.map(lambda b: b[1])).astype(float)
     ffi = ok["first_feasible_iteration"].astype(float)
     ok["f_measure"] = ffi - 1.0
     if "feasible_history" in ok:
