@@ -446,14 +446,13 @@ class RRTStarTree:
         rejects most samples (the same stream: only how much is drawn ahead differs)."""
         b = SAMPLE_BLOCK
         k = INFORMED_BLOCKS if self.config.informed and self._ctr[K.N_GOAL] else 1
-        goal_draw, samples = [], []
-        for _ in range(k):
-            goal_draw.append(self.rng.random(b) < self.config.goal_bias)
-            samples.append(self._lo + self.rng.random((b, self.dim)) * (self._hi - self._lo))
-        p = np.concatenate(samples) if k > 1 else samples[0]
+        # block by block: b goal draws, then b samples; one draw of k such blocks is the same
+        # stream (the generator fills an array value after value)
+        u = self.rng.random((k, b * (1 + self.dim)))
+        self._goal_draw = (u[:, :b] < self.config.goal_bias).ravel()
+        p = self._lo + u[:, b:].reshape(k * b, self.dim) * (self._hi - self._lo)
         if self._ground_z:
             p[:, 2] += self.scenario.ground(p[:, 0], p[:, 1])
-        self._goal_draw = np.concatenate(goal_draw) if k > 1 else goal_draw[0]
         self._samples = np.zeros((k * b, 3))
         self._samples[:, : self.dim] = p
         self._ctr[K.POS] = 0
