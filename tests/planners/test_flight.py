@@ -45,3 +45,35 @@ def test_a_constant_speed_uav_flies_within_its_speed_range(scenario: str) -> Non
     assert not speed_violations(flight.points[None], flight.times[None], uav.min_speed,
                                 uav.v_max)[0]  # fmt: skip
     assert "speed" not in flight.violations
+
+
+@pytest.mark.parametrize("timing", [None, (2.0, 0.03)])
+def test_take_off_slots_answer_as_the_table_does_in_any_order(timing) -> None:
+    """:class:`ClearAt` answers, for every wait asked, in increasing order (as
+    :func:`first_clear` asks) or shuffled, whether the flight moved that much later conflicts
+    in the table (:meth:`ReservationTable.conflicts`, one wait at a time)."""
+    from uavplan.planners.core.flight import ClearAt, Flight
+    from uavplan.world.reservations import ReservationTable
+
+    rng = np.random.default_rng(3)
+    table = ReservationTable(np.zeros(3), np.full(3, 400.0), 15.0, timing=timing)
+    for k in range(10):
+        p = rng.uniform(0, 400, (5, 3))
+        p[:, 2] = rng.uniform(40, 60, 5)
+        t = rng.uniform(0, 60) + np.concatenate([[0.0], np.cumsum(rng.uniform(5, 15, 4))])
+        table.add(f"u{k}", p, t)
+    waits = np.arange(0.0, 150.0, 5.0)
+    checked = 0
+    for q in range(6):
+        p = rng.uniform(0, 400, (4, 3))
+        p[:, 2] = 50.0
+        f = Flight(p, np.array([0.0, 10.0, 20.0, 30.0]), "polyline", "polyline", ())
+        want = ~table.conflicts(np.broadcast_to(p, (len(waits), 4, 3)), f.times + waits[:, None])
+        for order in (np.arange(len(waits)), rng.permutation(len(waits))):
+            slots = ClearAt(table, waits, 7)
+            got = np.zeros(len(waits), dtype=bool)
+            for i in order:
+                got[i] = slots.clear(q, f, int(i))
+            np.testing.assert_array_equal(got, want)
+            checked += int((~want).sum())
+    assert checked > 20  # blocked waits were asked

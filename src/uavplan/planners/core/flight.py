@@ -246,33 +246,31 @@ def check_flights(validator: MotionValidator, flights: Sequence[Flight]) -> list
 class ClearAt:
     """Whether a flight is clear of ``table``'s reserved flights taking off ``waits[i]`` seconds
     later than its times say, where separation is the only check that reads time: asked
-    lazily for increasing ``i`` per flight, each query runs through the flight's next
-    ``chunk`` waits up to the first clear one (:meth:`ReservationTable.first_free`, which
-    searches each wait from where the conflict at the wait before was found).
+    lazily, in any order, each query running through the flight's next ``chunk`` waits up to
+    the first clear one (:meth:`ReservationTable.first_free`, which searches each wait from
+    where the conflict at the wait before was found), so that waits asked in increasing order
+    (as :func:`first_clear` asks them) are mostly answered by the query before.
     ``clear(key, flight, i)``; ``key`` names the flight (answers are kept per key)."""
 
     def __init__(self, table: ReservationTable, waits: Sequence[float], chunk: int) -> None:
         self.table = table
         self.W = np.asarray(waits, dtype=np.float64)
         self.chunk = int(chunk)
-        #: per key: every wait before this index is blocked; the index itself is clear unless
-        #: it is the end of what was asked
-        self._blocked: dict[object, int] = {}
-        self._clear: dict[object, int] = {}
+        #: per key: the waits from the first index to the second are blocked, the second
+        #: itself clear if it is the third
+        self._known: dict[object, tuple[int, int, int]] = {}
         self._hint: dict[object, int] = {}
 
     def clear(self, key: object, f: Flight, i: int) -> bool:
-        if i < self._blocked.get(key, 0):
+        start, blocked, clear = self._known.get(key, (0, 0, -1))
+        if start <= i < blocked:
             return False
-        if self._clear.get(key) == i:
+        if i == clear:
             return True
-        # waits before i are known (asked in order); search from i on
         j, self._hint[key] = self.table.first_free(
             as_3d(f.points), f.times, self.W, i, i + self.chunk, self._hint.get(key, 0)
         )
-        self._blocked[key] = j if j >= 0 else i + self.chunk
-        if j >= 0:
-            self._clear[key] = j
+        self._known[key] = (i, j if j >= 0 else i + self.chunk, j)
         return j == i
 
 
