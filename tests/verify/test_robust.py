@@ -294,25 +294,25 @@ def test_the_ground_within_reach_at_a_flights_nodes_is_the_whole_grids(seed: int
 
 
 @settings(max_examples=25, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1))
-def test_the_close_pairs_are_every_pair_near_in_space_and_time_once(seed: int) -> None:
-    """The verifier's pair search (a grid in space and time, each pair tested in the first
-    cell it shares) finds exactly the segment pairs of different UAVs closer than the gap
-    whose windows under the search's take-off and speed limits meet, each once, as a brute
-    force over every pair does."""
+@given(seed=st.integers(0, 2**32 - 1), chunk=st.sampled_from([1, 2, 3, 8]))
+def test_the_close_pairs_are_every_pair_near_in_space_and_time_once(seed: int, chunk: int) -> None:
+    """The verifier's pair search (a grid in space and time over runs of ``chunk`` segments,
+    each pair of runs taken in the first cell it shares) finds exactly the segment pairs of
+    different UAVs closer than the gap whose windows under the search's take-off and speed
+    limits meet, each once, as a brute force over every pair does."""
     from uavplan.verify.robust import _close_pairs, _pack, _seg_dist2
 
     rng = np.random.default_rng(seed)
     trajs = []
     for k in range(int(rng.integers(2, 7))):
-        m = int(rng.integers(2, 9))
+        m = int(rng.integers(2, 20))
         P = np.cumsum(rng.normal(0.0, 25.0, (m, 3)), axis=0) + rng.uniform(0, 80, 3)
         t = float(rng.uniform(-50.0, 300.0)) + np.cumsum(rng.uniform(0.5, 20.0, m))
         trajs.append(Trajectory(f"u{k}", P, t))
     P, T, owner, valid = _pack(trajs)
     take = np.array([t.times[0] for t in trajs])[np.maximum(owner, 0)]
     gap, cell, dcap, rcap = float(rng.uniform(5, 60)), float(rng.uniform(20, 80)), 20.0, 0.1
-    got = _close_pairs(P, owner, valid, gap, max(cell, gap), T, take, dcap, rcap)
+    got = _close_pairs(P, owner, valid, gap, max(cell, gap), T, take, dcap, rcap, chunk)
     lo = take - dcap + (T - take) / (1 + rcap)
     hi = take + dcap + (np.roll(T, -1) - take) / (1 - rcap)
     want = [(i, j) for i in range(len(P) - 1) for j in range(i + 1, len(P) - 1)

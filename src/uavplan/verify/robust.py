@@ -222,79 +222,111 @@ def _seg_dist2(P, i, j):  # pragma: no cover - numba
     return best
 
 
+#: :func:`_close_pairs`: consecutive segments of one trajectory per entry of its grid
+CHUNK_SEGMENTS = 8
+
+
 @njit(cache=True)
-def _close_pairs(P, owner, valid, gap, cell, T, take, dcap, rcap):  # pragma: no cover - numba
+def _close_pairs(
+    P, owner, valid, gap, cell, T, take, dcap, rcap, chunk=CHUNK_SEGMENTS
+):  # pragma: no cover
     """Every pair of segments ``(i, j)`` of different owners (``owner[i] < owner[j]``; segment
     ``i`` runs from row ``i`` to ``i + 1``, ``valid[i]`` it is one) whose untimed distance is
     below ``gap`` and whose flown time windows with a take-off error up to ``dcap`` and a
     speed error up to ``rcap`` meet (``T``: the rows' planned times, ``take``: each row's
-    owner's take-off): a uniform grid of side ``cell`` in space and of the windows' longest in
-    time holds each segment in the cells its box grown by ``gap`` towards +x, +y, +z and its
-    window touch (two segments closer than ``gap`` have such boxes overlapping on every axis,
-    at the larger of their closest coordinates, and two meeting windows a time cell in
-    common, so they share a cell). A pair is tested in one of its common cells only, the
-    first, and its windows are compared exactly before its distance is computed."""
+    owner's take-off). The grid's entries are runs of up to ``chunk`` consecutive segments of
+    one trajectory (a densely sampled flight has hundreds of short segments in a cell: pairs of
+    runs are ``chunk``^2 fewer), each with the box of its points and the union of its
+    segments' windows: a uniform grid of side ``cell`` in space and of the runs' longest window
+    in time holds each run in the cells its box grown by ``gap`` towards +x, +y, +z and its
+    window touch (two segments closer than ``gap`` lie in runs whose boxes, so grown, overlap
+    on every axis, at the larger of their closest coordinates, and two meeting windows in runs
+    with a time cell in common, so the runs share a cell). A pair of runs is taken in one of
+    its common cells only, the first, when its windows meet and its boxes are within ``gap``
+    on every axis; then each pair of their segments as the brute force takes it: windows
+    compared exactly, then the distance."""
     n = P.shape[0] - 1
     wlo = np.empty(n)
     whi = np.empty(n)
-    t_lo = np.inf
-    t_hi = -np.inf
-    span = 0.0
     for i in range(n):
         if valid[i]:
             t0 = take[i]
             wlo[i] = t0 - dcap + (T[i] - t0) / (1.0 + rcap)
             whi[i] = t0 + dcap + (T[i + 1] - t0) / (1.0 - rcap)
-            t_lo = min(t_lo, wlo[i])
-            t_hi = max(t_hi, whi[i])
-            span = max(span, whi[i] - wlo[i])
-    tcell = max(span, 1e-9)
-    lo = np.empty(3)
-    hi = np.empty(3)
-    for d in range(3):
-        lo[d] = np.inf
-        hi[d] = -np.inf
-    for i in range(n):
-        if valid[i]:
+    # the runs: consecutive valid segments of one owner, at most ``chunk`` of them
+    first = np.empty(n, dtype=np.int64)
+    stop = np.empty(n, dtype=np.int64)
+    m = 0
+    i = 0
+    while i < n:
+        if not valid[i]:
+            i += 1
+            continue
+        j = i + 1
+        while j < n and j - i < chunk and valid[j] and owner[j] == owner[i]:
+            j += 1
+        first[m] = i
+        stop[m] = j
+        m += 1
+        i = j
+    if m == 0:
+        return np.empty((0, 2), dtype=np.int64)
+    clo = np.empty((m, 4))  # x, y, z, window: the run's least ...
+    chi = np.empty((m, 4))  # ... and greatest
+    t_lo = np.inf
+    t_hi = -np.inf
+    span = 0.0
+    lo = np.full(3, np.inf)
+    hi = np.full(3, -np.inf)
+    for c in range(m):
+        for d in range(3):
+            clo[c, d] = np.inf
+            chi[c, d] = -np.inf
+        clo[c, 3] = np.inf
+        chi[c, 3] = -np.inf
+        for i in range(first[c], stop[c]):
             for d in range(3):
-                lo[d] = min(lo[d], P[i, d], P[i + 1, d])
-                hi[d] = max(hi[d], P[i, d], P[i + 1, d])
+                clo[c, d] = min(clo[c, d], P[i, d], P[i + 1, d])
+                chi[c, d] = max(chi[c, d], P[i, d], P[i + 1, d])
+            clo[c, 3] = min(clo[c, 3], wlo[i])
+            chi[c, 3] = max(chi[c, 3], whi[i])
+        for d in range(3):
+            lo[d] = min(lo[d], clo[c, d])
+            hi[d] = max(hi[d], chi[c, d])
+        t_lo = min(t_lo, clo[c, 3])
+        t_hi = max(t_hi, chi[c, 3])
+        span = max(span, chi[c, 3] - clo[c, 3])
+    tcell = max(span, 1e-9)
     dims = np.empty(4, dtype=np.int64)
     for d in range(3):
         dims[d] = int((hi[d] - lo[d] + gap) / cell) + 2
     dims[3] = int((t_hi - t_lo) / tcell) + 2
-    # each segment's cells: x in [lo0, hi0], y [lo1, hi1], z [lo2, hi2], time [lo3, hi3]
-    box = np.empty((n, 8), dtype=np.int64)
+    # each run's cells: x in [lo0, hi0], y [lo1, hi1], z [lo2, hi2], time [lo3, hi3]
+    box = np.empty((m, 8), dtype=np.int64)
     count = 0
-    for i in range(n):
-        if not valid[i]:
-            continue
-        c = 1
+    for c in range(m):
+        k = 1
         for d in range(3):
-            box[i, d] = int((min(P[i, d], P[i + 1, d]) - lo[d]) / cell)
-            box[i, 4 + d] = int((max(P[i, d], P[i + 1, d]) + gap - lo[d]) / cell)
-            c *= box[i, 4 + d] - box[i, d] + 1
-        box[i, 3] = int((wlo[i] - t_lo) / tcell)
-        box[i, 7] = int((whi[i] - t_lo) / tcell)
-        count += c * (box[i, 7] - box[i, 3] + 1)
+            box[c, d] = int((clo[c, d] - lo[d]) / cell)
+            box[c, 4 + d] = int((chi[c, d] + gap - lo[d]) / cell)
+            k *= box[c, 4 + d] - box[c, d] + 1
+        box[c, 3] = int((clo[c, 3] - t_lo) / tcell)
+        box[c, 7] = int((chi[c, 3] - t_lo) / tcell)
+        count += k * (box[c, 7] - box[c, 3] + 1)
     keys = np.empty(count, dtype=np.int64)
-    segs = np.empty(count, dtype=np.int64)
+    runs = np.empty(count, dtype=np.int64)
     e = 0
-    for i in range(n):
-        if not valid[i]:
-            continue
-        for x in range(box[i, 0], box[i, 4] + 1):
-            for y in range(box[i, 1], box[i, 5] + 1):
-                for z in range(box[i, 2], box[i, 6] + 1):
-                    for w in range(box[i, 3], box[i, 7] + 1):
+    for c in range(m):
+        for x in range(box[c, 0], box[c, 4] + 1):
+            for y in range(box[c, 1], box[c, 5] + 1):
+                for z in range(box[c, 2], box[c, 6] + 1):
+                    for w in range(box[c, 3], box[c, 7] + 1):
                         keys[e] = ((x * dims[1] + y) * dims[2] + z) * dims[3] + w
-                        segs[e] = i
+                        runs[e] = c
                         e += 1
-    keys = keys[:e]
-    segs = segs[:e]
     order = np.argsort(keys, kind="mergesort")
     keys = keys[order]
-    segs = segs[order]
+    runs = runs[order]
     found = []
     g2 = gap * gap
     here = np.empty(4, dtype=np.int64)
@@ -309,22 +341,33 @@ def _close_pairs(P, owner, valid, gap, cell, T, take, dcap, rcap):  # pragma: no
             k //= dims[d]
         for p in range(s, t):
             for q in range(p + 1, t):
-                i, j = segs[p], segs[q]
-                if owner[i] == owner[j]:
+                a, b = runs[p], runs[q]
+                if owner[first[a]] == owner[first[b]]:
                     continue
-                # a pair is tested once, in the first cell the two share (where the larger
-                # of their lower cells lies on every axis), and only when its windows meet
+                # a pair of runs is taken once, in the first cell the two share (where the
+                # larger of their lower cells lies on every axis), and only when its windows
+                # meet and its boxes come within the gap
                 once = True
                 for d in range(4):
-                    if max(box[i, d], box[j, d]) != here[d]:
+                    if max(box[a, d], box[b, d]) != here[d]:
                         once = False
                         break
-                if not once or wlo[i] > whi[j] or wlo[j] > whi[i]:
+                if not once or clo[a, 3] > chi[b, 3] or clo[b, 3] > chi[a, 3]:
                     continue
-                if owner[i] > owner[j]:
-                    i, j = j, i
-                if _seg_dist2(P, i, j) < g2:
-                    found.append(i * (n + 1) + j)
+                near = True
+                for d in range(3):
+                    if clo[b, d] - chi[a, d] > gap or clo[a, d] - chi[b, d] > gap:
+                        near = False
+                        break
+                if not near:
+                    continue
+                for i0 in range(first[a], stop[a]):
+                    for j0 in range(first[b], stop[b]):
+                        if wlo[i0] > whi[j0] or wlo[j0] > whi[i0]:
+                            continue
+                        i, j = (i0, j0) if owner[i0] < owner[j0] else (j0, i0)
+                        if _seg_dist2(P, i, j) < g2:
+                            found.append(i * (n + 1) + j)
         s = t
     out = np.empty((len(found), 2), dtype=np.int64)
     if len(found):
