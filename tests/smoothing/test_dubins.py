@@ -26,6 +26,7 @@ from uavplan.smoothing import (
     smooth_path,
     waypoint_headings,
 )
+from uavplan.smoothing._dubins_kernels import headings_kernel
 from uavplan.smoothing.dubins import smooth_path_reference
 from uavplan.world.scenario import UAV
 
@@ -491,6 +492,8 @@ def test_the_compiled_smoothing_equals_the_python_one(seed, n, rho, step, given_
     if rng.random() < 0.2 and n > 2:  # back the way it came
         w[2, :2] = w[0, :2]
     heads = rng.uniform(-7, 7, n) if given_headings else None
+    dh = np.abs((headings_kernel(w) - waypoint_headings(w) + math.pi) % TWO_PI - math.pi)
+    assert np.all(dh <= 1e-12)
     a = smooth_path(w, rho, step, heads)
     b = smooth_path_reference(w, rho, step, heads)
     np.testing.assert_array_equal(a.waypoints, b.waypoints)

@@ -493,7 +493,7 @@ def smooth_path(
     from uavplan.smoothing._dubins_kernels import smooth_kernel
 
     wp, hd, rho, kinds = _smoothing_input(waypoints, turn_radius, step, headings, kinds,
-                                          duplicate_tol)  # fmt: skip
+                                          duplicate_tol, compiled=True)  # fmt: skip
     allowed = np.array([k in kinds for k in CSC_KINDS])
     pts, heads, index, words, lengths, failed = smooth_kernel(
         np.ascontiguousarray(wp), np.ascontiguousarray(hd, dtype=np.float64), rho, float(step),
@@ -516,9 +516,11 @@ def _smoothing_input(
     headings: ArrayLike | None,
     kinds: Sequence[str],
     duplicate_tol: float,
+    compiled: bool = False,
 ) -> tuple[FloatArray, FloatArray, float, tuple[str, ...]]:
     """:func:`smooth_path`'s arguments checked: the distinct waypoints (k, 3), their headings
-    (k,), the radius and the kinds."""
+    (k,; given, else :func:`waypoint_headings`, in Numba if ``compiled``), the radius and the
+    kinds."""
     p = np.asarray(waypoints, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != 3 or p.shape[0] < 1:
         raise ValueError(f"waypoints must be (n, 3) with n >= 1, got shape {p.shape}")
@@ -531,10 +533,12 @@ def _smoothing_input(
         raise ValueError(f"step must be positive and finite, got {step!r}")
     keep = drop_consecutive_duplicates(p, duplicate_tol)
     wp = p[keep].copy()
-    if headings is None:
+    if headings is None and compiled:
         from uavplan.smoothing._dubins_kernels import headings_kernel
 
         hd = headings_kernel(wp)  # waypoint_headings, to round-off
+    elif headings is None:
+        hd = waypoint_headings(wp)
     else:
         h_in = np.asarray(headings, dtype=np.float64).reshape(-1)
         if h_in.shape != (p.shape[0],) or not np.all(np.isfinite(h_in)):
