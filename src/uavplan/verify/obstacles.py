@@ -91,7 +91,8 @@ def segment_cylinder_distance(
 
     Args:
         a, b: (m, 2 or 3) segment ends, metres (2-D segments are never outside the z range).
-        center: the axis (x, y); z_lo, z_hi: the z range (may be infinite).
+        center: the axis (x, y), or one per segment (m, 2); z_lo, z_hi: the z range (may be
+            infinite), or one per segment (m,).
 
     Returns:
         ``(distance, s)``: (m,) metres (inf where no part of the segment is in the z range) and
@@ -112,7 +113,7 @@ def segment_cylinder_distance(
         lo = np.where(flat, np.where(inside, 0.0, 2.0), np.maximum(0.0, np.minimum(s1, s2)))
         hi = np.where(flat, np.where(inside, 1.0, -1.0), np.minimum(1.0, np.maximum(s1, s2)))
     c = np.asarray(center, dtype=np.float64)
-    ax, ay = a[:, 0] - c[0], a[:, 1] - c[1]
+    ax, ay = a[:, 0] - c[..., 0], a[:, 1] - c[..., 1]
     dx, dy = b[:, 0] - a[:, 0], b[:, 1] - a[:, 1]
     dd = dx * dx + dy * dy
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -123,32 +124,47 @@ def segment_cylinder_distance(
     return np.where(empty, np.inf, dist), np.where(empty, np.nan, s)
 
 
+def _disc_distances(
+    a: FloatArray, b: FloatArray, discs: Sequence[Any], z_lo: FloatArray, z_hi: FloatArray
+) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
+    """:func:`segment_cylinder_distance` of every (disc, segment) pair the broad phase keeps,
+    in one call: the discs' indices, the segments' rows (disc by disc, rows in order), the
+    distances and the closest points' parameters. ``z_lo``, ``z_hi``: each disc's z range."""
+    near = near_segments(a, b, discs, _disc_boxes)
+    if not near:
+        none = np.zeros(0, dtype=np.intp)
+        return none, none, np.zeros(0), np.zeros(0)
+    ci = np.concatenate([np.full(len(rows), i, dtype=np.intp) for i, rows in near])
+    rows = np.concatenate([rows for _, rows in near]).astype(np.intp)
+    centers = np.array([o.center for o in discs], dtype=np.float64).reshape(-1, 2)
+    d, s = segment_cylinder_distance(a[rows], b[rows], centers[ci], z_lo[ci], z_hi[ci])
+    return ci, rows, d, s
+
+
 def check_cylinders(traj: Trajectory, cylinders: Sequence[Cylinder]) -> list[Violation]:
     """Every segment clears every cylinder: the part of the segment between ``z_min - margin``
     and ``z_max + margin`` stays at least ``radius + margin`` from the axis (exact)."""
     a, b = segment_ends(traj)
+    z_lo = np.array([c.z_min - c.margin for c in cylinders], dtype=np.float64)
+    z_hi = np.array([c.z_max + c.margin for c in cylinders], dtype=np.float64)
+    radius = np.array([c.effective_radius for c in cylinders], dtype=np.float64)
+    ci, rows, d, s = _disc_distances(a, b, cylinders, z_lo, z_hi)
     out = []
-    for ci, rows in near_segments(a, b, cylinders, _disc_boxes):
-        cyl = cylinders[ci]
-        r = cyl.effective_radius
-        d, s = segment_cylinder_distance(
-            a[rows], b[rows], cyl.center, cyl.z_min - cyl.margin, cyl.z_max + cyl.margin
-        )
-        for q in np.flatnonzero(d < r - TOL):
-            k = rows[q]
-            p, t = point_at(traj, int(k), float(s[q]))
-            out.append(
-                Violation(
-                    "cylinder",
-                    (traj.id,),
-                    t,
-                    (p,),
-                    float(d[q]),
-                    r,
-                    f"{traj.id}: segment {k} passes {fmt_num(d[q])} m from the axis of cylinder "
-                    f"{ci} (radius + margin {r:g} m) at {fmt_points(p)}, t={t:.3f} s",
-                )
+    for q in np.flatnonzero(d < radius[ci] - TOL):
+        k, r = rows[q], float(radius[ci[q]])
+        p, t = point_at(traj, int(k), float(s[q]))
+        out.append(
+            Violation(
+                "cylinder",
+                (traj.id,),
+                t,
+                (p,),
+                float(d[q]),
+                r,
+                f"{traj.id}: segment {k} passes {fmt_num(d[q])} m from the axis of cylinder "
+                f"{ci[q]} (radius + margin {r:g} m) at {fmt_points(p)}, t={t:.3f} s",
             )
+        )
     return out
 
 
@@ -156,26 +172,25 @@ def check_circles(traj: Trajectory, circles: Sequence[Any]) -> list[Violation]:
     """Circles are infinite vertical prisms: every segment stays at least ``radius + margin``
     from the centre in the horizontal plane (exact)."""
     a, b = segment_ends(traj)
+    unbounded = np.full(len(circles), math.inf)
+    radius = np.array([float(c.effective_radius) for c in circles], dtype=np.float64)
+    ci, rows, d, s = _disc_distances(a[:, :2], b[:, :2], circles, -unbounded, unbounded)
     out = []
-    for ci, rows in near_segments(a, b, circles, _disc_boxes):
-        circ = circles[ci]
-        r = float(circ.effective_radius)
-        d, s = segment_cylinder_distance(a[rows, :2], b[rows, :2], circ.center, -math.inf, math.inf)
-        for q in np.flatnonzero(d < r - TOL):
-            k = rows[q]
-            p, t = point_at(traj, int(k), float(s[q]))
-            out.append(
-                Violation(
-                    "circle",
-                    (traj.id,),
-                    t,
-                    (p,),
-                    float(d[q]),
-                    r,
-                    f"{traj.id}: segment {k} passes {fmt_num(d[q])} m from the centre of circle "
-                    f"{ci} (radius + margin {r:g} m) at {fmt_points(p)}, t={t:.3f} s",
-                )
+    for q in np.flatnonzero(d < radius[ci] - TOL):
+        k, r = rows[q], float(radius[ci[q]])
+        p, t = point_at(traj, int(k), float(s[q]))
+        out.append(
+            Violation(
+                "circle",
+                (traj.id,),
+                t,
+                (p,),
+                float(d[q]),
+                r,
+                f"{traj.id}: segment {k} passes {fmt_num(d[q])} m from the centre of circle "
+                f"{ci[q]} (radius + margin {r:g} m) at {fmt_points(p)}, t={t:.3f} s",
             )
+        )
     return out
 
 
