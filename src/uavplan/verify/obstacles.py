@@ -148,24 +148,8 @@ def check_cylinders(traj: Trajectory, cylinders: Sequence[Cylinder]) -> list[Vio
     z_lo = np.array([c.z_min - c.margin for c in cylinders], dtype=np.float64)
     z_hi = np.array([c.z_max + c.margin for c in cylinders], dtype=np.float64)
     radius = np.array([c.effective_radius for c in cylinders], dtype=np.float64)
-    ci, rows, d, s = _disc_distances(a, b, cylinders, z_lo, z_hi)
-    out = []
-    for q in np.flatnonzero(d < radius[ci] - TOL):
-        k, r = rows[q], float(radius[ci[q]])
-        p, t = point_at(traj, int(k), float(s[q]))
-        out.append(
-            Violation(
-                "cylinder",
-                (traj.id,),
-                t,
-                (p,),
-                float(d[q]),
-                r,
-                f"{traj.id}: segment {k} passes {fmt_num(d[q])} m from the axis of cylinder "
-                f"{ci[q]} (radius + margin {r:g} m) at {fmt_points(p)}, t={t:.3f} s",
-            )
-        )
-    return out
+    found = _disc_distances(a, b, cylinders, z_lo, z_hi)
+    return _disc_violations(traj, "cylinder", "the axis of cylinder", radius, *found)
 
 
 def check_circles(traj: Trajectory, circles: Sequence[Any]) -> list[Violation]:
@@ -174,21 +158,36 @@ def check_circles(traj: Trajectory, circles: Sequence[Any]) -> list[Violation]:
     a, b = segment_ends(traj)
     unbounded = np.full(len(circles), math.inf)
     radius = np.array([float(c.effective_radius) for c in circles], dtype=np.float64)
-    ci, rows, d, s = _disc_distances(a[:, :2], b[:, :2], circles, -unbounded, unbounded)
+    found = _disc_distances(a[:, :2], b[:, :2], circles, -unbounded, unbounded)
+    return _disc_violations(traj, "circle", "the centre of circle", radius, *found)
+
+
+def _disc_violations(
+    traj: Trajectory,
+    kind: str,
+    what: str,
+    radius: FloatArray,
+    ci: IntArray,
+    rows: IntArray,
+    d: FloatArray,
+    s: FloatArray,
+) -> list[Violation]:
+    """A violation for each (disc, segment) pair of :func:`_disc_distances` closer than the
+    disc's radius plus margin."""
     out = []
     for q in np.flatnonzero(d < radius[ci] - TOL):
         k, r = rows[q], float(radius[ci[q]])
         p, t = point_at(traj, int(k), float(s[q]))
         out.append(
             Violation(
-                "circle",
+                kind,
                 (traj.id,),
                 t,
                 (p,),
                 float(d[q]),
                 r,
-                f"{traj.id}: segment {k} passes {fmt_num(d[q])} m from the centre of circle "
-                f"{ci[q]} (radius + margin {r:g} m) at {fmt_points(p)}, t={t:.3f} s",
+                f"{traj.id}: segment {k} passes {fmt_num(d[q])} m from {what} {ci[q]} "
+                f"(radius + margin {r:g} m) at {fmt_points(p)}, t={t:.3f} s",
             )
         )
     return out
