@@ -327,7 +327,8 @@ def _close_pairs(
     order = np.argsort(keys, kind="mergesort")
     keys = keys[order]
     runs = runs[order]
-    found = []
+    found = np.empty(1024, dtype=np.int64)  # pair codes i (n + 1) + j, grown by doubling
+    nf = 0
     g2 = gap * gap
     here = np.empty(4, dtype=np.int64)
     s = 0
@@ -367,11 +368,16 @@ def _close_pairs(
                             continue
                         i, j = (i0, j0) if owner[i0] < owner[j0] else (j0, i0)
                         if _seg_dist2(P, i, j) < g2:
-                            found.append(i * (n + 1) + j)
+                            if nf == found.shape[0]:
+                                grown = np.empty(2 * nf, dtype=np.int64)
+                                grown[:nf] = found
+                                found = grown
+                            found[nf] = i * (n + 1) + j
+                            nf += 1
         s = t
-    out = np.empty((len(found), 2), dtype=np.int64)
-    if len(found):
-        arr = np.unique(np.array(found, dtype=np.int64))
+    out = np.empty((nf, 2), dtype=np.int64)
+    if nf:
+        arr = np.sort(found[:nf])  # each pair found once (runs partition the segments)
         out = np.empty((arr.shape[0], 2), dtype=np.int64)
         for k in range(arr.shape[0]):
             out[k, 0] = arr[k] // (n + 1)
