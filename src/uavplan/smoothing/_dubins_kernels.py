@@ -60,15 +60,16 @@ def _shortest(x0, y0, h0, x1, y1, h1, rho, allowed):  # pragma: no cover - numba
     b1 = 0.0
     b2 = 0.0
     b3 = 0.0
+    s0, c0, s1, c1 = math.sin(h0), math.cos(h0), math.sin(h1), math.cos(h1)  # once, 4 words
     for w in range(4):
         if not allowed[w]:
             continue
         k0 = _FIRST[w]
         k1 = _LAST[w]
-        cx0 = x0 - k0 * rho * math.sin(h0)
-        cy0 = y0 + k0 * rho * math.cos(h0)
-        cx1 = x1 - k1 * rho * math.sin(h1)
-        cy1 = y1 + k1 * rho * math.cos(h1)
+        cx0 = x0 - k0 * rho * s0
+        cy0 = y0 + k0 * rho * c0
+        cx1 = x1 - k1 * rho * s1
+        cy1 = y1 + k1 * rho * c1
         vx = cx1 - cx0
         vy = cy1 - cy0
         dist = math.hypot(vx, vy)
