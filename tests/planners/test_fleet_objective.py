@@ -19,6 +19,7 @@ from uavplan.problems.encoding import CartesianEncoding
 from uavplan.problems.path_problem import PathProblem
 from uavplan.scenarios import resolve
 from uavplan.world import Scenario
+from uavplan.world.execution import DEFAULT
 from uavplan.world.fleet_tasks import with_fleet
 from uavplan.world.reservations import ReservationTable
 
@@ -37,14 +38,21 @@ def planned(fleet6: Scenario) -> dict[str, np.ndarray]:
 
 
 def _problem(
-    sc: Scenario, planned: dict, reserved: int, cruise: float | None = None
+    sc: Scenario, planned: dict, reserved: int, cruise: float | None = None, timed: bool = False
 ) -> PathProblem:
     """The last task's problem among the planned flights of the first ``reserved`` tasks
-    (its cruise layer at ``cruise`` m in the band's reference when given)."""
-    table = ReservationTable.for_uav(sc.bounds.lo, sc.bounds.hi, sc.uav)
+    (its cruise layer at ``cruise`` m in the band's reference when given; with ``timed`` the
+    table under the default execution model's windows)."""
+    task = dataclasses.replace(sc.tasks[-1], cruise=cruise)
+    if timed:  # taking off 3 s after its planned time: some paths clear, some not
+        table = ReservationTable.for_scenario(dataclasses.replace(sc, execution=DEFAULT))
+        assert table.timed
+        task = dataclasses.replace(task, start_time=task.start_time + 3.0)
+    else:
+        table = ReservationTable.for_uav(sc.bounds.lo, sc.bounds.hi, sc.uav)
     for t in sc.tasks[:reserved]:
         table.add(t.id, *planned[t.id])
-    return separated_problem(sc, dataclasses.replace(sc.tasks[-1], cruise=cruise), table)
+    return separated_problem(sc, task, table)
 
 
 def _swarm(enc: CartesianEncoding, path: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -59,11 +67,15 @@ def _reference(problem: PathProblem, enc: CartesianEncoding, X: np.ndarray, belo
     return infinite_if_violated(f, cv)
 
 
-@pytest.mark.parametrize(("reserved", "cruise"), [(0, None), (5, None), (5, 120.0)])
+@pytest.mark.parametrize(
+    ("reserved", "cruise", "timed"),
+    [(0, None, False), (5, None, False), (5, 120.0, False), (5, None, True)],
+)
 def test_fused_kernel_gives_the_reference_costs(
-    fleet6: Scenario, planned: dict, reserved: int, cruise: float | None
+    fleet6: Scenario, planned: dict, reserved: int, cruise: float | None, timed: bool
 ) -> None:
-    problem = _problem(fleet6, planned, reserved, cruise)
+    """Nominal and under the default execution model's timed table."""
+    problem = _problem(fleet6, planned, reserved, cruise, timed)
     enc = CartesianEncoding(problem, 10)
     fused = FleetObjective.of(problem, enc)
     assert fused is not None
@@ -71,6 +83,9 @@ def test_fused_kernel_gives_the_reference_costs(
     X = _swarm(enc, planned[fleet6.tasks[-1].id][0], rng)
     full = _reference(problem, enc, X)
     assert 50 < np.isfinite(full).sum() < 550  # both kinds are tested
+    if timed:  # and the separation decides some
+        alone = _reference(_problem(fleet6, planned, 0, cruise, timed), enc, X)
+        assert np.sum(np.isfinite(alone) & np.isinf(full)) >= 5
     thresholds = (
         np.full(len(X), np.inf),
         np.where(rng.random(len(X)) < 0.5, np.inf, full * rng.uniform(0.99, 1.01, len(X))),

@@ -86,6 +86,19 @@ def _row_sum(a, n):  # pragma: no cover - numba
     return 0.0 + res
 
 
+@njit(cache=True, inline="always")
+def _separated(paths, times, seg, p, speed, t_start, table):  # pragma: no cover - numba
+    """Whether path ``p`` keeps the table's separation (times at ``speed`` from
+    ``t_start``)."""
+    N = paths.shape[1]
+    acc = 0.0
+    times[p, 0] = 0.0 / speed + t_start
+    for s in range(N - 1):
+        acc += seg[p, s]
+        times[p, s + 1] = acc / speed + t_start
+    return not path_query(paths, times, p, table) < table[4]
+
+
 @population_kernel(error_model="numpy")
 def fleet_costs(
     X, below, n_free, start, goal, ends_ground, ground_genes, H, x0, y0, dx, dy,
@@ -105,7 +118,9 @@ def fleet_costs(
     absolute, band ``[bmin, bmax]``, each node's cost its distance to ``mid`` (the band's
     middle, or the UAV's cruise layer); ``ends_ground``: the terrain under the start and the
     goal. Times at ``speed`` from ``t_start``. ``static`` and ``table`` are the ``args`` of
-    :func:`static_path_ok` and :func:`path_query`.
+    :func:`static_path_ok` and :func:`path_query`. The separation query runs after F2, before
+    F4 and the static checks (each gate can only make a cost infinite, so any order gives the
+    same costs: only the work differs).
     """
     P = X.shape[0]
     N = n_free + 2
@@ -183,6 +198,11 @@ def fleet_costs(
         f = (f_len + weights[1] * f_thr) + f_alt
         if nonneg and not f < below[p]:
             continue
+        # F5 (the separation) before F4 and the static checks: under an execution model most
+        # particles that get here conflict (a UAV blocked at its take-off time is blocked
+        # whatever its path), and F2 has already turned away those that hit a cylinder
+        if has_table and not _separated(paths, times, seg, p, speed, t_start, table):
+            continue
         # F4 (Eqs. 8-10): turning angles, then climb-angle changes
         for i in range(N - 2):
             a0 = paths[p, i + 1, 0] - paths[p, i, 0]
@@ -211,15 +231,6 @@ def fleet_costs(
         ok = static_path_ok(paths, p, static, not (band_mode and band_in))
         if not ok:
             continue
-        if has_table:
-            acc = 0.0
-            times[p, 0] = 0.0 / speed + t_start
-            for s in range(N - 1):
-                acc += seg[p, s]
-                times[p, s + 1] = acc / speed + t_start
-            d_min = path_query(paths, times, p, table)
-            if d_min < table[4]:
-                continue
         out[p] = f
     return out
 

@@ -450,11 +450,15 @@ class RRTStarTree:
         # stream (the generator fills an array value after value)
         u = self.rng.random((k, b * (1 + self.dim)))
         self._goal_draw = (u[:, :b] < self.config.goal_bias).ravel()
-        p = self._lo + u[:, b:].reshape(k * b, self.dim) * (self._hi - self._lo)
+        out = np.zeros((k * b, 3))
+        # lo + u (hi - lo), written in place (the same values, no temporaries)
+        np.multiply(u[:, b:].reshape(k, b, self.dim), self._hi - self._lo,
+                    out=out.reshape(k, b, 3)[:, :, : self.dim])  # fmt: skip
+        p = out[:, : self.dim]
+        p += self._lo
         if self._ground_z:
             p[:, 2] += self.scenario.ground(p[:, 0], p[:, 1])
-        self._samples = np.zeros((k * b, 3))
-        self._samples[:, : self.dim] = p
+        self._samples = out
         self._ctr[K.POS] = 0
 
     def _draw(self) -> FloatArray:
