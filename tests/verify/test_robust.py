@@ -293,6 +293,51 @@ def test_the_ground_within_reach_at_a_flights_nodes_is_the_whole_grids(seed: int
         assert got == (max(want[0], 0.0), want[1])
 
 
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_whether_the_ground_fails_is_what_the_clearance_says(seed: int) -> None:
+    """The margins' bisection asks only whether the ground checks fail at a horizontal error,
+    skipping the second bound of a side the first settles: the same answer as the clearance
+    (``vertical_clearance(...) < need``) over random terrains, flights, reaches and needs,
+    with a band above the ground, an absolute band, or none, and without terrain."""
+    from dataclasses import replace
+
+    from uavplan.verify.robust import vertical_clearance, vertical_fails
+    from uavplan.verify.terrain import terrain_clearance_extrema, within_reach
+    from uavplan.world.obstacles import AltitudeBand
+    from uavplan.world.scenario import Bounds
+    from uavplan.world.terrain import Terrain
+
+    rng = np.random.default_rng(seed)
+    ny, nx = (int(v) for v in rng.integers(2, 30, 2))
+    du, dv = (float(v) for v in rng.uniform(0.5, 5.0, 2))
+    H = rng.normal(0.0, float(rng.choice([0.5, 5.0])), (ny, nx))
+    m = int(rng.integers(2, 20))
+    span = np.array([du * (nx - 1), dv * (ny - 1)])
+    P = np.column_stack([rng.uniform(-0.1 * span, 1.1 * span, (m, 2)),
+                         rng.uniform(2.0, 30.0, m)])  # fmt: skip
+    tr = Trajectory("u", P, np.arange(m, dtype=np.float64), True)
+    bands = (None, AltitudeBand(5.0, 25.0, "ground"), AltitudeBand(4.0, 28.0, "absolute"))
+    band = bands[int(rng.integers(3))]
+    terrain = None if rng.random() < 0.2 else Terrain(H, 0.0, 0.0, du, dv)
+    sc = replace(resolve("spso"), terrain=terrain, cylinders=(), altitude=band,
+                 bounds=Bounds((-1e4, -1e4, -1.0), (1e4, 1e4, 31.0)))  # fmt: skip
+    seen = set()
+    for _ in range(6):
+        reach = float(rng.choice([0.0, rng.uniform(0.1, 3.0), rng.uniform(3.0, 40.0)]))
+        scratch: dict[str, object] = {}
+        ev, _ = vertical_clearance(tr, sc, None, terrain_clearance_extrema, reach, within_reach,
+                                   scratch)  # fmt: skip
+        for need in (0.5 * ev, ev, np.nextafter(ev, np.inf), 2.0 * ev + 0.1, 1.0, 3.0):
+            if not need > 0:
+                continue
+            got = vertical_fails(tr, sc, terrain_clearance_extrema, reach, float(need),
+                                 within_reach, scratch)  # fmt: skip
+            assert got == (ev < need), (reach, need, ev)
+            seen.add(got)
+    assert seen  # each example asks at least once
+
+
 @settings(max_examples=25, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), chunk=st.sampled_from([1, 2, 3, 8]))
 def test_the_close_pairs_are_every_pair_near_in_space_and_time_once(seed: int, chunk: int) -> None:

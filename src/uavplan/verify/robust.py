@@ -691,13 +691,16 @@ def horizontal_clearance(
     checks: Any,
     known: float = 0.0,
     ground: Any = None,
+    ground_fails: Any = None,
 ) -> tuple[float, str]:
     """The largest horizontal tracking error the UAV's static checks tolerate (cylinders,
     circles, polygons widened by it, as a robust plan is planned; and, with ``ground``, the
     checks against the ground, which a horizontal error moves under the UAV: ``ground(e)``
     says which fails with a horizontal error ``e`` and the model's vertical one, or ""),
     found by bisection from ``known``, the model's, when the checks pass with it; and what
-    limits it. ``checks``: ``(check_cylinders, check_circles, check_polygons)``."""
+    limits it. ``checks``: ``(check_cylinders, check_circles, check_polygons)``.
+    ``ground_fails(e)``: whether ``ground(e)`` fails, when that is cheaper to tell than why
+    (the bisection's steps ask only whether; what limits the margin is ``ground``'s)."""
     cyl, circ, poly = checks
     cylinders = tuple(scenario.cylinders) if traj.dim == 3 else ()
     circles = tuple(scenario.circles)
@@ -705,11 +708,16 @@ def horizontal_clearance(
     if not (cylinders or circles or polygons or ground is not None):
         return math.inf, ""
 
-    def fails(e: float) -> str:
+    def fails(e: float, why_: bool = False) -> str:
+        """What fails with a horizontal error ``e`` ("" if nothing); with ``why_`` the
+        ground's own reason, else "ground" where ``ground_fails`` says it fails."""
         if ground is not None:
-            why = ground(e)
-            if why:
-                return str(why)
+            if ground_fails is None or why_:
+                why = ground(e)
+                if why:
+                    return str(why)
+            elif ground_fails(e):
+                return "ground"
         if cylinders and cyl(traj, [replace(c, margin=c.margin + e) for c in cylinders]):
             return "cylinders"
         if circles and circ(traj, [replace(c, margin=c.margin + e) for c in circles]):
@@ -720,7 +728,7 @@ def horizontal_clearance(
 
     lo = known if known > 0.0 and not fails(known) else 0.0
     if lo == 0.0 and fails(0.0):
-        return 0.0, fails(0.0)
+        return 0.0, fails(0.0, True)
     cap = 1000.0
     if not fails(cap):
         return math.inf, ""
@@ -731,7 +739,7 @@ def horizontal_clearance(
             hi = mid
         else:
             lo = mid
-    return lo, fails(hi) or "obstacles"
+    return lo, fails(hi, True) or "obstacles"
 
 
 def vertical_clearance(
@@ -760,24 +768,11 @@ def vertical_clearance(
     if source is not None:
         low_c, high_c = source(traj, reach)
     elif terrain is not None:
-        a, b = traj.points[:-1], traj.points[1:]
-        floor0 = terrain.heights
-        top0 = terrain.heights if terrain.lower is None else terrain.lower
-        # the clearances read only the nodes at the cells under the flight: the grids moved
-        # within reach are computed there alone (one table query per node, not a filter of
-        # the whole raster per UAV and step) into grids cut to those cells (and one node
-        # around); the values read are the same
-        view = None if scratch is None else scratch.get("view")
-        if view is None:
-            view = _GroundView(traj, terrain, a, b)
-            if scratch is not None:
-                scratch["view"] = view
+        side = _ground_sides(traj, terrain, reach, extrema, within, scratch)
         low_c, high_c = -math.inf, math.inf
-        for how in ("height", "slope") if reach > 0 and within is not None else ("",):
-            floor = view.moved(floor0, reach, True, how, within)
-            low_c = max(low_c, float(np.min(extrema(a, b, floor)[:, 0])))
-            top = view.moved(top0, reach, False, how, within)
-            high_c = min(high_c, float(np.max(extrema(a, b, top)[:, 2])))
+        for how in side.hows:
+            low_c = max(low_c, side(True, how))
+            high_c = min(high_c, side(False, how))
     elif band is not None and band.reference == "ground":  # flat ground at 0
         low_c, high_c = float(z.min()), float(z.max())
     if math.isfinite(low_c):
@@ -790,6 +785,84 @@ def vertical_clearance(
             best = min(best, (float(np.min(z - band.min)), "altitude band's floor"),
                        (float(np.min(band.max - z)), "altitude band's ceiling"))  # fmt: skip
     return max(best[0], 0.0), best[1]
+
+
+def vertical_fails(
+    traj: Trajectory, scenario: Any, extrema: Any, reach: float, need: float, within: Any,
+    scratch: dict[str, Any] | None = None,
+) -> bool:  # fmt: skip
+    """Whether :func:`vertical_clearance` (without a raster ``source``) is below ``need`` (> 0),
+    the same answer with less work: the floor's clearance is the larger of the two bounds of
+    the ground within reach ("height", "slope") and the ceiling's the smaller, and each check
+    can only fail more as its clearance shrinks, so a side that passes on one bound passes,
+    and a side that fails decides alone (a margin's bisection asks this at every step)."""
+    if traj.dim != 3 or not need > 0.0:
+        return False
+    z = traj.points[:, 2]
+    lo, hi = scenario.bounds.lower[2], scenario.bounds.upper[2]
+    if float(min(np.min(z - lo), np.min(hi - z))) < need:
+        return True
+    band = scenario.altitude
+    ground_band = band is not None and band.reference == "ground"
+    if (band is not None and not ground_band
+            and min(float(np.min(z - band.min)), float(np.min(band.max - z))) < need):  # fmt: skip
+        return True
+
+    def floor_fails(c: float) -> bool:
+        return (math.isfinite(c) and c < need) or (ground_band and c - band.min < need)
+
+    terrain = scenario.terrain
+    if terrain is None:  # flat ground at 0 under a band above it
+        return ground_band and (floor_fails(float(z.min())) or band.max - float(z.max()) < need)
+    side = _ground_sides(traj, terrain, reach, extrema, within, scratch)
+    low_c = -math.inf
+    for how in side.hows:  # the floor: low_c = max over the bounds
+        low_c = max(low_c, side(True, how))
+        if math.isfinite(low_c) and not floor_fails(low_c):
+            break
+    else:
+        if floor_fails(low_c):
+            return True
+    if not ground_band:
+        return False
+    high_c = math.inf
+    for how in side.hows:  # the ceiling: high_c = min over the bounds
+        high_c = min(high_c, side(False, how))
+        if not band.max - high_c < need:
+            return False
+    return True
+
+
+class _GroundSides:
+    """A flight's clearances to the ground moved within ``reach`` (:func:`_ground_sides`):
+    ``sides(True, how)`` the least height above the floor along the flight, ``sides(False,
+    how)`` the greatest above the top, for each bound ``how`` of :attr:`hows`."""
+
+    def __init__(self, traj: Trajectory, terrain: Any, reach: float, extrema: Any, within: Any,
+                 scratch: dict[str, Any] | None) -> None:  # fmt: skip
+        self.a, self.b = traj.points[:-1], traj.points[1:]
+        self.floor0 = terrain.heights
+        self.top0 = terrain.heights if terrain.lower is None else terrain.lower
+        # the clearances read only the nodes at the cells under the flight: the grids moved
+        # within reach are computed there alone (one table query per node, not a filter of
+        # the whole raster per UAV and step) into grids cut to those cells (and one node
+        # around); the values read are the same
+        view = None if scratch is None else scratch.get("view")
+        if view is None:
+            view = _GroundView(traj, terrain, self.a, self.b)
+            if scratch is not None:
+                scratch["view"] = view
+        self.view, self.reach, self.extrema, self.within = view, reach, extrema, within
+        self.hows = ("height", "slope") if reach > 0 and within is not None else ("",)
+
+    def __call__(self, floor: bool, how: str) -> float:
+        grid = self.view.moved(self.floor0 if floor else self.top0, self.reach, floor, how,
+                               self.within)  # fmt: skip
+        e = self.extrema(self.a, self.b, grid)
+        return float(np.min(e[:, 0])) if floor else float(np.max(e[:, 2]))
+
+
+_ground_sides = _GroundSides
 
 
 class _Grid:

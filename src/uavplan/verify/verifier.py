@@ -288,8 +288,14 @@ def _under_model(
             ev_, by_ = vertical(e)
             return by_ if ev_ < timing.track_v - TOL else ""
 
+        def ground_fails(e: float, tr: Trajectory = tr, scratch: dict[str, Any] = scratch
+                         ) -> bool:  # fmt: skip
+            return R.vertical_fails(tr, sc, terrain_clearance_extrema, e, timing.track_v - TOL,
+                                    within_reach, scratch)  # fmt: skip
+
         use_ground = ground if tr.dim == 3 and ground_refs else None
-        eh, by_h = R.horizontal_clearance(tr, sc, checks, timing.track_h, use_ground)
+        eh, by_h = R.horizontal_clearance(tr, sc, checks, timing.track_h, use_ground,
+                                          ground_fails if src is None else None)  # fmt: skip
         hb = R.horizontal_bounds(tr, sc)
         if hb < eh:
             eh, by_h = hb, "bounds"
