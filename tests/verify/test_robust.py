@@ -293,6 +293,55 @@ def test_the_ground_within_reach_at_a_flights_nodes_is_the_whole_grids(seed: int
         assert got == (max(want[0], 0.0), want[1])
 
 
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), moving=st.booleans())
+def test_the_compiled_margin_bisection_is_the_python_one(seed: int, moving: bool) -> None:
+    """A pair's take-off and speed margins, bisected in one compiled call, equal the Python
+    bisection (``_largest`` over the same check) for two random crossing flights under random
+    models, whether the pair passes with the model's errors or not."""
+    from uavplan.verify.robust import (
+        SPEED_CAP,
+        TAKEOFF_CAP,
+        _fails_at,
+        _largest,
+        _largest_tolerated,
+        _pack,
+    )  # fmt: skip
+
+    rng = np.random.default_rng(seed)
+    m = int(rng.integers(2, 8))
+    a = Trajectory(
+        "a",
+        np.column_stack([np.linspace(0.0, 400.0, m), np.full(m, 200.0), np.full(m, 50.0)]),
+        np.linspace(0.0, 40.0, m),
+        True,
+    )
+    y = rng.uniform(0.0, 400.0, (m, 1))
+    b_pts = np.column_stack([np.full(m, 200.0) + rng.normal(0, 20, m), np.sort(y[:, 0]),
+                             np.full(m, 50.0) + rng.normal(0, 5, m)])  # fmt: skip
+    b = Trajectory("b", b_pts, np.linspace(0.0, 40.0, m) + rng.uniform(-15, 15), True)
+    P, T, owner, valid = _pack([a, b])
+    take = np.where(owner == 0, a.times[0], b.times[0]).astype(np.float64)
+    ia, ib = np.flatnonzero(valid & (owner == 0)), np.flatnonzero(valid & (owner == 1))
+    pairs = np.ascontiguousarray(
+        np.stack(np.meshgrid(ia, ib, indexing="ij"), axis=-1).reshape(-1, 2), dtype=np.int64
+    )
+    below = float(rng.uniform(5.0, 60.0))
+    d0, r0 = float(rng.choice([0.0, rng.uniform(0, 5)])), float(rng.choice([0.0, 0.03]))
+
+    def fails(delta: float, rho: float) -> bool:
+        return bool(_fails_at(P, T, pairs, take, 0, len(pairs), delta, rho, moving, below))
+
+    passes = not fails(d0, r0)
+    want_t = _largest(lambda x: fails(x, r0), TAKEOFF_CAP, d0 if passes else 0.0)
+    want_s = _largest(lambda x: fails(d0, x), SPEED_CAP, r0 if passes else 0.0)
+    got_t = _largest_tolerated(P, T, pairs, take, 0, len(pairs), d0, r0, moving, below,
+                               d0 if passes else 0.0, TAKEOFF_CAP, False)  # fmt: skip
+    got_s = _largest_tolerated(P, T, pairs, take, 0, len(pairs), d0, r0, moving, below,
+                               r0 if passes else 0.0, SPEED_CAP, True)  # fmt: skip
+    assert (got_t, got_s) == (want_t, want_s)
+
+
 @settings(max_examples=60, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1))
 def test_whether_the_ground_fails_is_what_the_clearance_says(seed: int) -> None:

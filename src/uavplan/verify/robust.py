@@ -407,6 +407,40 @@ def _group_min(P, T, pairs, take, da, ra, db, rb, start, stop, stop_below):  # p
 
 
 @njit(cache=True)
+def _fails_at(P, T, pairs, take, start, stop, delta, rho, moving, below):  # pragma: no cover
+    """Whether segment pairs ``pairs[start:stop]`` come closer than ``below`` with take-off
+    error ``delta`` and speed error ``rho`` (the second side without error when ``moving``)."""
+    if start >= stop:
+        return False
+    db, rb = (0.0, 0.0) if moving else (delta, rho)
+    return _group_min(P, T, pairs, take, delta, rho, db, rb, start, stop, below)[0] < below
+
+
+@njit(cache=True)
+def _largest_tolerated(
+    P, T, pairs, take, start, stop, d0, r0, moving, below, known, cap, on_speed
+):  # fmt: skip  # pragma: no cover - numba
+    """:func:`_largest` of the take-off error (with the speed error ``r0``) or, with
+    ``on_speed``, of the speed error (with the take-off error ``d0``), ``known`` not failing:
+    the same bisection, in one call."""
+    if known <= 0.0 and _fails_at(P, T, pairs, take, start, stop, d0 if on_speed else 0.0,
+                                  0.0 if on_speed else r0, moving, below):  # fmt: skip
+        return 0.0
+    if not _fails_at(P, T, pairs, take, start, stop, d0 if on_speed else cap,
+                     cap if on_speed else r0, moving, below):  # fmt: skip
+        return np.inf
+    lo, hi = known, cap
+    for _ in range(BISECT):
+        mid = 0.5 * (lo + hi)
+        if _fails_at(P, T, pairs, take, start, stop, d0 if on_speed else mid,
+                     mid if on_speed else r0, moving, below):  # fmt: skip
+            hi = mid
+        else:
+            lo = mid
+    return lo
+
+
+@njit(cache=True)
 def _pair_dists(P, pairs):  # pragma: no cover - numba
     """The untimed distance of each segment pair (a lower bound of its distance under any
     timing)."""
@@ -598,16 +632,14 @@ def _pair_margin(
         db, rb = (0.0, 0.0) if moving else (delta, rho)
         return _group_min(P, T, pairs, take, delta, rho, db, rb, s, e, stop)
 
-    def fails(delta: float, rho: float) -> bool:
-        if fs >= fe:
-            return False
-        db, rb = (0.0, 0.0) if moving else (delta, rho)
-        got = _group_min(P, T, fp, take, delta, rho, db, rb, fs, fe, required - TOL)
-        return bool(got[0] < required - TOL)
-
-    passes = not fails(d0, r0)  # the model's own errors: a known lower end of each search
-    takeoff = _largest(lambda x: fails(x, r0), TAKEOFF_CAP, d0 if passes else 0.0)
-    speed = _largest(lambda x: fails(d0, x), SPEED_CAP, r0 if passes else 0.0)
+    # each search from the model's own errors when the pair passes with them (a known lower
+    # end), else from 0: :func:`_largest`, compiled with the pair's fails (one call each)
+    below = required - TOL
+    passes = not _fails_at(P, T, fp, take, fs, fe, d0, r0, moving, below)
+    takeoff = float(_largest_tolerated(P, T, fp, take, fs, fe, d0, r0, moving, below,
+                                       d0 if passes else 0.0, TAKEOFF_CAP, False))  # fmt: skip
+    speed = float(_largest_tolerated(P, T, fp, take, fs, fe, d0, r0, moving, below,
+                                     r0 if passes else 0.0, SPEED_CAP, True))  # fmt: skip
     d, k, u, w = dist(d0, r0)
     if k < 0:  # no two points can coincide under the model
         return PairMargin(a, b, math.nan, (), math.inf, float(required), takeoff, speed,
