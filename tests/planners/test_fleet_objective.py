@@ -38,12 +38,17 @@ def planned(fleet6: Scenario) -> dict[str, np.ndarray]:
 
 
 def _problem(
-    sc: Scenario, planned: dict, reserved: int, cruise: float | None = None, timed: bool = False
-) -> PathProblem:
+    sc: Scenario, planned: dict, reserved: int, cruise: float | None = None, timed: bool = False,
+    shadow: bool = False,
+) -> PathProblem:  # fmt: skip
     """The last task's problem among the planned flights of the first ``reserved`` tasks
     (its cruise layer at ``cruise`` m in the band's reference when given; with ``timed`` the
-    table under the default execution model's windows)."""
+    table under the default execution model's windows; with ``shadow`` taking off 15 m from
+    the fifth UAV at its time, so that paths near that UAV's conflict with it)."""
     task = dataclasses.replace(sc.tasks[-1], cruise=cruise)
+    if shadow:
+        task = dataclasses.replace(task, start=sc.tasks[4].start + np.array([15.0, 0.0, 0.0]),
+                                   start_time=sc.tasks[4].start_time)  # fmt: skip
     if timed:  # taking off 3 s after its planned time: some paths clear, some not
         table = ReservationTable.for_scenario(dataclasses.replace(sc, execution=DEFAULT))
         assert table.timed
@@ -68,23 +73,26 @@ def _reference(problem: PathProblem, enc: CartesianEncoding, X: np.ndarray, belo
 
 
 @pytest.mark.parametrize(
-    ("reserved", "cruise", "timed"),
-    [(0, None, False), (5, None, False), (5, 120.0, False), (5, None, True)],
-)
+    ("reserved", "cruise", "timed", "shadow"),
+    [(0, None, False, False), (5, None, False, False), (5, 120.0, False, False),
+     (5, None, False, True), (5, None, True, False)],
+)  # fmt: skip
 def test_fused_kernel_gives_the_reference_costs(
-    fleet6: Scenario, planned: dict, reserved: int, cruise: float | None, timed: bool
-) -> None:
-    """Nominal and under the default execution model's timed table."""
-    problem = _problem(fleet6, planned, reserved, cruise, timed)
+    fleet6: Scenario, planned: dict, reserved: int, cruise: float | None, timed: bool,
+    shadow: bool,
+) -> None:  # fmt: skip
+    """Nominal and under the default execution model's timed table; where the separation
+    decides some particles (``timed``, ``shadow``) that is checked too."""
+    problem = _problem(fleet6, planned, reserved, cruise, timed, shadow)
     enc = CartesianEncoding(problem, 10)
     fused = FleetObjective.of(problem, enc)
     assert fused is not None
     rng = np.random.default_rng(reserved)
-    X = _swarm(enc, planned[fleet6.tasks[-1].id][0], rng)
+    X = _swarm(enc, planned[fleet6.tasks[4 if shadow else -1].id][0], rng)
     full = _reference(problem, enc, X)
     assert 50 < np.isfinite(full).sum() < 550  # both kinds are tested
-    if timed:  # and the separation decides some
-        alone = _reference(_problem(fleet6, planned, 0, cruise, timed), enc, X)
+    if timed or shadow:  # and the separation decides some
+        alone = _reference(_problem(fleet6, planned, 0, cruise, timed, shadow), enc, X)
         assert np.sum(np.isfinite(alone) & np.isinf(full)) >= 5
     thresholds = (
         np.full(len(X), np.inf),
