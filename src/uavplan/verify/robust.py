@@ -667,7 +667,9 @@ def _pair_margin(
 
 def _largest(fails: Any, cap: float, known: float = 0.0) -> float:
     """The largest ``x`` in [0, cap] with ``fails(x)`` False (failing monotone in x), ``known``
-    a value known not to fail: 0 when it fails at 0, inf when not at ``cap``."""
+    a value known not to fail: 0 when it fails at 0, inf when not at ``cap``. The reference of
+    :func:`_largest_tolerated`, which does the same for a pair's margins in one compiled call
+    (a test holds the two equal)."""
     if known <= 0.0 and fails(0.0):
         return 0.0
     if not fails(cap):
@@ -800,7 +802,7 @@ def vertical_clearance(
     if source is not None:
         low_c, high_c = source(traj, reach)
     elif terrain is not None:
-        side = _ground_sides(traj, terrain, reach, extrema, within, scratch)
+        side = _GroundSides(traj, terrain, reach, extrema, within, scratch)
         low_c, high_c = -math.inf, math.inf
         for how in side.hows:
             low_c = max(low_c, side(True, how))
@@ -846,7 +848,7 @@ def vertical_fails(
     terrain = scenario.terrain
     if terrain is None:  # flat ground at 0 under a band above it
         return ground_band and (floor_fails(float(z.min())) or band.max - float(z.max()) < need)
-    side = _ground_sides(traj, terrain, reach, extrema, within, scratch)
+    side = _GroundSides(traj, terrain, reach, extrema, within, scratch)
     low_c = -math.inf
     for how in side.hows:  # the floor: low_c = max over the bounds
         low_c = max(low_c, side(True, how))
@@ -866,9 +868,10 @@ def vertical_fails(
 
 
 class _GroundSides:
-    """A flight's clearances to the ground moved within ``reach`` (:func:`_ground_sides`):
-    ``sides(True, how)`` the least height above the floor along the flight, ``sides(False,
-    how)`` the greatest above the top, for each bound ``how`` of :attr:`hows`."""
+    """A flight's clearances to the ground moved within ``reach``: called ``(True, how)``, the
+    least height above the floor along the flight; ``(False, how)``, the greatest above the
+    top; for each bound ``how`` of :attr:`hows` (:func:`~uavplan.verify.terrain.
+    within_reach`'s "height" and "slope", or "" for the ground as it is)."""
 
     def __init__(self, traj: Trajectory, terrain: Any, reach: float, extrema: Any, within: Any,
                  scratch: dict[str, Any] | None) -> None:  # fmt: skip
@@ -892,9 +895,6 @@ class _GroundSides:
                                self.within)  # fmt: skip
         e = self.extrema(self.a, self.b, grid)
         return float(np.min(e[:, 0])) if floor else float(np.max(e[:, 2]))
-
-
-_ground_sides = _GroundSides
 
 
 class _Grid:
