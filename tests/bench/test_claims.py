@@ -97,3 +97,22 @@ def test_the_committed_ledger_is_rebuilt_from_the_results() -> None:
     """docs/claims.md is what `uavplan report results --claims` writes from results/."""
     expected = render_markdown(build_ledger(ROOT / "results"), "results")
     assert (ROOT / "docs" / "claims.md").read_text() == expected
+
+
+def test_the_results_pages_claim_summaries_say_what_the_ledger_says() -> None:
+    """Each paper's section of docs/results.md opens with its claims by verdict (between
+    ``<!-- claims -->`` markers): every claim of docs/claims.md once, under its verdict."""
+    import re
+
+    ledger = (ROOT / "docs" / "claims.md").read_text()
+    verdicts = dict(re.findall(r"^\| \*\*([\w-]+)\*\*:.*?\| \*\*([^*|]+)\*\* \|", ledger, re.M))
+    assert len(verdicts) == len(CLAIMS)
+    page = (ROOT / "docs" / "results.md").read_text()
+    said: dict[str, str] = {}
+    for block in re.findall(r"<!-- claims -->\n(.*?)\n<!-- /claims -->", page, re.S):
+        for part in block.split("`): ", 1)[-1].split("; "):
+            verdict, names = part.split(": ", 1)
+            for name in re.findall(r"`([\w-]+)`", names):
+                assert name not in said, f"{name} summarized twice"
+                said[name] = verdict.strip()
+    assert said == verdicts
