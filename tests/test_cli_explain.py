@@ -87,3 +87,32 @@ def test_events_are_typed() -> None:
 def test_explain_bad_input(tmp_path: Path) -> None:
     r = CliRunner().invoke(app, ["explain", str(tmp_path / "missing.json")])
     assert r.exit_code == 2 and "Traceback" not in r.output
+
+
+def test_a_large_fleets_story_puts_the_failures_first_and_tells_mass_rescues_by_kind() -> None:
+    """30 UAVs that waited, one repaired, one failing: the failing UAV leads with the
+    verifier's finding, the repaired one follows, and the 30 waits are one line with their
+    span; with ``everyone`` each UAV has its line."""
+    from types import SimpleNamespace
+
+    from uavplan.cli.explain import LIST_MAX, story_lines
+
+    ids = [f"uav{i}" for i in range(40)]
+    events = [Event("waited", f"uav{i}", f"takes off {5 * i:g} s later", 5.0 * i)
+              for i in range(1, 31)]  # fmt: skip
+    events += [Event("repaired", "uav31", "re-flown after planning: RRT* (try 1)"),
+               Event("unresolved", "uav32", "its flight fails: separation")]  # fmt: skip
+    doc = {"uavs": [{"id": u} for u in ids],
+           "diagnostics": {"events": [e.record() for e in events]}}  # fmt: skip
+    finding = SimpleNamespace(kind="separation", uavs=("uav32", "uav33"), message="too close")
+    lines = story_lines(doc, SimpleNamespace(violations=[finding]))
+    assert LIST_MAX < 30
+    assert lines[:2] == ["fails (2 UAV(s)):", "uav32:"]
+    assert lines[2] == "  FAILS separation: too close"
+    assert lines.index("repaired after planning (1 UAV(s)):") > lines.index("uav33:")
+    waited = [x for x in lines if x.startswith("  waited:")]
+    assert len(waited) == 1 and "30 UAV(s)" in waited[0] and "5-150 s later" in waited[0]
+    assert lines[-1] == "7 other UAV(s) fly their first planned flight (--all lists every UAV)"
+    every = story_lines(doc, SimpleNamespace(violations=[finding]), everyone=True)
+    assert sum(x.startswith("  waited:") for x in every) == 30
+    assert sum(x.endswith("flies its first planned flight") for x in every) == 7

@@ -19,9 +19,19 @@ from rich.console import Console
 
 from uavplan.cli._common import fail, load_world, world_of_plan
 
+#: Rescued UAVs of one kind listed one by one up to this many; beyond it, a line for the kind
+#: (how many, the range of their take-off delays, the first few) unless ``--all``.
+LIST_MAX = 12
+#: UAVs named on a kind's line when the kind is told as a group.
+NAMED = 8
+
 
 def story_lines(doc: dict[str, Any], report: Any, everyone: bool = False) -> list[str]:
-    """The explanation of a plan (its JSON ``doc``) given the verifier's ``report`` on it."""
+    """The explanation of a plan (its JSON ``doc``) given the verifier's ``report`` on it: the
+    strategy's attempts and the restarts, then every UAV that fails (what the verifier finds,
+    with the planner's story of it), then those repaired after planning, then the rescued ones
+    (each, or by kind when a kind has more than :data:`LIST_MAX` UAVs; ``everyone``: each UAV,
+    also those with nothing to tell)."""
     from uavplan.planners.core.events import Event
 
     diag = doc.get("diagnostics") or {}
@@ -35,35 +45,78 @@ def story_lines(doc: dict[str, Any], report: Any, everyone: bool = False) -> lis
     restarts = [e for e in events if e.kind == "restart"]
     if restarts:
         lines.append("restarts of the whole fleet: " + "; ".join(e.detail for e in restarts))
-    by_uav: dict[str, list[str]] = {u: [] for u in ids}
+    told: dict[str, list[Event]] = {u: [] for u in ids}
     for e in events:
-        if e.uav in by_uav and e.kind != "unresolved":  # the verifier's finding says more
-            by_uav[e.uav].append(f"{e.kind}: {e.detail}")
+        if e.uav in told and e.kind != "unresolved":  # the verifier's finding says more
+            told[e.uav].append(e)
+    fails: dict[str, list[str]] = {}
     for v in report.violations:
         for u in v.uavs:
-            if u in by_uav:
-                by_uav[u].append(f"FAILS {v.kind}: {v.message}")
-    unresolved = {e.uav for e in events if e.kind == "unresolved"}
-    for u in unresolved:
-        if u in by_uav and not any(x.startswith("FAILS") for x in by_uav[u]):
-            detail = next(e.detail for e in events if e.kind == "unresolved" and e.uav == u)
-            by_uav[u].append(f"the planner says {detail}; the verifier finds no violation")
-    quiet = 0
-    for u in ids:
-        told = by_uav[u]
-        if not told:
-            quiet += 1
-            if everyone:
+            if u in told:
+                fails.setdefault(u, []).append(f"FAILS {v.kind}: {v.message}")
+    for e in events:
+        if e.kind == "unresolved" and e.uav in told and e.uav not in fails:
+            fails[e.uav] = [f"the planner says {e.detail}; the verifier finds no violation"]
+
+    def story(u: str) -> list[str]:
+        return (
+            [f"{u}:"]
+            + [f"  {e.kind}: {e.detail}" for e in told[u]]
+            + [f"  {t}" for t in fails.get(u, ())]
+        )
+
+    failing = [u for u in ids if u in fails]
+    repaired = [u for u in ids if u not in fails and any(e.kind == "repaired" for e in told[u])]
+    rescued = [u for u in ids if u not in fails and u not in repaired and told[u]]
+    if failing:
+        lines.append(f"fails ({len(failing)} UAV(s)):")
+        lines += [x for u in failing for x in story(u)]
+    if repaired:
+        lines.append(f"repaired after planning ({len(repaired)} UAV(s)):")
+        lines += [x for u in repaired for x in story(u)]
+    if everyone:
+        for u in ids:
+            if u in rescued:
+                lines += story(u)
+            elif u not in fails and u not in repaired:
                 lines.append(f"{u}: flies its first planned flight")
-            continue
-        lines.append(f"{u}:")
-        lines += [f"  {t}" for t in told]
-    if quiet and not everyone:
-        lines.append(f"{quiet} other UAV(s) fly their first planned flight (--all lists them)")
+        return lines + _without_diagnostics(events, doc)
+    kinds: dict[str, list[Event]] = {}
+    for u in rescued:
+        for e in told[u]:
+            kinds.setdefault(e.kind, []).append(e)
+    grouped = any(len(es) > LIST_MAX for es in kinds.values())
+    if rescued:
+        lines.append(f"rescued while planning ({len(rescued)} UAV(s)):")
+    if grouped:
+        lines += [_kind_line(kind, es) for kind, es in kinds.items()]
+    else:
+        lines += [x for u in rescued for x in story(u)]
+    quiet = len(ids) - len(failing) - len(repaired) - len(rescued)
+    if quiet:
+        more = "every UAV" if grouped else "them"
+        lines.append(f"{quiet} other UAV(s) fly their first planned flight (--all lists {more})")
+    elif grouped:
+        lines.append("(--all lists every UAV)")
+    return lines + _without_diagnostics(events, doc)
+
+
+def _kind_line(kind: str, es: list[Any]) -> str:
+    """One line for the UAVs rescued in one way: how many, their take-off delays, a few."""
+    from uavplan.planners.core.events import KINDS
+
+    late = [e.value for e in es if e.value]
+    span = f"; {min(late):g}-{max(late):g} s later" if late else ""
+    named = ", ".join(f"{e.uav} ({e.value:g} s)" if e.value else str(e.uav) for e in es[:NAMED])
+    more = f" and {len(es) - NAMED} more" if len(es) > NAMED else ""
+    return f"  {kind}: {len(es)} UAV(s), each: {KINDS[kind]}{span}: {named}{more}"
+
+
+def _without_diagnostics(events: list[Any], doc: dict[str, Any]) -> list[str]:
     if not events and "diagnostics" not in doc:
-        lines.append("(this plan file has no diagnostics: it was written before uavplan kept "
-                     "them; the verifier's findings above are all there is)")  # fmt: skip
-    return lines
+        return ["(this plan file has no diagnostics: it was written before uavplan kept them; "
+                "the verifier's findings above are all there is)"]  # fmt: skip
+    return []
 
 
 def explain(
