@@ -69,7 +69,7 @@ def quick(name: str, **extra: Any) -> Planner:
 
 
 def scenario_for(name: str) -> Scenario:
-    return easy_2d() if 2 in get_planner(name).dims else easy_3d()
+    return easy_2d() if 2 in get_planner(name).specs.dims else easy_3d()
 
 
 @pytest.mark.parametrize("name", PLANNERS)
@@ -77,7 +77,7 @@ def scenario_for(name: str) -> Scenario:
 def test_planner_solves_easy_scenario(name: str, make: Callable[[], Scenario]) -> None:
     sc = make()
     planner = quick(name)
-    if sc.dim not in planner.dims:
+    if sc.dim not in planner.specs.dims:
         with pytest.raises(PlannerError, match=f"{sc.dim}-D"):
             planner.plan(sc, budget=60, seed=1)
         return
@@ -96,7 +96,7 @@ def test_planner_solves_easy_scenario(name: str, make: Callable[[], Scenario]) -
     # times at the UAV's speed
     seg = np.linalg.norm(np.diff(r.waypoints, axis=0), axis=1)
     assert np.allclose(np.diff(r.times), seg / sc.uav.speed)
-    n_it = 60 if planner.anytime else r.iterations  # a planner that ends on arrival: fewer
+    n_it = 60 if planner.specs.anytime else r.iterations  # a planner that ends on arrival: fewer
     assert r.evaluations > 0 and 0 < r.iterations <= 60
     assert r.iterations == n_it and len(r.history) == n_it
     assert np.all(r.history[1:] <= r.history[:-1])  # inf until a first path, then falling
@@ -113,7 +113,7 @@ def test_planner_deterministic_per_seed(name: str) -> None:
     assert np.array_equal(a.waypoints, b.waypoints)
     assert np.array_equal(a.history, b.history)
     # a deterministic method gives one plan whatever the seed; the others differ by seed
-    assert np.array_equal(a.waypoints, c.waypoints) == quick(name).deterministic
+    assert np.array_equal(a.waypoints, c.waypoints) == quick(name).specs.deterministic
 
 
 @pytest.mark.parametrize("name", PLANNERS)
@@ -220,6 +220,29 @@ def test_named_configurations_share_one_class() -> None:
     assert get_planner("prioritized").config.optimizer_options["w"] == 0.8
 
 
+def test_a_planner_says_what_it_can_do_in_one_specs_record() -> None:
+    """Capabilities are one frozen record per class, inherited and changed by replace; a class
+    that sets one as a loose attribute (where the framework would never read it) is refused."""
+    import dataclasses
+
+    from uavplan.planners import Planner, PlannerSpecs
+    from uavplan.planners.core.base import SPEC_FIELDS
+
+    assert {f.name for f in dataclasses.fields(PlannerSpecs)} == set(SPEC_FIELDS)
+    for name in PLANNERS:
+        assert isinstance(planner_entry(name).cls.specs, PlannerSpecs), name
+    assert planner_entry("rgg-pso+").cls.specs.inner_optimizer == "pso"  # inherited
+    assert not planner_entry("rrt-star").cls.specs.handles_moving
+    assert planner_entry("apf").cls.specs.steps_in_time
+    with pytest.raises(TypeError, match="declare them in specs"):
+
+        class Loose(Planner):
+            supports_reservations = True
+
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        Planner.specs.anytime = False  # type: ignore[misc]
+
+
 def test_unknown_planner() -> None:
     with pytest.raises(PlannerError, match="unknown planner 'nope'; available"):
         get_planner("nope")
@@ -246,7 +269,7 @@ def with_traffic(sc: Scenario) -> Scenario:
 def test_moving_obstacles_are_planned_around_or_refused_naming_why(name: str) -> None:
     planner = quick(name)
     sc = with_traffic(scenario_for(name))
-    if not planner.handles_moving:
+    if not planner.specs.handles_moving:
         with pytest.raises(PlannerError, match="cannot plan around moving obstacles"):
             planner.plan(sc, budget=20, seed=0)
         return

@@ -128,7 +128,7 @@ def _run_plan(
     budget = (
         Budget(max_iterations=iterations, max_time=max_time) if iterations or max_time else None
     )
-    n_iter = iterations or (None if max_time else planner.default_iterations)
+    n_iter = iterations or (None if max_time else planner.specs.default_iterations)
 
     with Progress(
         TextColumn("[bold]{task.description}"),

@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 from uavplan._discovery import import_submodules
-from uavplan.planners.core.base import FleetPlanner, Planner
+from uavplan.planners.core.base import FleetPlanner, Planner, PlannerSpecs
 from uavplan.planners.core.options import PlannerConfig, PlannerError, describe_options, option
 from uavplan.planners.core.registry import PlannerEntry, register_planner, registry
 from uavplan.planners.core.results import FleetResult, PlanResult
@@ -29,6 +29,7 @@ __all__ = [
     "PlannerConfig",
     "PlannerEntry",
     "PlannerError",
+    "PlannerSpecs",
     "Run",
     "available_planners",
     "describe_options",

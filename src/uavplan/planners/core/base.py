@@ -18,8 +18,8 @@ Configuration: each planner has a frozen dataclass ``Config`` (a :class:`Planner
 :class:`FleetPlannerConfig`) whose fields are declared with :func:`option` (documentation,
 source, range or choices); defaults are the paper's. Keyword options are checked against it:
 an unknown option, or a value out of its range, is refused with a :class:`PlannerError` naming
-the valid ones. A planner built around a population optimizer (``Planner.inner_optimizer``, or a
-config field ``optimizer``) takes that optimizer's options too, routed into
+the valid ones. A planner built around a population optimizer (its specs' ``inner_optimizer``,
+or a config field ``optimizer``) takes that optimizer's options too, routed into
 ``optimizer_options``. :meth:`Planner.describe` is generated from the config.
 
 Registry: :func:`register_planner` as a class decorator registers a planner under its ``name``;
@@ -73,38 +73,75 @@ from uavplan.world.scenario import Scenario, Task
 FloatArray = NDArray[np.float64]
 
 
+#: The capabilities that used to be separate class attributes of a planner, refused there now
+#: (:meth:`Planner.__init_subclass__`): declare them in ``specs``.
+SPEC_FIELDS = (
+    "dims",
+    "default_iterations",
+    "inner_optimizer",
+    "supports_reservations",
+    "deterministic",
+    "anytime",
+    "steps_in_time",
+    "handles_moving",
+)
+
+
+@dataclass(frozen=True)
+class PlannerSpecs:
+    """What a planner class can do, in one record the framework reads (the CLI, the fleet
+    engine, the memory estimate, the contract tests), instead of flags spread over the class.
+
+    dims: the scenario dimensions it plans.
+    default_iterations: its iteration budget when none is given.
+    inner_optimizer: the population optimizer it is built on, if fixed (otherwise the config's
+        ``optimizer`` field names it, if it has one).
+    supports_reservations: whether its search keeps clear of other UAVs' flights (it evaluates
+        whole timed paths on the run's problem); planners that check edges without time
+        cannot.
+    deterministic: whether the seed is unused (the same plan from every seed).
+    anytime: whether it uses its whole iteration budget (False: it may end earlier, e.g. on
+        arrival, and its history is as long as the iterations it ran).
+    steps_in_time: whether its path is a trajectory stepped in time within the UAV's limits
+        (flown as planned if it passes every check, see
+        :func:`~uavplan.planners.core.flight.fly`).
+    handles_moving: whether its search sees moving obstacles in time (False: refused on such a
+        scenario).
+    """
+
+    dims: tuple[int, ...] = (2, 3)
+    default_iterations: int = 200
+    inner_optimizer: str | None = None
+    supports_reservations: bool = False
+    deterministic: bool = False
+    anytime: bool = True
+    steps_in_time: bool = False
+    handles_moving: bool = True
+
+
 class Planner(ABC):
-    """Plans one task. Subclasses set ``name``, ``Config`` and implement :meth:`_plan`.
+    """Plans one task. Subclasses set ``name``, ``Config`` and ``specs`` and implement
+    :meth:`_plan`.
 
     Class attributes:
         name: the registry name (a named configuration's instances carry that name).
         Config: the frozen config dataclass.
-        dims: the scenario dimensions handled.
-        default_iterations: the iteration budget when none is given.
-        supports_reservations: whether its search keeps clear of other UAVs' flights.
-        handles_moving: whether its search sees moving obstacles in time.
-        deterministic: whether the seed is unused (the same plan from every seed).
-        anytime: whether it uses its whole iteration budget (False: it may end earlier, e.g.
-            on arrival, and its history is as long as the iterations it ran).
-        inner_optimizer: the population optimizer this planner is built on, if fixed
-            (otherwise the config's ``optimizer`` field names it, if it has one).
+        specs: what it can do (:class:`PlannerSpecs`; a subclass inherits its parent's and
+            changes fields with ``dataclasses.replace(Parent.specs, ...)``).
     """
 
     name: ClassVar[str] = "planner"
     Config: ClassVar[type[Options]] = PlannerConfig
-    dims: ClassVar[tuple[int, ...]] = (2, 3)
-    default_iterations: ClassVar[int] = 200
-    inner_optimizer: ClassVar[str | None] = None
-    #: whether the search keeps clear of reserved UAVs (it evaluates whole timed paths on the
-    #: run's problem); planners that check edges without time cannot
-    supports_reservations: ClassVar[bool] = False
-    deterministic: ClassVar[bool] = False
-    anytime: ClassVar[bool] = True
-    #: its path is a trajectory stepped in time within the UAV's limits (flown as planned if
-    #: it passes every check, see :func:`~uavplan.planners.core.flight.fly`)
-    steps_in_time: ClassVar[bool] = False
-    #: whether its search sees moving obstacles in time (False: refused on such a scenario)
-    handles_moving: ClassVar[bool] = True
+    specs: ClassVar[PlannerSpecs] = PlannerSpecs()
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        stray = [f for f in SPEC_FIELDS if f in vars(cls)]
+        if stray:
+            raise TypeError(f"{cls.__qualname__} sets {', '.join(stray)} as class attributes; "
+                            f"declare them in specs = PlannerSpecs({stray[0]}=...)")  # fmt: skip
+        if not isinstance(cls.specs, PlannerSpecs):
+            raise TypeError(f"{cls.__qualname__}.specs must be a PlannerSpecs")
 
     def __init__(
         self,
@@ -133,7 +170,7 @@ class Planner(ABC):
     def optimizer_name(self) -> str | None:
         """The inner population optimizer's registry name (None: the planner has none)."""
         named = getattr(self.config, "optimizer", None)
-        return str(named) if named is not None else self.inner_optimizer
+        return str(named) if named is not None else self.specs.inner_optimizer
 
     def configure(self, base: Options, options: Mapping[str, Any]) -> Options:
         """``base`` with ``options`` applied: the config's own fields directly, the inner
@@ -142,7 +179,7 @@ class Planner(ABC):
         own = {f.name for f in fields(base)}
         direct = {k: v for k, v in options.items() if k in own}
         named = direct.get("optimizer", getattr(base, "optimizer", None))
-        opt_name = str(named) if named is not None else self.inner_optimizer
+        opt_name = str(named) if named is not None else self.specs.inner_optimizer
         opt_fields = _optimizer_fields(opt_name, self.name)
         routed = {k: v for k, v in options.items() if k not in own and k in opt_fields}
         unknown = sorted(set(options) - set(direct) - set(routed))
@@ -225,18 +262,18 @@ class Planner(ABC):
     def check_input(self, scenario: Scenario, task: Task) -> None:
         """Refuse what this planner cannot plan: a dimension it does not handle, a task
         outside the bounds or of the wrong dimension, moving obstacles it cannot see in time."""
-        if scenario.moving_obstacles and not self.handles_moving:
+        if scenario.moving_obstacles and not self.specs.handles_moving:
             from uavplan.planners.core.registry import registry
 
-            able = sorted(n for n, e in registry().items() if e.cls.handles_moving)
+            able = sorted(n for n, e in registry().items() if e.cls.specs.handles_moving)
             raise PlannerError(
                 f"{self.name} cannot plan around moving obstacles (its search has no time); "
                 f"{scenario.name!r} has {len(scenario.moving_obstacles)}: plan it with one of "
                 f"{', '.join(able)}"
             )
-        if scenario.dim not in self.dims:
+        if scenario.dim not in self.specs.dims:
             raise PlannerError(
-                f"{self.name} plans {' or '.join(f'{d}-D' for d in self.dims)} scenarios; "
+                f"{self.name} plans {' or '.join(f'{d}-D' for d in self.specs.dims)} scenarios; "
                 f"{scenario.name!r} is {scenario.dim}-D"
             )
         for what, p in (("start", task.start), ("goal", task.goal)):
@@ -253,7 +290,7 @@ class Planner(ABC):
 
     def budget(self, budget: Budget | int | None) -> Budget:
         try:
-            return Budget.of(budget if budget is not None else self.default_iterations)
+            return Budget.of(budget if budget is not None else self.specs.default_iterations)
         except (OptimizerError, TypeError, ValueError) as exc:
             raise PlannerError(f"{self.name}: budget: {exc}") from None
 
@@ -281,7 +318,7 @@ class Planner(ABC):
         or with a turn radius its Dubins-smoothed version, checked as it will be flown."""
         t = task if isinstance(task, Task) else _task(scenario, task)
         self.check_input(scenario, t)
-        if reservations is not None and not self.supports_reservations:
+        if reservations is not None and not self.specs.supports_reservations:
             raise PlannerError(
                 f"{self.name} cannot keep clear of other UAVs while it searches (its search does "
                 "not see time): plan fleets with a fleet planner (uavplan planners lists them)"
@@ -302,7 +339,7 @@ class Planner(ABC):
             path = np.stack([problem.start, problem.goal])
             reasons = reasons or ("no_path",)
         info = dict(outcome.info)
-        if polish and not reasons and reservations is None and not self.steps_in_time:
+        if polish and not reasons and reservations is None and not self.specs.steps_in_time:
             path, note = polished(scenario, t, problem, np.asarray(path, dtype=np.float64))
             if note:
                 info["polished"] = note
@@ -321,7 +358,12 @@ class Planner(ABC):
             info=info,
         )
         flight = fly(
-            scenario, t, result.waypoints, result.times, reservations, as_planned=self.steps_in_time
+            scenario,
+            t,
+            result.waypoints,
+            result.times,
+            reservations,
+            as_planned=self.specs.steps_in_time,
         )
         if reasons:  # a planner's reason (no path found) fails the flight too
             flight = dataclasses.replace(flight, violations=flight.violations + reasons)

@@ -221,7 +221,6 @@ class PrioritizedPlanner(FleetPlanner):
     name = "prioritized-engine"
     Config = PrioritizedConfig
     config: PrioritizedConfig
-    dims = (2, 3)
 
     def __init__(self, config: PrioritizedConfig | None = None, **options: Any) -> None:
         super().__init__(config, **options)

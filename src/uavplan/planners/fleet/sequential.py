@@ -31,7 +31,7 @@ from uavplan.world.tolerances import RESERVE_TOL
 
 def separating_planners() -> list[str]:
     """The single-UAV planners whose search keeps clear of other UAVs, and the fleet ones."""
-    return sorted(n for n, e in registry().items() if e.fleet or e.cls.supports_reservations)
+    return sorted(n for n, e in registry().items() if e.fleet or e.cls.specs.supports_reservations)
 
 
 def task_seeds(seed: int | None, n: int) -> list[int | None]:
@@ -52,7 +52,7 @@ def plan_sequentially(
     """Plan every task of ``scenario`` with ``planner`` in LH order, each UAV clear of the
     flights of those before it (see the module docstring). ``progress(task_id)`` gives each
     task's callback."""
-    if not planner.supports_reservations:
+    if not planner.specs.supports_reservations:
         raise PlannerError(
             f"{planner.name} plans one UAV and cannot keep clear of others while it searches; "
             f"{scenario.name!r} has {len(scenario.tasks)} UAVs: plan it with one of "

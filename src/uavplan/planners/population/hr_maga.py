@@ -99,7 +99,7 @@ from numpy.typing import NDArray
 from uavplan.optimizers.base import Budget
 from uavplan.optimizers.constraints import feasibility_first
 from uavplan.optimizers.maga import MAGABatch, MAGAConfig, ReferenceMAGA, turn_cosines
-from uavplan.planners.core.base import Planner
+from uavplan.planners.core.base import Planner, PlannerSpecs
 from uavplan.planners.core.options import PlannerConfig, PlannerError, option
 from uavplan.planners.core.registry import register_planner
 from uavplan.planners.core.run import Outcome, Run, Termination, Tracker
@@ -188,10 +188,7 @@ class HRMAGA(Planner):
     name = "hr-maga"
     Config = HRMAGAConfig
     config: HRMAGAConfig
-    dims = (3,)
-    inner_optimizer = None
-
-    default_iterations = 300
+    specs = PlannerSpecs(dims=(3,), default_iterations=300)
 
     def check_input(self, scenario: Scenario, task: Task) -> None:
         super().check_input(scenario, task)

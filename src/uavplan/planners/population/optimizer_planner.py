@@ -20,7 +20,7 @@ from uavplan import optimizers
 from uavplan._text import first_sentence
 from uavplan.optimizers.base import fit_schedule
 from uavplan.optimizers.constraints import RULES, Constrained
-from uavplan.planners.core.base import Planner
+from uavplan.planners.core.base import Planner, PlannerSpecs
 from uavplan.planners.core.options import PlannerConfig, option
 from uavplan.planners.core.registry import add_provider, is_registered, register_planner
 from uavplan.planners.core.run import Outcome, Run
@@ -54,7 +54,7 @@ class OptimizerPlanner(Planner):
     """Plan with a population optimizer over encoded waypoints (see the module docstring)."""
 
     name = "optimizer"
-    supports_reservations = True
+    specs = PlannerSpecs(supports_reservations=True)
     Config = OptimizerPlannerConfig
     config: OptimizerPlannerConfig
 

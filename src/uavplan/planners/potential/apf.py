@@ -48,13 +48,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from uavplan.planners.core.base import Planner
+from uavplan.planners.core.base import Planner, PlannerSpecs
 from uavplan.planners.core.options import PlannerConfig, option
 from uavplan.planners.core.registry import register_planner
 from uavplan.planners.core.run import Outcome, Run
@@ -719,11 +719,13 @@ class APFPlanner(Planner):
     name = "apf"
     Config = APFConfig
     config: APFConfig
-    default_iterations = 400  # x 50 steps
-    deterministic: ClassVar[bool] = True
-    anytime: ClassVar[bool] = False
-    supports_reservations = True  # other UAVs' flights are moving obstacles of its field
-    steps_in_time = True  # its path is flown as planned when it passes every check
+    specs = PlannerSpecs(
+        default_iterations=400,  # x 50 steps
+        deterministic=True,
+        anytime=False,
+        supports_reservations=True,  # other UAVs' flights are moving obstacles of its field
+        steps_in_time=True,  # its path is flown as planned when it passes every check
+    )
 
     def _plan(self, run: Run) -> Outcome:
         sc, task, tr = run.scenario, run.task, run.tracker
@@ -731,7 +733,9 @@ class APFPlanner(Planner):
         goal = np.asarray(task.goal, dtype=np.float64)
         prm = field_params(self.config, sc, float(np.linalg.norm(goal - start)))
         per = int(self.config.steps_per_iteration)
-        it_limit = run.max_iterations if run.max_iterations is not None else self.default_iterations
+        it_limit = (
+            run.max_iterations if run.max_iterations is not None else self.specs.default_iterations
+        )
         limit = it_limit * per
         if run.budget.max_evaluations is not None:
             limit = min(limit, int(run.budget.max_evaluations))

@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 from uavplan.optimizers.base import FunctionProblem, fit_schedule
 from uavplan.optimizers.base import get as get_optimizer
 from uavplan.optimizers.constraints import feasibility_first
-from uavplan.planners.core.base import Planner
+from uavplan.planners.core.base import Planner, PlannerSpecs
 from uavplan.planners.core.options import PlannerError, option
 from uavplan.planners.core.registry import register_planner
 from uavplan.planners.core.run import Outcome, Run
@@ -85,9 +85,8 @@ class FusedAPFPlanner(Planner):
     name = "apf-fused"
     Config = FusedAPFConfig
     config: FusedAPFConfig
-    default_iterations = 40  # the paper's Fig. 16 converges within 40 rounds
-    supports_reservations = True
-    steps_in_time = True
+    # 40 iterations: the paper's Fig. 16 converges within 40 rounds
+    specs = PlannerSpecs(default_iterations=40, supports_reservations=True, steps_in_time=True)
 
     def _plan(self, run: Run) -> Outcome:
         cfg = self.config

@@ -51,7 +51,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.optimizers.base import Budget
-from uavplan.planners.core.base import Planner
+from uavplan.planners.core.base import Planner, PlannerSpecs
 from uavplan.planners.core.options import PlannerConfig, PlannerError, option
 from uavplan.planners.core.registry import register_planner
 from uavplan.planners.core.run import Outcome, Run
@@ -398,15 +398,15 @@ class RGGPlanner(Planner):
     unchanged path is not re-evaluated), stopped earlier by its evaluations or time.
     """
 
-    handles_moving = False  # its graph has no time: moving obstacles are refused
+    # its graph has no time: moving obstacles are refused
+    specs = PlannerSpecs(handles_moving=False, default_iterations=20)
 
     name = "rgg"
     Config = RGGConfig
     config: RGGConfig
-    default_iterations = 20
 
     def iteration_limit(self, budget: Budget) -> int | None:
-        return budget.max_iterations or self.default_iterations
+        return budget.max_iterations or self.specs.default_iterations
 
     def _plan(self, run: Run) -> Outcome:
         cfg = self.config

@@ -40,7 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.optimizers.pso import PSO, PSOConfig
-from uavplan.planners.core.base import Planner
+from uavplan.planners.core.base import Planner, PlannerSpecs
 from uavplan.planners.core.options import PlannerConfig, option
 from uavplan.planners.core.registry import register_planner
 from uavplan.planners.core.run import Outcome, Run
@@ -183,11 +183,9 @@ class RGGPSOPlanner(Planner):
     """RGG-PSO: PSO over variable-length particles seeded by RGG paths (see the module)."""
 
     name = "rgg-pso"
-    supports_reservations = True
+    specs = PlannerSpecs(supports_reservations=True, inner_optimizer="pso", default_iterations=200)
     Config = RGGPSOConfig
     config: RGGPSOConfig
-    inner_optimizer = "pso"
-    default_iterations = 200
 
     def swarm(
         self,

@@ -219,7 +219,7 @@ class RGGPSOPlusPlanner(RGGPSOPlanner):
         if b.max_iterations is not None:
             return b.max_iterations
         if b.max_evaluations is None:
-            return self.default_iterations
+            return self.specs.default_iterations
         f, d = self.config.whole_fraction, self.config.depth
         swarms = sum(2**level * f * (1 - f) ** level for level in range(d)) + (2 * (1 - f)) ** d
         assert self.optimizer_config is not None

@@ -152,7 +152,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from uavplan.optimizers.base import Budget
-from uavplan.planners.core.base import Planner
+from uavplan.planners.core.base import Planner, PlannerSpecs
 from uavplan.planners.core.options import Options, PlannerConfig, PlannerError, option
 from uavplan.planners.core.registry import register_planner
 from uavplan.planners.core.run import Outcome, Run
@@ -733,7 +733,8 @@ class RRTStarPlanner(Planner):
     callback, or at the first goal connection with ``stop_at_goal``.
     """
 
-    handles_moving = False  # its graph has no time: moving obstacles are refused
+    # its graph has no time: moving obstacles are refused
+    specs = PlannerSpecs(handles_moving=False)
 
     name = "rrt-star"
     Config = RRTStarPlannerConfig
