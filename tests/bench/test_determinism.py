@@ -55,7 +55,7 @@ def planner_plan(scenario: str, runs: int = 1, iterations: int = 3) -> Experimen
     from uavplan.scenarios import resolve
 
     dim = resolve(scenario).dim
-    names = [n for n in available_planners() if dim in get_planner(n).dims]
+    names = [n for n in available_planners() if dim in get_planner(n).specs.dims]
     return ExperimentPlan(
         f"det-planners-{dim}d", "determinism", (scenario,),
         tuple(Algorithm(n, n, _options(n)) for n in names), _scales(runs, iterations),

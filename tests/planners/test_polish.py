@@ -1,4 +1,4 @@
-"""The CLI's polish (:mod:`uavplan.planners.core.polish`): tightening never raises the cost, keeps
+"""The CLI's polish (:mod:`uavplan.planners.polish`): tightening never raises the cost, keeps
 start and goal and every segment valid, and does pull a zigzag straight; a segment steeper than
 the UAV climbs is eased, and a polish never makes one."""
 
@@ -7,10 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from uavplan.planners import get_planner
-from uavplan.planners.core import polish
+from uavplan.planners import get_planner, polish
 from uavplan.planners.core.flight import flight_validator
-from uavplan.planners.core.polish import polished, tighten
+from uavplan.planners.polish import polished, tighten
 from uavplan.problems.validity import climb_violations, limit_climb
 from uavplan.scenarios import resolve
 from uavplan.world import UAV, AltitudeBand, Cylinder, Scenario, Task

@@ -11,6 +11,7 @@ import pytest
 from typer.testing import CliRunner
 
 from uavplan.cli import app
+from uavplan.planners.polish import polished
 from uavplan.scenarios import resolve
 from uavplan.world.geometry import track_crosses_itself
 
@@ -30,7 +31,7 @@ def test_polish_shortens_by_line_of_sight_and_never_costs_more() -> None:
     sc = resolve("spso")
     planner = get_planner("spso", pop_size=60)
     raw = planner.plan(sc, budget=30, seed=3)
-    pol = planner.plan(sc, budget=30, seed=3, polish=True)
+    pol = planner.plan(sc, budget=30, seed=3, polish=polished)
     assert np.array_equal(raw.waypoints[0], pol.waypoints[0])
     assert np.array_equal(raw.waypoints[-1], pol.waypoints[-1])
     note = pol.info.get("polished")
@@ -50,7 +51,7 @@ def test_polish_follows_the_terrain_where_the_flight_leaves_the_band() -> None:
     sc = resolve("jacksboro")
     planner = get_planner("spso", pop_size=50, constraints="feasibility-first")
     raw = planner.plan(sc, budget=30, seed=0)
-    pol = planner.plan(sc, budget=30, seed=0, polish=True)
+    pol = planner.plan(sc, budget=30, seed=0, polish=polished)
     assert raw.feasible and not raw.flown_feasible and "altitude" in raw.flown_violations
     assert pol.feasible and pol.flown_feasible
     assert pol.info["polished"]["steps"][:2] == ["terrain following", "shortcut"]

@@ -43,7 +43,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any, ClassVar
 
@@ -63,7 +63,6 @@ from uavplan.planners.core.options import (
     bad_value,
     type_hints,
 )
-from uavplan.planners.core.polish import polished
 from uavplan.planners.core.results import FleetResult, PlanResult, make_result
 from uavplan.planners.core.run import Outcome, ProgressCallback, Run, Termination, Tracker
 from uavplan.problems.path_problem import PRESETS, SEPARATION_TERM, PathProblem
@@ -71,6 +70,13 @@ from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 
 FloatArray = NDArray[np.float64]
+
+
+#: A single UAV's post-processing of the path its planner found, given to :meth:`Planner.plan`
+#: by the layers that choose it (the CLI's polish, :func:`uavplan.planners.polish.polished`):
+#: ``(scenario, task, problem, path) -> (path, note)``, an empty note when nothing changed. The
+#: contract only calls it; what it does is policy, kept out of the core.
+PathPolish = Callable[[Scenario, Task, PathProblem, FloatArray], tuple[FloatArray, dict[str, Any]]]
 
 
 #: The capabilities that used to be separate class attributes of a planner, refused there now
@@ -302,17 +308,17 @@ class Planner(ABC):
         seed: int | None = None,
         callback: ProgressCallback | None = None,
         reservations: ReservationTable | None = None,
-        polish: bool = False,
+        polish: PathPolish | None = None,
     ) -> PlanResult:
         """Plan ``task`` (default: the first) of ``scenario`` within ``budget`` (an int:
         iterations; default :attr:`default_iterations`) from ``seed``; ``callback(iteration,
         best)`` after every iteration may return True to stop. ``reservations``: other UAVs'
         flights to keep S2 from (planners with :attr:`supports_reservations` only).
-        ``polish``: the found path is then polished (:func:`~uavplan.planners.core.polish.polished`:
-        terrain following, tightening and line-of-sight shortcuts; ``info["polished"]`` says
-        what changed); not for planners that step in time, nor with reservations. The CLI
-        polishes unless ``--raw``; the experiments never do (the papers' numbers are the
-        optimizers' own).
+        ``polish``: the found path is then passed through it (:data:`PathPolish`; the CLI's is
+        :func:`uavplan.planners.polish.polished`: terrain following, tightening and
+        line-of-sight shortcuts; ``info["polished"]`` says what changed); not for planners that
+        step in time, nor with reservations. The CLI polishes unless ``--raw``; the
+        experiments never do (the papers' numbers are the optimizers' own).
 
         The result declares its flight (:mod:`uavplan.planners.core.flight`): the polyline itself,
         or with a turn radius its Dubins-smoothed version, checked as it will be flown."""
@@ -339,8 +345,9 @@ class Planner(ABC):
             path = np.stack([problem.start, problem.goal])
             reasons = reasons or ("no_path",)
         info = dict(outcome.info)
-        if polish and not reasons and reservations is None and not self.specs.steps_in_time:
-            path, note = polished(scenario, t, problem, np.asarray(path, dtype=np.float64))
+        steps = self.specs.steps_in_time
+        if polish is not None and not reasons and reservations is None and not steps:
+            path, note = polish(scenario, t, problem, np.asarray(path, dtype=np.float64))
             if note:
                 info["polished"] = note
         result = make_result(
@@ -513,7 +520,7 @@ class FleetPlanner(Planner):
         seed: int | None = None,
         callback: ProgressCallback | None = None,
         reservations: ReservationTable | None = None,
-        polish: bool = False,
+        polish: PathPolish | None = None,
     ) -> PlanResult:
         """A fleet of one: ``task`` alone (fleet planners keep clear of each other's UAVs
         themselves, not of flights reserved outside; ``polish`` does not apply)."""

@@ -15,6 +15,7 @@ from uavplan.planners.core.options import PlannerError
 from uavplan.planners.core.results import FleetResult, PlanResult
 from uavplan.planners.core.run import ProgressCallback
 from uavplan.planners.fleet.sequential import plan_sequentially, task_seeds
+from uavplan.planners.polish import polished
 from uavplan.world.scenario import Scenario
 
 
@@ -88,7 +89,8 @@ def plan_all(
         raise PlannerError(f"none of the tasks {list(tasks or [])} is in {scenario.name!r}")
     if len(chosen) == 1:
         cb = progress(chosen[0].id) if progress else None
-        r = planner.plan(scenario, chosen[0], budget, task_seeds(seed, 1)[0], cb, polish=polish)
+        how = polished if polish else None
+        r = planner.plan(scenario, chosen[0], budget, task_seeds(seed, 1)[0], cb, polish=how)
         return FleetPlan(scenario, planner.name, planner.describe(), seed, (r,))
     sc = dataclasses.replace(scenario, tasks=chosen)
     fr = plan_sequentially(planner, sc, budget, seed, progress)

@@ -1,7 +1,7 @@
 """The CLI's repair of a fleet's plan (:func:`~uavplan.planners.fleet.fleet_plan.plan_all` with
 ``polish=True`` and a fleet planner; the experiments never polish, so the papers' numbers are
 the planners' own). Not from any paper: the single UAV's polish and fallback
-(:mod:`uavplan.planners.core.polish`, the fallbacks of :mod:`uavplan.strategy`) carried
+(:mod:`uavplan.planners.polish`, the fallbacks of :mod:`uavplan.strategy`) carried
 over to a fleet, one UAV at a time, each against the declared flights of all the others that
 pass every check as they stand (so whatever is kept stays clear of every other UAV that is
 flown, before and after it in the priority order; a UAV whose flight fails and is not repaired
@@ -54,6 +54,7 @@ from uavplan.planners.core.flight import (
     only_separation_reads_time,
 )
 from uavplan.planners.core.results import FleetResult, PlanResult, make_result
+from uavplan.planners.polish import polished
 from uavplan.problems.validity import TIME_CHECKS, greedy_shortcut
 from uavplan.world.geometry import as_3d, track_crosses_itself
 from uavplan.world.reservations import ReservationTable
@@ -259,7 +260,7 @@ def _rrt_path(scenario: Scenario, task: Task, seed: int) -> FloatArray | None:
     from uavplan.planners.sampling.rrt_star import map_scaled_options
 
     planner = get_planner("rrt-star", **map_scaled_options(scenario))
-    res = planner.plan(scenario, task, seed=seed, polish=True)
+    res = planner.plan(scenario, task, seed=seed, polish=polished)
     return np.asarray(res.waypoints, dtype=np.float64) if res.flown_feasible else None
 
 

@@ -1,4 +1,4 @@
-"""The CLI's polish of a single UAV's found polyline (``Planner.plan(polish=True)``; the
+"""The CLI's polish of a single UAV's found polyline (``Planner.plan(polish=polished)``; the
 experiments never polish, so the papers' numbers are the optimizers' own). Not from any paper:
 cheap post-processing that planning tools commonly apply, each step judged by the
 straight-segment validator of the UAV's flight (the altitude band along whole segments,
