@@ -286,6 +286,26 @@ def test_plan_exits_1_when_the_verifier_rejects_its_plan(tmp_path: Path, monkeyp
     assert (tmp_path / "b" / "plan.json").exists()  # what was written stays, for inspection
 
 
+def test_a_plan_that_does_not_fly_is_written_refused_loudly_and_exits_1(tmp_path: Path) -> None:
+    """The goal walled in on every side: every planner and fallback fails; the plan is written
+    for inspection, the console says NOT FLYABLE naming the UAV and how to learn why, exit 1."""
+    sc = tmp_path / "boxed.yaml"
+    sc.write_text(
+        "name: boxed\nbounds: {lower: [0, 0], upper: [100, 100]}\npolygons:\n"
+        "  - vertices: [[60, 30], [90, 30], [90, 35], [60, 35]]\n"
+        "  - vertices: [[60, 65], [90, 65], [90, 70], [60, 70]]\n"
+        "  - vertices: [[60, 30], [65, 30], [65, 70], [60, 70]]\n"
+        "  - vertices: [[85, 30], [90, 30], [90, 70], [85, 70]]\n"
+        "tasks:\n  - {id: uav0, start: [10, 50], goal: [75, 50]}\n"
+    )
+    out = tmp_path / "out"
+    r = runner.invoke(app, ["plan", str(sc), "--iterations", "20", "--out", str(out)])
+    assert r.exit_code == 1, r.output
+    assert "NOT FLYABLE: 1 of 1 UAVs' flown trajectories fail a check (uav0)" in r.output
+    assert f"uavplan explain {out}" in r.output
+    assert json.loads((out / "plan.json").read_text())["feasible"] is False
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [

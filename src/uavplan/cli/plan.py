@@ -393,6 +393,8 @@ def _summary(plan: Any, times: tuple[float, float, int], out_dir: Path) -> None:
             f"({', '.join(bad[:10])}{' ...' if len(bad) > 10 else ''}); plan.json says "
             "feasible: false; do not fly this plan"
         )
+        err.print(f"why, UAV by UAV: uavplan explain {out_dir}; the planners' searches are "
+                  "random, so another --seed is another plan", markup=False)  # fmt: skip
         if plan.planned_feasible and kinds["polyline"] and plan.scenario.uav.turn_radius > 0:
             err.print(
                 "the plan declares its planned polylines as the flights (flight=after or none), "
