@@ -5,6 +5,7 @@ that needs nothing."""
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 import numpy as np
 import pytest
@@ -73,15 +74,21 @@ def _verified(sc: Scenario, fr: FleetResult) -> bool:
     return bool(verify_plan(d, sc).ok)
 
 
-def test_a_uav_through_a_cylinder_is_replanned_and_verified(planned) -> None:  # type: ignore[no-untyped-def]
-    sc, fr, cfg = planned
+def _through_a_cylinder(sc: Scenario, fr: FleetResult) -> tuple[Any, int, FleetResult]:
+    """``fr`` with its second task's UAV flying straight through the cylinder nearest the
+    middle of its way: (the task, its index in the results, the fleet)."""
     task = sc.tasks[1]
     c = sc.cylinders[int(np.argmin([np.hypot(*(np.asarray(cy.center[:2]) -
                                                (np.asarray(task.start[:2]) + task.goal[:2]) / 2))
                                     for cy in sc.cylinders]))]  # fmt: skip
     through = np.array([task.start, [c.center[0], c.center[1], task.start[2]], task.goal])
     k = [r.uav_id for r in fr.results].index(task.id)
-    bad = _replace_uav(sc, fr, k, through)
+    return task, k, _replace_uav(sc, fr, k, through)
+
+
+def test_a_uav_through_a_cylinder_is_replanned_and_verified(planned) -> None:  # type: ignore[no-untyped-def]
+    sc, fr, cfg = planned
+    task, k, bad = _through_a_cylinder(sc, fr)
     assert not bad.feasible and not bad.results[k].flown_ok
     assert not _verified(sc, bad)
     out = polish_fleet(sc, bad, 7, cfg)
@@ -115,6 +122,27 @@ def test_a_looping_uav_is_untangled(planned) -> None:  # type: ignore[no-untyped
     assert not track_crosses_itself(out.results[k].waypoints)
     assert out.results[k].length < bent.results[k].length
     assert out.feasible and _verified(sc, out)
+
+
+def test_a_uav_no_repair_helps_keeps_its_plan_and_the_story_says_what_was_tried(
+    planned, monkeypatch
+) -> None:  # type: ignore[no-untyped-def]
+    """Through a cylinder, with RRT* finding nothing (patched): the UAV keeps its failing
+    plan, the fleet stays infeasible, and its unresolved event says what the repair tried."""
+    from uavplan.planners.core.events import plan_events
+    from uavplan.planners.fleet import fleet_polish
+
+    sc, fr, cfg = planned
+    task, _, bad = _through_a_cylinder(sc, fr)
+    monkeypatch.setattr(fleet_polish, "_rrt_path", lambda *a: None)
+    out = polish_fleet(sc, bad, 7, cfg)
+    assert not out.feasible and out.info["repair"] == {}
+    tried = out.info["unrepaired"][task.id]
+    assert "later take-offs: none flies" in tried
+    assert f"{fleet_polish.RRT_TRIES} RRT* tries: no path whose flight passes even alone" in tried
+    plan = FleetPlan(sc, "ppswarm", {}, 7, out.results, out)
+    (e,) = [e for e in plan_events(plan) if e.kind == "unresolved"]
+    assert e.uav == task.id and "cylinders" in e.detail and tried in e.detail
 
 
 def test_a_fleet_that_needs_nothing_is_left_as_it_is(planned) -> None:  # type: ignore[no-untyped-def]

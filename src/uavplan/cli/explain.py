@@ -47,7 +47,7 @@ def story_lines(doc: dict[str, Any], report: Any, everyone: bool = False) -> lis
         lines.append("restarts of the whole fleet: " + "; ".join(e.detail for e in restarts))
     told: dict[str, list[Event]] = {u: [] for u in ids}
     for e in events:
-        if e.uav in told and e.kind != "unresolved":  # the verifier's finding says more
+        if e.uav in told:  # an unresolved UAV's event says what the repair tried
             told[e.uav].append(e)
     fails: dict[str, list[str]] = {}
     for v in report.violations:
@@ -56,7 +56,7 @@ def story_lines(doc: dict[str, Any], report: Any, everyone: bool = False) -> lis
                 fails.setdefault(u, []).append(f"FAILS {v.kind}: {v.message}")
     for e in events:
         if e.kind == "unresolved" and e.uav in told and e.uav not in fails:
-            fails[e.uav] = [f"the planner says {e.detail}; the verifier finds no violation"]
+            fails[e.uav] = ["the verifier finds no violation in this UAV's flight"]
 
     def story(u: str) -> list[str]:
         return (

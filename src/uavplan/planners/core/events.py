@@ -5,8 +5,8 @@ flight left failing), what each restart of the fleet gave, and which attempts a 
 (:func:`diagnostics`), ``uavplan explain`` tells them.
 
 The fleet engine keeps its records in the results' ``info`` (``rescue`` per UAV, ``delayed``,
-``repair`` and ``best_restart`` per fleet); :func:`plan_events` reads them into events, one
-vocabulary for every planner (:data:`KINDS`)."""
+``repair``, ``unrepaired`` (what the repair tried) and ``best_restart`` per fleet);
+:func:`plan_events` reads them into events, one vocabulary for every planner (:data:`KINDS`)."""
 
 from __future__ import annotations
 
@@ -71,6 +71,7 @@ def plan_events(plan: FleetPlan) -> tuple[Event, ...]:
     fleet = plan.fleet
     finfo = dict(fleet.info) if fleet is not None else {}
     delayed = dict(finfo.get("delayed") or {})
+    unrepaired = dict(finfo.get("unrepaired") or {})
     out: list[Event] = []
     for r in plan.results:
         rescue = (r.info or {}).get("rescue")
@@ -87,8 +88,10 @@ def plan_events(plan: FleetPlan) -> tuple[Event, ...]:
         if not r.flown_feasible:
             checks = list(dict.fromkeys(str(v).split(":")[0]
                                         for v in (r.flown_violations or r.violations)))  # fmt: skip
-            out.append(Event("unresolved", r.uav_id,
-                             "its flight fails: " + (", ".join(checks) or "a check")))  # fmt: skip
+            tried = unrepaired.get(r.uav_id)
+            why = f"; the repair after planning tried {tried}" if tried else ""
+            fails = ", ".join(checks) or "a check"
+            out.append(Event("unresolved", r.uav_id, f"its flight fails: {fails}{why}"))
     if fleet is not None and len(fleet.restart_costs) > 1:
         best = finfo.get("best_restart")
         for k, c in enumerate(fleet.restart_costs, start=1):

@@ -293,6 +293,7 @@ def polish_fleet(
     order = [u for u in fleet.priority if u in index] or list(index)
     rngs = np.random.SeedSequence(seed).spawn(len(results))
     repaired: dict[str, str] = {}
+    unrepaired: dict[str, str] = {}  # what was tried for each UAV no repair helped
     # a failing UAV is repaired against the flights that pass (a failing one is replaced, or
     # the fleet fails anyway): one table for all of them, each repaired flight added to it
     passing: ReservationTable | None = None
@@ -322,10 +323,13 @@ def polish_fleet(
             return f"{what}{later}{after}"
 
         new: PlanResult | None = None
+        tried: list[str] = []  # what was tried, for a UAV left unrepaired
         if loops:
             cut, _, _ = greedy_shortcut(static, cut_loops(r.waypoints))
             new = _try(scenario, task, r, cut, table, opts, "loop cut")
+            tried.append("the loop cut")
         elif not r.flown_feasible and len(starts) > 1:  # its own flight, later (no search)
+            tried.append(f"its own path at {len(starts) - 1} later take-offs: none flies")
             own = None
             if r.flown is not None and set(r.flown_violations) <= TIME_CHECKS:
                 own = [Flight(np.asarray(r.flown), np.asarray(r.flown_times) - r.times[0]
@@ -333,9 +337,11 @@ def polish_fleet(
             new = _first_slot(scenario, tasks[uid], r, r.waypoints, table, opts, starts[1:],
                               functools.partial(how, "its own path"), own,
                               fill=delay_step)  # fmt: skip
+        alone = 0  # RRT* tries whose path flies nowhere, even alone
         for a, ss in enumerate(rngs[k].spawn(RRT_TRIES) if new is None else ()):
             found = _rrt_path(scenario, tasks[uid], int(ss.generate_state(1)[0]))
             if found is None:
+                alone += 1
                 continue
             short, _, _ = greedy_shortcut(static, found)
             # the shortcut first; then the path as RRT*'s polish left it, whose flight passed
@@ -350,6 +356,12 @@ def polish_fleet(
                     break
             if new is not None:
                 break
+        if new is None and not r.flown_feasible:
+            if alone < RRT_TRIES:
+                tried.append(f"{RRT_TRIES - alone} RRT* path(s): none flies at any take-off tried")
+            if alone:
+                tried.append(f"{alone} RRT* tries: no path whose flight passes even alone")
+            unrepaired[uid] = "; ".join(tried)
         if new is not None:
             results[k] = new
             repaired[uid] = str(new.info["repaired"])
@@ -359,6 +371,8 @@ def polish_fleet(
                 passing = None
     spent = time.perf_counter() - t0  # the user waits for it: it is planning time
     info = {**fleet.info, "repair": repaired, "repair_time": spent}
+    if unrepaired:
+        info["unrepaired"] = unrepaired
     if not repaired:
         return dataclasses.replace(fleet, wall_time=fleet.wall_time + spent, info=info)
     out = tuple(results)
