@@ -95,8 +95,9 @@ SPEC_FIELDS = (
 
 @dataclass(frozen=True)
 class PlannerSpecs:
-    """What a planner class can do, in one record the framework reads (the CLI, the fleet
-    engine, the memory estimate, the contract tests), instead of flags spread over the class.
+    """What a planner class can do, in one record the framework reads (:meth:`Planner.plan`'s
+    checks and budget, the CLI, single-UAV planners run as a fleet, the contract tests), instead
+    of flags spread over the class.
 
     dims: the scenario dimensions it plans.
     default_iterations: its iteration budget when none is given.
