@@ -36,6 +36,13 @@ def test_the_diagnostics_section_tells_each_uavs_rescue(fleet_plan: Path) -> Non
     assert len(restarts) == len(doc["fleet"]["restart_costs"]) and any(
         "(kept)" in e.detail for e in restarts
     )
+    # each restart's UAVs left failing are kept (a restart with any has an infinite cost), and
+    # its event names them
+    failed = doc["fleet"]["info"]["restart_failed"]
+    assert len(failed) == len(restarts)
+    for e, left, c in zip(restarts, failed, doc["fleet"]["restart_costs"], strict=True):
+        assert not left or c is None, (e, left, c)
+        assert all(u in e.detail for u in left[:8]) and ("left failing" in e.detail) == bool(left)
     from uavplan.io.plan_file import PlanSpec
 
     PlanSpec.model_validate(doc)  # the schema holds the section
@@ -117,3 +124,28 @@ def test_a_large_fleets_story_puts_the_failures_first_and_tells_mass_rescues_by_
     every = story_lines(doc, SimpleNamespace(violations=[finding]), everyone=True)
     assert sum(x.startswith("  waited:") for x in every) == 30
     assert sum(x.endswith("flies its first planned flight") for x in every) == 7
+
+
+def test_a_discarded_restarts_failures_are_named() -> None:
+    """The restart events read the engine's record of each restart's UAVs left failing."""
+    import dataclasses
+
+    from uavplan.planners import get_planner
+    from uavplan.planners.core.events import plan_events
+    from uavplan.planners.fleet.fleet_plan import plan_all
+    from uavplan.scenarios import resolve
+
+    plan = plan_all(resolve("ppswarm1@3"), get_planner("ppswarm", n_iter=2, n_restart=2), None, 0)
+    assert plan.fleet is not None and len(plan.fleet.info["restart_failed"]) == 2
+    left = [f"uav{i}" for i in range(10)]
+    fleet = dataclasses.replace(
+        plan.fleet,
+        restart_costs=(1.0, float("inf")),
+        info={**plan.fleet.info, "best_restart": 1, "restart_failed": [[], left]},
+    )
+    restarts = [e for e in plan_events(dataclasses.replace(plan, fleet=fleet))
+                if e.kind == "restart"]  # fmt: skip
+    assert [e.detail for e in restarts] == [
+        "1: cost 1 (kept)",
+        "2: 10 UAV(s) left failing: uav0, uav1, uav2, uav3, uav4, uav5, uav6, uav7 and 2 more",
+    ]

@@ -27,7 +27,7 @@ KINDS: Mapping[str, str] = {
     "delayed": "its path was planned again from a later take-off",
     "repaired": "re-flown after planning against every other UAV's flight",
     "unresolved": "its flight fails a check as planned; the plan does not fly",
-    "restart": "one restart of the whole fleet: its cost (inf: a UAV left infeasible)",
+    "restart": "one restart of the whole fleet: its cost, or the UAVs it left failing",
     "attempt": "one planner run of the strategy (uavplan plan without -a)",
 }
 
@@ -94,9 +94,18 @@ def plan_events(plan: FleetPlan) -> tuple[Event, ...]:
             out.append(Event("unresolved", r.uav_id, f"its flight fails: {fails}{why}"))
     if fleet is not None and len(fleet.restart_costs) > 1:
         best = finfo.get("best_restart")
+        failed = list(finfo.get("restart_failed") or [])
         for k, c in enumerate(fleet.restart_costs, start=1):
             kept = " (kept)" if best == k else ""
-            what = f"cost {float(c):.6g}" if math.isfinite(c) else "a UAV left infeasible"
+            what = f"cost {float(c):.6g}"
+            left = failed[k - 1] if k <= len(failed) else []
+            if not math.isfinite(c) and k > len(failed):  # a plan from before the record
+                what = "a UAV left infeasible"
+            elif not math.isfinite(c) and not left:  # every flight passes, a path's cost is inf
+                what = "cost inf (every UAV's flight passes)"
+            if left:  # which, so that a discarded restart's failures are not lost
+                more = f" and {len(left) - 8} more" if len(left) > 8 else ""
+                what = f"{len(left)} UAV(s) left failing: {', '.join(left[:8])}{more}"
             out.append(Event("restart", None, f"{k}: {what}{kept}", float(c)))
     return tuple(out)
 

@@ -285,6 +285,7 @@ class PrioritizedPlanner(FleetPlanner):
         last_pop: list[FloatArray | None] = [None] * M
         best: tuple[Any, ...] | None = None
         restart_costs: list[float] = []
+        restart_failed: list[list[str]] = []  # each restart's UAVs left failing, in order
         fleet_history: list[float] = []
         per_uav_cost = np.full(M, np.inf)
         evaluations = 0
@@ -356,6 +357,8 @@ class PrioritizedPlanner(FleetPlanner):
             n_bad = sum(not ok(res) for res in finished)
             total = float(sum(res.cost for res in finished))
             restart_costs.append(np.inf if n_bad else total)
+            restart_failed.append([tasks[m].id for m in priority
+                                   if results[m] is not None and not ok(results[m])])  # fmt: skip
             key = (n_bad, total)
             if best is None or key < best[0]:
                 best = (key, finished, [tasks[m].id for m in priority], r, dict(delayed))
@@ -378,6 +381,7 @@ class PrioritizedPlanner(FleetPlanner):
             "n_infeasible": int(n_bad),
             "n_iter": n_iter,
             "delayed": delays,
+            "restart_failed": restart_failed,
             # what each UAV was kept S2 from: the flights (in-loop) or the polylines (paper)
             "separated": "flights" if in_loop else "polylines",
         }
