@@ -74,6 +74,33 @@ def test_more_threads_switch_to_the_parallel_build_after_the_serial_time(
     assert k.parallel.signatures
 
 
+def test_a_parallel_build_that_cannot_be_built_falls_back_to_the_serial_one(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A parallel build that fails before it has ever run (as Numba's parfor lowering of some
+    tuple arguments does) is not used again: the serial build answers, with the same bits; once
+    the parallel build has run, its errors are the run's and propagate."""
+    k = _fresh()
+    x = np.ones((4, 3))
+    monkeypatch.setattr(numba, "get_num_threads", lambda: 2)
+    k.switched = True
+
+    def cannot_build(*args: object) -> None:
+        raise TypeError("scalar type Tuple(...) given for non scalar argument #29")
+
+    monkeypatch.setattr(k, "parallel", cannot_build)
+    np.testing.assert_array_equal(k(x), np.full(4, 3.0))
+    assert k.parallel_error is not None and "argument #29" in k.parallel_error
+    np.testing.assert_array_equal(k(x), np.full(4, 3.0))  # the serial build from then on
+    k2 = _fresh()
+    k2.switched = True
+    np.testing.assert_array_equal(k2(x), np.full(4, 3.0))  # the parallel build runs
+    assert k2.parallel_ran and k2.parallel_error is None
+    monkeypatch.setattr(k2, "parallel", cannot_build)
+    with pytest.raises(TypeError, match="argument #29"):
+        k2(x)
+
+
 def test_modes_override_the_rule_and_reject_unknown_names() -> None:
     k = _fresh()
     previous = kernel_builds.set_mode("always")

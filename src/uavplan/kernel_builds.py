@@ -91,7 +91,28 @@ class PopulationKernel:
         self.serial_seconds = 0.0
         self.serial_calls = 0
         self.switched = False
+        #: the parallel build has run once (so an error from it is the run's, not its build's)
+        self.parallel_ran = False
+        #: why the parallel build could not be used (it failed to compile), else None
+        self.parallel_error: str | None = None
         ALL.append(self)
+
+    def _parallel_or_serial(self, *args: Any) -> Any:
+        """The parallel build; where it fails before it has ever run (Numba cannot build it
+        for these arguments: some parfor lowerings of tuple arguments fail), the serial build
+        from then on, which gives the same bits (the module docstring). ``always`` mode never
+        falls back: benchmarks of the parallel builds must see the failure."""
+        if self.parallel_error is None:
+            try:
+                out = self.parallel(*args)
+            except Exception as exc:  # any failure to build it
+                if self.parallel_ran:
+                    raise
+                self.parallel_error = f"{type(exc).__name__}: {exc}"
+            else:
+                self.parallel_ran = True
+                return out
+        return self.serial(*args)
 
     def use_parallel(self) -> bool:
         """Whether the next call runs the parallel build."""
@@ -104,7 +125,7 @@ class PopulationKernel:
             return (self.parallel if _mode == "always" else self.serial)(*args)
         threads = numba.get_num_threads()
         if threads == 1 or self.switched:
-            return (self.parallel if threads > 1 else self.serial)(*args)
+            return self._parallel_or_serial(*args) if threads > 1 else self.serial(*args)
         n0, t0 = len(self.serial.overloads), time.perf_counter()
         result = self.serial(*args)
         if len(self.serial.overloads) != n0:
