@@ -307,15 +307,32 @@ def test_a_fixed_wing_without_speed_to_spare_plans_for_the_wind(
 
 def test_default_plans_turn_no_tighter_than_the_airframe_flies_in_wind() -> None:
     from uavplan.scenarios import resolve
-    from uavplan.world.airframes import SMALL_FIXED_WING, turn_radius_in_wind
+    from uavplan.world.airframes import (
+        SMALL_FIXED_WING,
+        l1_distance,
+        planned_turn_radius,
+        turn_radius_in_wind,
+    )
     from uavplan.world.execution import flyable_turns
 
     sc = resolve("ppswarm1@4")
-    r = turn_radius_in_wind(SMALL_FIXED_WING, float(sc.uav.speed))
+    banked = turn_radius_in_wind(SMALL_FIXED_WING, float(sc.uav.speed))
     # 23 m/s over the ground at a 65 degree bank: 25.2 m, above the scenario's 20 m
-    assert r == pytest.approx(23.0**2 / (9.80665 * np.tan(np.radians(65.0))))
+    assert banked == pytest.approx(23.0**2 / (9.80665 * np.tan(np.radians(65.0))))
+    # and the L1 guidance at 23 m/s (6 s period, 0.75 damping) aims 32.9 m ahead: the larger
+    r = l1_distance(SMALL_FIXED_WING, 23.0)
+    assert r == pytest.approx(0.75 * 6.0 * 23.0 / np.pi) and r > banked
+    assert planned_turn_radius(SMALL_FIXED_WING, float(sc.uav.speed)) == pytest.approx(r)
+    # a quicker guidance (a 3 s period) leaves the bank limit the binding one
+    quick = dataclasses.replace(SMALL_FIXED_WING, l1_period=3.0)
+    assert planned_turn_radius(quick, 20.0) == pytest.approx(banked)
     wider, planned = flyable_turns(sc)
     assert planned == pytest.approx(r) and wider.uav.turn_radius == pytest.approx(r) and r > 20.0
+    from uavplan.strategy.world import planning_world
+
+    line = planning_world(sc, "ppswarm1@4").turns_line()
+    assert line is not None and line.startswith("turns planned at 32.9 m radius, not 20 m")
+    assert "L1 guidance's look-ahead at 23 m/s" in line and "allows 25.2 m" in line
     assert wider.uav.speed == sc.uav.speed and wider.tasks == sc.tasks
     # a UAV that names no airframe keeps its turns
     unnamed = dataclasses.replace(sc, uav=dataclasses.replace(sc.uav, airframe=None))

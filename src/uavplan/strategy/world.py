@@ -73,12 +73,22 @@ class PlanningWorld:
         af = self.airframe
         if af is None or self.turn_radius <= 0:
             return None
-        why = (f"the tightest a {af.name} flies at its {af.max_bank_deg:g} degree bank "
-               f"limit with {af.turn_wind:g} m/s of wind behind it"
-               if af.kind == "fixed-wing" else
-               f"a {af.name} turning at its cruise speed with {af.turn_accel:g} m/s^2 "
-               "(its mission would slow down for a sharper corner, late on the "
-               "plan's schedule)")  # fmt: skip
+        if af.kind == "fixed-wing":
+            from uavplan.world.airframes import turn_radius_in_wind
+
+            v = float(self.world.uav.speed)
+            banked = turn_radius_in_wind(af, v)
+            why = (f"the tightest a {af.name} flies at its {af.max_bank_deg:g} degree bank "
+                   f"limit with {af.turn_wind:g} m/s of wind behind it"
+                   if banked >= self.turn_radius - 1e-9 else
+                   f"its L1 guidance's look-ahead at {v + af.turn_wind:g} m/s over the ground "
+                   f"(a tighter turn is cut going in and overshot coming out; its "
+                   f"{af.max_bank_deg:g} degree bank limit with {af.turn_wind:g} m/s of wind "
+                   f"behind it allows {banked:.1f} m)")  # fmt: skip
+        else:
+            why = (f"a {af.name} turning at its cruise speed with {af.turn_accel:g} m/s^2 "
+                   "(its mission would slow down for a sharper corner, late on the "
+                   "plan's schedule)")  # fmt: skip
         return (f"turns planned at {self.turn_radius:.1f} m radius, not {self.given_turn:g} m: "
                 f"{why} (--nominal plans the scenario's turns)")  # fmt: skip
 

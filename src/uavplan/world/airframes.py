@@ -54,7 +54,8 @@ class Airframe:
             never assumes less than 3 m and 2 m).
         turn_wind: the wind (m/s) a fixed wing's planned turns leave room for, the
             calibration's: uavplan's default plans its turns no tighter than the airframe can
-            fly at its bank limit with this much wind behind it (:func:`turn_radius_in_wind`).
+            fly at its bank limit with this much wind behind it (:func:`turn_radius_in_wind`)
+            nor than its L1 distance at that ground speed (:func:`planned_turn_radius`).
         speed_margin: how much faster than the plan's cruise speed the airframe can fly, a
             fraction of it (the airspeed a fixed wing may take to hold its commanded ground
             speed into a headwind; a multirotor's velocity limit, whose controller holds
@@ -159,12 +160,26 @@ def bank_for(speed: float, radius: float) -> float:
 
 def planned_turn_radius(af: Airframe, speed: float) -> float:
     """The tightest turn (m) uavplan's default plans for airframe ``af`` at ``speed``: a fixed
-    wing's at its bank limit with its ``turn_wind`` behind it (:func:`turn_radius_in_wind`); a
-    multirotor's at its ``turn_accel`` (``v^2 / a``: a turn it flies at the planned speed,
-    where its mission would slow down for a corner); 0 for none."""
+    wing's at its bank limit with its ``turn_wind`` behind it (:func:`turn_radius_in_wind`),
+    and no tighter than its guidance's L1 distance at that ground speed
+    (:func:`l1_distance`); a multirotor's at its ``turn_accel`` (``v^2 / a``: a turn it flies
+    at the planned speed, where its mission would slow down for a corner); 0 for none."""
     if af.kind == "fixed-wing":
-        return turn_radius_in_wind(af, speed)
+        return max(turn_radius_in_wind(af, speed), l1_distance(af, speed + af.turn_wind))
     return speed * speed / af.turn_accel if af.turn_accel > 0 else 0.0
+
+
+def l1_distance(af: Airframe, ground_speed: float) -> float:
+    """How far ahead (m) a fixed wing's L1 guidance aims at ``ground_speed``:
+    ``damping * period * v / pi`` (ArduPilot's ``AP_L1_Control``, Park, Deyst and How 2004).
+
+    The law steers towards the point of the path this far ahead, so along a turn whose radius
+    is below it the point runs off the arc onto the next leg before the UAV does: it turns in
+    late and swings out of a long turn at its bank limit. Flown in simulation, the small fixed
+    wing's default plans with turns at the bank limit in wind (25.2 m) left their tracking
+    error far more often than with turns at this distance (33 m); docs/decisions.md, "Flight
+    simulation", and docs/results.md give the runs."""
+    return af.l1_damping * af.l1_period * ground_speed / math.pi
 
 
 def turn_radius_in_wind(af: Airframe, speed: float, wind: float | None = None) -> float:

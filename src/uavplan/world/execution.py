@@ -180,7 +180,8 @@ def flyable_turns(scenario: Scenario) -> tuple[Scenario, float]:
     (:func:`uavplan.world.airframes.planned_turn_radius`) when that is larger, and the radius
     now planned (0 when unchanged). A fixed wing's turns planned at the bank limit in still
     air swing wide downwind (flown in simulation, such turns carried the largest tracking
-    errors of uavplan's default fleets); a multirotor's polyline corners are flown slower
+    errors of uavplan's default fleets), and turns tighter than its L1 guidance's look-ahead
+    are cut on entry and overshot on exit; a multirotor's polyline corners are flown slower
     than the plan's constant speed (its mission slows down for each), late by tens of seconds
     over a flight, so its corners are planned as curves it flies at speed. A fixed wing
     without a turn radius in the scenario keeps it (its limits are the scenario's)."""
