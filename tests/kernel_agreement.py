@@ -5,10 +5,12 @@ them, bit for bit (``uavplan.kernel_builds``).
 
 runs a small workload (``uavplan plan`` on built-in scenarios covering 2-D scenes, terrain,
 cylinders, fleets and moving obstacles; 200-obstacle worlds for the indexed passes; the reference
-kernels called directly), keeps the first calls of each kernel, runs both builds on copies of
-their arguments and prints one JSON line: the kernels compared, those never called, and those
-whose builds differ. ``tests/test_kernel_builds.py`` runs it (a slow test: it compiles every
-parallel build).
+kernels called directly), keeps each kernel's first calls for each set of argument types (a
+kernel called with other types is another build), runs both builds on copies of their
+arguments and prints one JSON line: the kernels compared, those never called, those whose
+parallel build Numba cannot build for a real call's types (a run then falls back to the
+serial build and loses the parallel speed) and those whose builds differ.
+``tests/test_kernel_builds.py`` runs it (a slow test: it compiles every parallel build).
 """
 
 from __future__ import annotations
@@ -20,13 +22,15 @@ import sys
 import tempfile
 from typing import Any
 
+import numba
 import numpy as np
 
 from uavplan import kernel_builds
 from uavplan.kernel_builds import ALL, PopulationKernel
 
-#: calls kept per kernel
-KEEP = 3
+#: calls kept per kernel and argument types (a kernel called with other types is another
+#: build: each is compared)
+KEEP = 2
 #: (scenario, planner, extra CLI options) of the workload
 PLANS = [
     ("simple2d", "spso", []),
@@ -57,10 +61,14 @@ def record() -> dict[str, list[tuple[Any, ...]]]:
     calls: dict[str, list[tuple[Any, ...]]] = {}
     original = PopulationKernel.__call__
 
+    seen: dict[tuple[str, str], int] = {}
+
     def keep(self: PopulationKernel, *args: Any) -> Any:
-        kept = calls.setdefault(self.__qualname__, [])
-        if len(kept) < KEEP:
-            kept.append(tuple(_copy(a) for a in args))
+        types = str(tuple(numba.typeof(a) for a in args))
+        n = seen.get((self.__qualname__, types), 0)
+        if n < KEEP:
+            seen[(self.__qualname__, types)] = n + 1
+            calls.setdefault(self.__qualname__, []).append(tuple(_copy(a) for a in args))
         return original(self, *args)
 
     from uavplan.cli import app
@@ -118,25 +126,28 @@ def _direct_calls() -> None:
 
 
 def compare(calls: dict[str, list[tuple[Any, ...]]]) -> dict[str, Any]:
-    differ = []
+    differ, cannot_build = [], []
     for qualname, kept in sorted(calls.items()):
         k = next(k for k in ALL if k.__qualname__ == qualname)
         for args in kept:
             a = k.serial(*(_copy(x) for x in args))
-            b = k.parallel(*(_copy(x) for x in args))
+            try:
+                b = k.parallel(*(_copy(x) for x in args))
+            except Exception as exc:  # Numba cannot build it for these argument types
+                cannot_build.append(f"{qualname}: {type(exc).__name__}: {str(exc)[:300]}")
+                break
             if not _same(a, b):
                 differ.append(qualname)
                 break
     names = {k.__module__ + "." + k.__qualname__ for k in ALL}
     seen = {k.__module__ + "." + k.__qualname__ for k in ALL if k.__qualname__ in calls}
     return {"compared": sorted(seen), "not_called": sorted(names - seen), "differ": differ,
-            "registered": sorted(names)}  # fmt: skip
+            "cannot_build": cannot_build, "registered": sorted(names),
+            "calls": sum(map(len, calls.values()))}  # fmt: skip
 
 
 if __name__ == "__main__":
-    import numba
-
     report = compare(record())
     report["threads"] = numba.get_num_threads()
     print(json.dumps(report))
-    sys.exit(1 if report["differ"] or report["not_called"] else 0)
+    sys.exit(1 if report["differ"] or report["not_called"] or report["cannot_build"] else 0)

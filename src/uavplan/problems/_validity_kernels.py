@@ -31,7 +31,7 @@ def static_path_ok(paths, p, args, waypoint_band=True):  # pragma: no cover - nu
     objective calls it too).
     ``args``: the tuple ``(lo, hi, bounds_tol, cyl_c, cyl_r, cyl_lo, cyl_hi, has_terrain, H,
     flat, off, shp, nH, nflat, noff, nshp, grid, need, has_band, band_ground, nearest, bmin, bmax,
-    band_tol, strict, max_climb, max_descent, scene)``
+    band_tol, strict, max_climb, max_descent, *scene)``
     (:meth:`~uavplan.problems.validity.MotionValidator.static_kernel_args`; the climb and
     descent limits in degrees, inf where not checked, as
     :func:`~uavplan.problems.validity.climb_violations` tests them).
@@ -44,42 +44,16 @@ def static_path_ok(paths, p, args, waypoint_band=True):  # pragma: no cover - nu
     segments); ``need``: the least clearance above the terrain; the band
     ``[bmin, bmax]`` above ground (``band_ground``; at the waypoints the ground is read at the
     ``nearest`` node, else bilinear) or absolute, within ``band_tol``, and along whole segments
-    when ``strict`` (ground band over terrain only); ``scene``: ``(verts, starts, circ, poly,
-    convex, edges, hull_s, maxv)``, the circles and polygons whose ground tracks it tests
+    when ``strict`` (ground band over terrain only); ``scene``: ``verts, starts, circ, poly,
+    convex, edges, hull_s, maxv``, the circles and polygons whose ground tracks it tests
     (:func:`uavplan.world.geometry.scene2d.segment_scene_hit`, empty where the validator
-    leaves them to the 2-D scene pass).
+    leaves them to the 2-D scene pass), flattened into ``args``: Numba's parallel build
+    cannot pass a tuple nested in a tuple argument to its parallel loop.
     """
-    (
-        lo,
-        hi,
-        bounds_tol,
-        cyl_c,
-        cyl_r,
-        cyl_lo,
-        cyl_hi,
-        has_terrain,
-        H,
-        flat,
-        off,
-        shp,
-        nH,
-        nflat,
-        noff,
-        nshp,
-        grid,
-        need,
-        has_band,
-        band_ground,
-        nearest,
-        bmin,
-        bmax,
-        band_tol,
-        strict,
-        max_climb,
-        max_descent,
-        scene,
-    ) = args
-    verts, starts, circ, poly, convex, edges, hull_s, maxv = scene
+    (lo, hi, bounds_tol, cyl_c, cyl_r, cyl_lo, cyl_hi, has_terrain, H, flat, off, shp, nH,
+     nflat, noff, nshp, grid, need, has_band, band_ground, nearest, bmin, bmax, band_tol, strict,
+     max_climb, max_descent, verts, starts, circ, poly, convex, edges, hull_s,
+     maxv) = args  # fmt: skip
     N = paths.shape[1]
     J = cyl_c.shape[0]
     x0, y0, dx, dy = grid[0], grid[1], grid[2], grid[3]

@@ -495,7 +495,7 @@ class MotionValidator:
             band is not None, ground, self.lookup == "nearest",
             float(band.min) if band is not None else 0.0,
             float(band.max) if band is not None else 0.0,
-            BAND_TOL, strict, *self._climb_limits, self._static_scene,
+            BAND_TOL, strict, *self._climb_limits, *self._static_scene,
         )  # fmt: skip
 
     @property
