@@ -96,7 +96,11 @@ def _direct_calls() -> None:
     per-pair distances and the reference kernels (those of the fused costs among them)."""
     from uavplan.problems import costs
     from uavplan.world import geometry
-    from uavplan.world._terrain_kernels import mean_height_batch, mean_height_batch_reference
+    from uavplan.world._terrain_kernels import (
+        mean_height_batch,
+        mean_height_batch_reference,
+        mean_height_lower_batch,
+    )
 
     rng = np.random.default_rng(0)
     paths = rng.uniform(0, 1000, (40, 12, 3))
@@ -123,6 +127,9 @@ def _direct_calls() -> None:
     u, v = rng.uniform(0, 59, (40, 12)), rng.uniform(0, 49, (40, 12))
     mean_height_batch(H, u, v)
     mean_height_batch_reference(H, u, v)
+    # HR-MAGA's lower bound of the terrain term over 8 x 8 blocks (reached on larger maps)
+    Hb = np.ascontiguousarray(rng.uniform(0, 100, (7, 8)))
+    mean_height_lower_batch(Hb, 8.0, 1e-9, u, v)
 
 
 def compare(calls: dict[str, list[tuple[Any, ...]]]) -> dict[str, Any]:
