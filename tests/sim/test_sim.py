@@ -253,6 +253,23 @@ def test_simulate_command(small_plan: Path, tmp_path: Path) -> None:
     assert bad.exit_code == 2 and "--turbulence 'gale'" in bad.output
 
 
+def test_a_folder_named_as_the_scenario_does_not_hide_it(
+    small_plan: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A built-in scenario's name means the built-in, as for every command, even where the
+    working folder holds a folder of that name (a plan written with ``--out ppswarm1@4``):
+    the runs used to read the name as that folder and fail one by one."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "ppswarm1@4").mkdir()
+    plan = str(small_plan / "plan.json")
+    r = CliRunner().invoke(app, ["simulate", plan, "ppswarm1@4", "--runs", "1", "--executor",
+                                 "serial", "--out", "sim"])  # fmt: skip
+    assert r.exit_code in (0, 1), r.output
+    assert "failed to run" not in r.output
+    doc = json.loads((tmp_path / "sim" / "simulate.json").read_text())
+    assert doc["scenario"] == "ppswarm1@4" and doc["summary"]["runs"] == 1
+
+
 def test_simulating_a_refused_plan_says_so_and_exits_1(small_plan: Path, tmp_path: Path) -> None:
     """A plan whose own checks fail for a UAV is simulated all the same (to see how it would
     fly), but the command says loudly that it is not flyable and exits 1 even when no run

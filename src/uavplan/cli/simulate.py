@@ -63,6 +63,7 @@ def simulate(
     from uavplan.bench.runner import SweepInterrupted, SweepStopped, run_sweep
     from uavplan.bench.simulation import simulation_plan, summarize
     from uavplan.io.plan_file import PlanFormatError, plan_path, read_plan_file
+    from uavplan.scenarios import builtin_names
     from uavplan.sim.turbulence import INTENSITIES
     from uavplan.world.airframes import AIRFRAMES, airframe_of
 
@@ -91,7 +92,7 @@ def simulate(
     assert world is not None
     if world.dim != 3 or plan.dim != 3:
         raise fail(f"{shown}: simulation flies 3-D plans (this one is {plan.dim}-D)")
-    if Path(ref).exists():
+    if Path(ref).is_file() and ref not in builtin_names():  # as resolve() reads it
         ref = str(Path(ref).resolve())
     af = AIRFRAMES[airframe] if airframe else airframe_of(world.uav)
     options = {"wind_max": wind, "turbulence": turbulence, "takeoff_s": takeoff,

@@ -86,7 +86,7 @@ def resolve(name_or_path: str | Path) -> Scenario:
     if text in builtin_names():
         return load_builtin(text)
     at = re.fullmatch(r"(.+)@(\d+)", text)
-    if at and not Path(text).exists():
+    if at and not Path(text).is_file():  # a folder of that name is no scenario file
         import dataclasses
 
         from uavplan.world.fleet_tasks import with_fleet
