@@ -53,7 +53,7 @@ def main() -> None:
     cond = Conditions(args.wind, args.turbulence)
     print(
         "class | scenario | flights | per-flight h p50/p90/p99/max | per-flight v p50/p90/p99/max"
-        " | samples h p99.9, v p99.9 | stated e_h/e_v | s per run"
+        " | samples h p99.9, v p99.9 | stated e_h/e_v | flights beyond e_h / e_v | s per run"
     )
     for name in args.classes:
         ref = CLASSES[name]
@@ -86,7 +86,8 @@ def main() -> None:
         print(f"{name} | {ref} | {len(H)} | {fmt(H)} | {fmt(V)} | "
               f"{np.quantile(np.concatenate(sh), 0.999):.2f}, "
               f"{np.quantile(np.concatenate(sv), 0.999):.2f} | "
-              f"{af.track_h}/{af.track_v} | {per_run:.2f}", flush=True)  # fmt: skip
+              f"{af.track_h}/{af.track_v} | {int((af.track_h < H).sum())} / "
+              f"{int((af.track_v < V).sum())} | {per_run:.2f}", flush=True)  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -50,7 +50,7 @@ def main() -> None:
         for margin in args.margins:
             planner = get_planner("ppswarm", separation_margin=margin, smooth=False)
             fleets = [planner.plan_fleet(sc, None, seed) for seed in range(args.seeds)]
-            feasible = [f for f in fleets if f.feasible]
+            feasible = [f for f in fleets if f.flown_feasible]
             for timing in ("constant", "planned"):
                 cfg = replace(planner.config, smooth_timing=timing)  # type: ignore[attr-defined]
                 counts, kinds, late, seps, agree = [], Counter(), [], [], 0

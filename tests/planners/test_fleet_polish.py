@@ -51,7 +51,7 @@ def planned() -> tuple[Scenario, FleetResult, dict[str, object]]:
     sc = with_fleet(resolve("ppswarm1"), 3, seed=0)
     planner = get_planner("ppswarm", **SMALL)
     fr = planner.plan_fleet(sc, seed=5)
-    assert fr.feasible
+    assert fr.flown_feasible
     return sc, fr, planner.describe()
 
 
@@ -66,7 +66,7 @@ def _replace_uav(sc: Scenario, fr: FleetResult, k: int, path: np.ndarray) -> Fle
                       evaluations_history=r.evaluations_history, wall_time=0.0)  # fmt: skip
     results[k] = declare(new, fly(sc, task, new.waypoints, new.times, table))
     feasible = all(x.flown_feasible for x in results)
-    return dataclasses.replace(fr, results=tuple(results), feasible=feasible)
+    return dataclasses.replace(fr, results=tuple(results), flown_feasible=feasible)
 
 
 def _verified(sc: Scenario, fr: FleetResult) -> bool:
@@ -89,10 +89,10 @@ def _through_a_cylinder(sc: Scenario, fr: FleetResult) -> tuple[Any, int, FleetR
 def test_a_uav_through_a_cylinder_is_replanned_and_verified(planned) -> None:  # type: ignore[no-untyped-def]
     sc, fr, cfg = planned
     task, k, bad = _through_a_cylinder(sc, fr)
-    assert not bad.feasible and not bad.results[k].flown_ok
+    assert not bad.flown_feasible and not bad.results[k].flown_ok
     assert not _verified(sc, bad)
     out = polish_fleet(sc, bad, 7, cfg)
-    assert out.feasible and np.isfinite(out.cost)
+    assert out.flown_feasible and np.isfinite(out.cost)
     assert set(out.info["repair"]) == {task.id} and out.info["repair"][task.id].startswith("RRT*")
     assert out.results[k].info["repaired"] == out.info["repair"][task.id]
     assert _verified(sc, out)
@@ -121,7 +121,7 @@ def test_a_looping_uav_is_untangled(planned) -> None:  # type: ignore[no-untyped
     assert out.info["repair"] == {r.uav_id: "loop cut"}
     assert not track_crosses_itself(out.results[k].waypoints)
     assert out.results[k].length < bent.results[k].length
-    assert out.feasible and _verified(sc, out)
+    assert out.flown_feasible and _verified(sc, out)
 
 
 def test_a_uav_no_repair_helps_keeps_its_plan_and_the_story_says_what_was_tried(
@@ -136,7 +136,7 @@ def test_a_uav_no_repair_helps_keeps_its_plan_and_the_story_says_what_was_tried(
     task, _, bad = _through_a_cylinder(sc, fr)
     monkeypatch.setattr(fleet_polish, "_rrt_path", lambda *a: None)
     out = polish_fleet(sc, bad, 7, cfg)
-    assert not out.feasible and out.info["repair"] == {}
+    assert not out.flown_feasible and out.info["repair"] == {}
     tried = out.info["unrepaired"][task.id]
     assert "later take-offs: none flies" in tried
     assert f"{fleet_polish.RRT_TRIES} RRT* tries: no path whose flight passes even alone" in tried

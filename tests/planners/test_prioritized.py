@@ -79,7 +79,7 @@ def test_small_fleet_is_feasible_verified_and_deterministic(fleet3: Scenario) ->
     a = get_planner("ppswarm", **SMALL).plan_fleet(fleet3, seed=5)
     b = get_planner("ppswarm", **SMALL).plan_fleet(fleet3, seed=5)
     c = get_planner("ppswarm", **SMALL).plan_fleet(fleet3, seed=6)
-    assert a.feasible and np.isfinite(a.cost)
+    assert a.flown_feasible and np.isfinite(a.cost)
     for ra, rb in zip(a.results, b.results, strict=True):
         assert np.array_equal(ra.waypoints, rb.waypoints)
     assert any(
@@ -106,7 +106,7 @@ def test_head_on_swap_is_separated() -> None:
     tasks = (Task("a", g(60.0, 440.0), g(990.0, 440.0)), Task("b", g(990.0, 440.0), g(60.0, 440.0)))
     sc = base.__class__(**{**base.__dict__, "tasks": tasks, "cylinders": ()})
     r = get_planner("ppswarm", **SMALL).plan_fleet(sc, seed=0)
-    assert r.feasible
+    assert r.flown_feasible
     d = plan_document(FleetPlan(sc, "ppswarm", {}, 0, r.results, r))
     rep = verify_plan(d, sc)
     assert rep.ok and rep.min_separation >= sc.uav.s2
@@ -158,7 +158,7 @@ def test_flights_keep_their_timing_and_agree_with_the_verifier(
             assert np.all(speed <= uav.v_max * (1 + 1e-9))
             assert np.all(speed >= uav.min_speed * (1 - 1e-9))
     d = plan_document(FleetPlan(fleet3, "ppswarm", {}, 5, r.results, r))
-    assert verify_plan(d, fleet3).ok == r.feasible == all(u.flown_ok for u in r.results)
+    assert verify_plan(d, fleet3).ok == r.flown_feasible == all(u.flown_ok for u in r.results)
 
 
 @pytest.mark.parametrize("timing", ["planned", "constant"])
@@ -180,7 +180,7 @@ def test_paper_mode_smooths_after_and_declares_the_polylines(fleet3: Scenario, t
         assert u.flown_kind == "polyline" and u.flown_ok is False
         assert any("turn" in v for v in u.flown_violations)
     assert r.info["smoothing"]["timing"] == timing
-    assert r.planned_feasible and not r.feasible
+    assert r.planned_feasible and not r.flown_feasible
     d = plan_document(FleetPlan(fleet3, "ppswarm", {}, 5, r.results, r))
     assert verify_plan(d, fleet3, smoothed=True).ok == all(u.smoothed_ok for u in r.results)
     assert verify_plan(d, fleet3, trajectory="planned").ok
@@ -198,7 +198,7 @@ def test_separation_margin_plans_wider_than_s2() -> None:
         r = get_planner("ppswarm", **SMALL, separation_margin=margin, flight="none").plan_fleet(
             sc, seed=0
         )
-        assert r.planned_feasible and not r.feasible  # polylines only: never called flyable
+        assert r.planned_feasible and not r.flown_feasible  # polylines only: never called flyable
         d = plan_document(FleetPlan(sc, "ppswarm", {}, 0, r.results, r))
         rep = verify_plan(d, sc, trajectory="planned")
         assert rep.ok and not verify_plan(d, sc).ok
@@ -241,7 +241,7 @@ def test_every_feasible_fleet_passes_the_verifier(name: str, planner: str) -> No
     r = get_planner(planner, **opts).plan_fleet(sc, seed=3)
     d = plan_document(FleetPlan(sc, planner, {}, 3, r.results, r))
     rep = verify_plan(d, sc)
-    if r.feasible:
+    if r.flown_feasible:
         assert rep.ok, [v.message for v in rep.violations]
     # and per UAV: every UAV the planner calls feasible has no violation of its own, except
     # separation from a UAV that is itself infeasible (planned later paths avoid earlier ones)
@@ -428,7 +428,7 @@ def test_blocked_flight_waits_on_the_ground_before_replanning(monkeypatch, fleet
     assert u1.times[0] == pytest.approx(10.0) and u1.flown_trajectory()[1][0] == pytest.approx(10.0)
     assert r.info["flights"]["rescue"]["wait"] == 1
     d = plan_document(FleetPlan(fleet3, "ppswarm", {}, 0, r.results, r))
-    assert r.feasible and verify_plan(d, fleet3).ok
+    assert r.flown_feasible and verify_plan(d, fleet3).ok
 
 
 def test_a_fleet_whose_smoothing_fails_is_declared_and_verified_as_it_would_fly() -> None:
@@ -444,7 +444,7 @@ def test_a_fleet_whose_smoothing_fails_is_declared_and_verified_as_it_would_fly(
     opts = {**SMALL, "n_restart": 1, "max_delays": 1}
     fr = get_planner("ppswarm", **opts).plan_fleet(sc, seed=0)
     bad = {r.uav_id for r in fr.results if not r.flown_feasible}
-    assert bad and not fr.feasible and len(bad) < len(fr.results)
+    assert bad and not fr.flown_feasible and len(bad) < len(fr.results)
     d = plan_document(FleetPlan(sc, "ppswarm", {}, 0, fr.results, fr))
     assert d["feasible"] is False
     rep = verify_plan(d, sc)
@@ -465,7 +465,7 @@ def test_fleet_keeps_a_per_axis_separation_as_flown() -> None:
     r = get_planner("ppswarm", **{**SMALL, "n_restart": 1}).plan_fleet(sc, seed=3)
     rep = verify_plan(plan_document(FleetPlan(sc, "ppswarm", {}, 3, r.results, r)), sc)
     assert rep.s2_axes == (30.0, 30.0, 8.0) and rep.s2 == 30.0
-    if r.feasible:
+    if r.flown_feasible:
         assert rep.ok, [v.message for v in rep.violations]
         assert rep.min_separation >= 30.0 - 1e-6
     bad_uavs = {u for v in rep.violations for u in v.uavs if v.kind != "separation"}

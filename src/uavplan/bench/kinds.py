@@ -231,7 +231,7 @@ def run_fleet(spec: RunSpec) -> dict[str, Any]:
             for r in fr.results:
                 # the engine checks the band along whole segments (strict_altitude)
                 claims += result_claims(r, scenario, f"{r.uav_id} ", flown=False, paper_band=False)
-    claims += [("flown", rep_f, False)] if fr.feasible else []
+    claims += [("flown", rep_f, False)] if fr.flown_feasible else []
     flown_length = 0.0
     for r in fr.results:
         pts, _ = r.flown_trajectory()
@@ -250,7 +250,7 @@ def run_fleet(spec: RunSpec) -> dict[str, Any]:
         "verified": None if rep is None else bool(rep.ok),
         "verify_violations": None if rep is None else len(rep.violations),
         "min_separation": None if rep is None else float(rep.min_separation),
-        "flown_feasible": bool(fr.feasible),
+        "flown_feasible": bool(fr.flown_feasible),
         "flown_verified": bool(rep_f.ok),
         "flown_violations": len(rep_f.violations),
         "flown_not_ok": int(sum(not r.flown_feasible for r in fr.results)),

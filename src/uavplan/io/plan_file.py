@@ -155,7 +155,7 @@ def fleet_record(f: FleetResult) -> dict[str, Any]:
     return {
         "priority": list(f.priority),
         "cost": _num(f.cost),
-        "feasible": bool(f.feasible),
+        "feasible": bool(f.flown_feasible),
         "history": [_num(v) for v in np.asarray(f.history)],
         "restart_costs": [_num(v) for v in np.asarray(f.restart_costs)],
         "wall_time": float(f.wall_time),

@@ -493,7 +493,7 @@ class FleetPlanner(Planner):
             results=out.results,
             priority=out.priority,
             cost=out.cost if out.cost is not None else (total if planned else math.inf),
-            feasible=all(r.flown_feasible for r in out.results),
+            flown_feasible=all(r.flown_feasible for r in out.results),
             planned_feasible=planned,
             history=np.asarray(out.history),
             restart_costs=np.asarray(out.restart_costs),

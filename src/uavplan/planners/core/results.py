@@ -102,9 +102,11 @@ class FleetResult:
         results: one :class:`PlanResult` per task, in the scenario's task order.
         priority: task ids in the order they were planned in the kept solution.
         cost: total cost (sum of the UAVs' costs; inf where what the planner guarantees fails).
-        feasible: every UAV's flown trajectory passes every check: the world, the separation
-            from every other UAV's flown trajectory, the kinematic limits (the plan's
-            guarantee).
+        flown_feasible: every UAV's flown trajectory passes every check: the world, the
+            separation from every other UAV's flown trajectory, the kinematic limits (the
+            plan's guarantee; :attr:`PlanResult.flown_feasible` of each UAV). ``feasible``
+            always means a polyline's verdict (:attr:`PlanResult.feasible`), ``flown_``
+            a flight's.
         planned_feasible: every UAV's planned polyline is feasible, separation included from
             what the UAVs planned before it reserved (``info["separated"]``: their polylines in
             PPSwarm's mode, its criterion; their flights where flights are planned in the loop,
@@ -117,7 +119,7 @@ class FleetResult:
     results: tuple[PlanResult, ...]
     priority: tuple[str, ...]
     cost: float
-    feasible: bool
+    flown_feasible: bool
     planned_feasible: bool
     history: FloatArray
     restart_costs: FloatArray

@@ -40,7 +40,7 @@ class FleetPlan:
     def feasible(self) -> bool:
         """The plan's guarantee: every UAV's flown trajectory passes every check."""
         if self.fleet is not None:
-            return bool(self.fleet.feasible)
+            return bool(self.fleet.flown_feasible)
         return all(r.flown_feasible for r in self.results)
 
     def diagnostics(self) -> dict[str, Any]:

@@ -376,13 +376,13 @@ def polish_fleet(
     if not repaired:
         return dataclasses.replace(fleet, wall_time=fleet.wall_time + spent, info=info)
     out = tuple(results)
-    feasible = all(r.flown_feasible for r in out)
+    flown = all(r.flown_feasible for r in out)
     total = float(sum(r.cost for r in out))
     return dataclasses.replace(
         fleet,
         results=out,
-        cost=total if feasible and math.isfinite(total) else math.inf,
-        feasible=feasible,
+        cost=total if flown and math.isfinite(total) else math.inf,
+        flown_feasible=flown,
         planned_feasible=all(r.feasible for r in out),
         wall_time=fleet.wall_time + spent,
         info=info,

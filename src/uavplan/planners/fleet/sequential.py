@@ -80,7 +80,7 @@ def plan_sequentially(
         results=out,
         priority=tuple(tasks[m].id for m in order),
         cost=total if flown else math.inf,
-        feasible=all(r.flown_feasible for r in out),
+        flown_feasible=all(r.flown_feasible for r in out),
         planned_feasible=planned,
         history=np.zeros(0),
         restart_costs=np.asarray([total if planned else math.inf]),
