@@ -175,10 +175,10 @@ def l1_distance(af: Airframe, ground_speed: float) -> float:
 
     The law steers towards the point of the path this far ahead, so along a turn whose radius
     is below it the point runs off the arc onto the next leg before the UAV does: it turns in
-    late and swings out of a long turn at its bank limit. Flown in simulation, the small fixed
-    wing's default plans with turns at the bank limit in wind (25.2 m) left their tracking
-    error far more often than with turns at this distance (33 m); docs/decisions.md, "Flight
-    simulation", and docs/results.md give the runs."""
+    late and swings out of a long turn at its bank limit: in simulation such turns carried
+    most of the flights that left the plan's tracking error (docs/decisions.md, "A fixed
+    wing's tightest planned turn"; docs/results.md gives the runs). The simulated guidance
+    (:mod:`uavplan.sim.fleet`) aims at this distance too."""
     return af.l1_damping * af.l1_period * ground_speed / math.pi
 
 
