@@ -102,6 +102,12 @@ def test_planner_solves_easy_scenario(name: str, make: Callable[[], Scenario]) -
     assert np.all(r.history[1:] <= r.history[:-1])  # inf until a first path, then falling
     eh = np.asarray(r.evaluations_history)
     assert len(eh) == n_it and np.all(np.diff(eh) >= 0) and eh[-1] <= r.evaluations
+    # what the run computed, counted where it was done: at least the returned path's costing
+    # and checks (RRT*'s evaluations are segment checks, all of them seen by the counters)
+    w = r.info["work"]
+    assert w["cost_paths"] >= 1 and w["checked_segments"] >= w["checked_paths"] >= 1
+    if name == "rrt-star":
+        assert w["checked_segments"] >= r.evaluations
 
 
 @pytest.mark.parametrize("name", PLANNERS)

@@ -375,14 +375,14 @@ def _summary(plan: Any, times: tuple[float, float, int], out_dir: Path) -> None:
                           f"of {terrain.name}; there the ground is unknown and the plan holds "
                           "its band above the highest height on each void's rim, a guess, not "
                           "a measurement", markup=False)  # fmt: skip
-    evals = sum(int(r.evaluations) for r in plan.results)
+    w = plan.work
+    did = f"{w['cost_paths']:,} paths costed, {w['checked_segments']:,} segments checked"
     out.print(
         f"wrote {out_dir / 'plan.json'}, {out_dir / 'plan.png'} and {out_dir / 'plan.html'} "
         + (
-            f"({evals:,} cost evaluations in {elapsed:.1f} s of planning"
+            f"({did} in {elapsed:.1f} s of planning"
             if n_runs == 1
-            else f"(the kept run: {evals:,} cost evaluations; {elapsed:.1f} s of planning for all "
-            f"{n_runs} runs"
+            else f"(the kept run: {did}; {elapsed:.1f} s of planning for all {n_runs} runs"
         )
         + (f", and {compiled:.1f} s compiling kernels once)" if compiled >= 0.5 else ")")
     )

@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.problems import costs as C
+from uavplan.problems import work
 from uavplan.problems.validity import Batch, MotionValidator
 from uavplan.world import geometry as G
 from uavplan.world.reservations import ReservationTable
@@ -389,6 +390,7 @@ class PathProblem:
 
     # ------------------------------------------------------------------ evaluation
     def _total(self, b: Batch, checks_too: bool = True) -> FloatArray:
+        work.add(cost_paths=b.paths.shape[0])
         terms = self.terms
         if self.fused is not None:  # the leading terms in one kernel, stopping early
             total = self.fused.compute(b, self._fused_args, self._fused_weights, True)[0]
@@ -405,6 +407,7 @@ class PathProblem:
         dim), flown at ``times`` (pop, n_points) seconds (default: the UAV's speed from the
         task's start time)."""
         b = self.validator.batch(paths, times)
+        work.add(cost_paths=b.paths.shape[0])
         rest = self.terms
         if self.fused is not None:
             total, fused = self.fused.compute(b, self._fused_args, self._fused_weights, False)

@@ -55,6 +55,7 @@ from numpy.typing import NDArray
 
 from uavplan.problems import _validity_kernels as VK
 from uavplan.problems import costs as C
+from uavplan.problems import work
 from uavplan.world import _terrain_kernels as tk
 from uavplan.world import geometry as G
 from uavplan.world.dynamic import min_distances, robust_min_distances
@@ -407,6 +408,7 @@ class MotionValidator:
     def violations(self, b: Batch, skip: Iterable[str] = ()) -> dict[str, BoolArray]:
         """Each applicable check's failures, (pop,) bool per check name, in report order."""
         skipped = set(skip)
+        work.checked(*b.paths.shape[:2])
         return {c: self._check(c, b) for c in self.checks() if c not in skipped}
 
     @cached_property
@@ -542,6 +544,7 @@ class MotionValidator:
         kernel leaves the cylinders to the indexed check that follows it, and from
         ``GRID_MIN_OBSTACLES`` circles and polygons those to the 2-D scene pass."""
         skipped = set(skip)
+        work.checked(*b.paths.shape[:2])
         applicable = self.checks()
         names = [c for c in CASCADE if c in applicable and c not in skipped]
         names += [c for c in applicable if c not in names and c not in skipped]

@@ -65,6 +65,7 @@ from uavplan.planners.core.options import (
 )
 from uavplan.planners.core.results import FleetResult, PlanResult, make_result
 from uavplan.planners.core.run import Outcome, ProgressCallback, Run, Termination, Tracker
+from uavplan.problems import work
 from uavplan.problems.path_problem import PRESETS, SEPARATION_TERM, PathProblem
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
@@ -322,7 +323,8 @@ class Planner(ABC):
         experiments never do (the papers' numbers are the optimizers' own).
 
         The result declares its flight (:mod:`uavplan.planners.core.flight`): the polyline itself,
-        or with a turn radius its Dubins-smoothed version, checked as it will be flown."""
+        or with a turn radius its Dubins-smoothed version, checked as it will be flown;
+        ``info["work"]`` counts what the run computed (:mod:`uavplan.problems.work`)."""
         t = task if isinstance(task, Task) else _task(scenario, task)
         self.check_input(scenario, t)
         if reservations is not None and not self.specs.supports_reservations:
@@ -331,6 +333,21 @@ class Planner(ABC):
                 "not see time): plan fleets with a fleet planner (uavplan planners lists them)"
             )
         b = self.budget(budget)
+        with work.counting() as done:  # info["work"]: what the whole run computed
+            result = self._run(scenario, t, b, seed, callback, reservations, polish)
+        return replace(result, info={**result.info, "work": done.record()})
+
+    def _run(
+        self,
+        scenario: Scenario,
+        t: Task,
+        b: Budget,
+        seed: int | None,
+        callback: ProgressCallback | None,
+        reservations: ReservationTable | None,
+        polish: PathPolish | None,
+    ) -> PlanResult:
+        """The run behind :meth:`plan`: search, polish, the result and its declared flight."""
         clock = Stopwatch()  # the reported time (and a time budget) leave kernel compilation out
         problem = self.problem(scenario, t, reservations)
         termination = Termination(
@@ -475,7 +492,8 @@ class FleetPlanner(Planner):
         callback: ProgressCallback | None = None,
         tasks: tuple[str, ...] | None = None,
     ) -> FleetResult:
-        """Plan every task of ``scenario`` (or those named in ``tasks``)."""
+        """Plan every task of ``scenario`` (or those named in ``tasks``); ``info["work"]`` counts
+        what the whole fleet's planning computed (:mod:`uavplan.problems.work`)."""
         sc = scenario
         if tasks is not None:
             chosen = tuple(t for t in scenario.tasks if t.id in set(tasks))
@@ -486,7 +504,8 @@ class FleetPlanner(Planner):
             self.check_input(sc, t)
         b = self.budget(budget) if budget is not None else None
         clock = Stopwatch()
-        out = self._plan_fleet(sc, b, seed, callback)
+        with work.counting() as done:
+            out = self._plan_fleet(sc, b, seed, callback)
         planned = all(r.feasible for r in out.results)
         total = float(sum(r.cost for r in out.results))
         return FleetResult(
@@ -501,7 +520,7 @@ class FleetPlanner(Planner):
             algorithm=self.name,
             config=self.describe(),
             seed=seed,
-            info=out.info,
+            info={**out.info, "work": done.record()},
         )
 
     @abstractmethod
@@ -530,7 +549,9 @@ class FleetPlanner(Planner):
         t = task if isinstance(task, Task) else _task(scenario, task)
         self.check_input(scenario, t)
         one = dataclasses.replace(scenario, tasks=(t,))
-        return self.plan_fleet(one, budget, seed, callback).results[0]
+        fleet = self.plan_fleet(one, budget, seed, callback)
+        r = fleet.results[0]
+        return replace(r, info={**r.info, "work": fleet.info["work"]})
 
     def _plan(self, run: Run) -> FloatArray | Outcome | None:  # pragma: no cover - unused
         raise NotImplementedError("fleet planners plan through plan_fleet")

@@ -39,6 +39,7 @@ from numpy.typing import NDArray
 
 from uavplan.kernel_builds import population_kernel
 from uavplan.problems import path_problem as PP
+from uavplan.problems import work
 from uavplan.problems._validity_kernels import static_path_ok
 from uavplan.problems.costs import altitude_target
 from uavplan.problems.encoding import CartesianEncoding
@@ -325,4 +326,5 @@ class FleetObjective:
         Xc = np.ascontiguousarray(X, dtype=np.float64)
         b = np.ascontiguousarray(below, dtype=np.float64)
         self.enc.evaluations += Xc.shape[0]
+        work.add(cost_paths=Xc.shape[0])  # its checks, inside the kernel, are not counted
         return np.asarray(fleet_costs(Xc, b, *self._head, *self._tail))

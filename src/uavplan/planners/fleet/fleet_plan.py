@@ -16,6 +16,7 @@ from uavplan.planners.core.results import FleetResult, PlanResult
 from uavplan.planners.core.run import ProgressCallback
 from uavplan.planners.fleet.sequential import plan_sequentially, task_seeds
 from uavplan.planners.polish import polished
+from uavplan.problems.work import Work
 from uavplan.world.scenario import Scenario
 
 
@@ -42,6 +43,17 @@ class FleetPlan:
         if self.fleet is not None:
             return bool(self.fleet.flown_feasible)
         return all(r.flown_feasible for r in self.results)
+
+    @property
+    def work(self) -> dict[str, int]:
+        """What planning computed (:mod:`uavplan.problems.work`): the fleet planner's count,
+        else the sum of the UAVs' runs' (zeros where nothing was counted)."""
+        if self.fleet is not None and "work" in self.fleet.info:
+            return dict(self.fleet.info["work"])
+        total = Work()
+        for r in self.results:
+            total.add(Work(**(r.info or {}).get("work", {})))
+        return total.record()
 
     def diagnostics(self) -> dict[str, Any]:
         """``plan.json``'s ``diagnostics``: :attr:`events`, then the UAVs' and the restarts'

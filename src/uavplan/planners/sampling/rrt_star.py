@@ -159,6 +159,7 @@ from uavplan.planners.core.run import Outcome, Run
 from uavplan.planners.sampling import _rrt_star_kernels as K
 from uavplan.planners.sampling import _tighten_kernels as T
 from uavplan.planners.sampling.grid_index import GridIndex, pad3
+from uavplan.problems import work
 from uavplan.problems.path_problem import lookup_for
 from uavplan.problems.validity import MotionValidator, greedy_shortcut
 from uavplan.world.scenario import Scenario, Task
@@ -575,6 +576,7 @@ class RRTStarTree:
         self._grow()
         cfg[K.SCAN_LIMIT] = g.scan_limit
         while True:
+            before = int(self._ctr[K.CHECKS])
             status = K.grow(
                 g.buffer, g._nxt, g._head, g._lo, g.cell, g._dims, self._parent, self._cost,
                 self._first_child, self._next_sib, self._stack, self._goal_nodes,
@@ -583,6 +585,8 @@ class RRTStarTree:
                 self._kargs,
             )  # fmt: skip
             g.n = int(self._ctr[K.N])
+            k = int(self._ctr[K.CHECKS]) - before  # segments the compiled loop checked
+            work.add(checked_paths=k, checked_segments=k)
             if status == K.GROW:
                 self._grow()
             elif status == K.NEED_SAMPLES:
@@ -680,6 +684,7 @@ def tightened(tree: RRTStarTree, path: FloatArray) -> tuple[FloatArray, int]:
     spacing = 0.5 * tree.config.step
     if tree._kargs is not None:
         out, checks = T.tighten(p3, tree._kargs, spacing, BAND_SWEEPS)
+        work.add(checked_paths=checks, checked_segments=checks)
         return np.asarray(out[:, :d]), checks
     count = [0]
 
