@@ -3,21 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
+from tests.planners.test_planners import easy_2d as _scene
 
 from uavplan.planners import get_planner
 from uavplan.problems import PathProblem, work
-from uavplan.world import Bounds, Circle, Scenario, Task
-
-
-def _scene() -> Scenario:
-    return Scenario(
-        "w",
-        Bounds((0.0, 0.0), (100.0, 100.0)),
-        (Task("uav0", (10.0, 50.0), (90.0, 50.0)),),
-        circles=(Circle((50.0, 50.0), 10.0),),
-        cost="length2d",
-        n_waypoints=3,
-    )
 
 
 def test_the_problem_counts_paths_costed_and_the_validator_paths_checked() -> None:
