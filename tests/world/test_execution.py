@@ -282,7 +282,8 @@ def test_a_fixed_wing_without_speed_to_spare_plans_for_the_wind(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """The default model's wind is the calibration's wind the airframe cannot make up by
-    flying faster than planned: with none to spare, all of it (a headwind makes it late)."""
+    flying faster (or slower) than planned: with none to spare, all of it (a headwind makes it
+    late, a tailwind early)."""
     from dataclasses import replace
     from types import SimpleNamespace
 
@@ -303,6 +304,16 @@ def test_a_fixed_wing_without_speed_to_spare_plans_for_the_wind(
     assert default_for(uav).wind == pytest.approx(tight.turn_wind)
     # a multirotor's controller holds its ground velocity: no wind share
     assert default_for(SimpleNamespace(airframe=QUADROTOR.name, speed=10.0, v_max=10.0)).wind == 0
+    # a fixed wing that cannot fly slower than planned runs early with the wind behind it:
+    # RSCDWOA's UAV of one airspeed (50-50 m/s) gets the whole wind, one with 1 m/s below its
+    # cruise the rest, one with room both ways none
+    fast = SimpleNamespace(airframe="fast-fixed-wing", speed=50.0, v_max=50.0, min_speed=50.0)
+    assert default_for(fast).wind == pytest.approx(AIRFRAMES["fast-fixed-wing"].turn_wind)
+    assert default_for(fast).rho(50.0) == pytest.approx(0.03 + 3.0 / 50.0)
+    near = SimpleNamespace(airframe="fast-fixed-wing", speed=50.0, v_max=50.0, min_speed=49.0)
+    assert default_for(near).wind == pytest.approx(AIRFRAMES["fast-fixed-wing"].turn_wind - 1.0)
+    free = SimpleNamespace(airframe="fast-fixed-wing", speed=50.0, v_max=50.0, min_speed=40.0)
+    assert default_for(free).wind == 0
 
 
 def test_default_plans_turn_no_tighter_than_the_airframe_flies_in_wind() -> None:

@@ -244,7 +244,7 @@ def verified_by_the_verifier(plan: Any, out_dir: Path) -> bool:
     report = verify_trajectories(pf.trajectories("flown"), world, pf.scenario, model=pf.execution)
     if report.model is not None:
         with_margins(out_dir / "plan.json", margins_record(report))
-        for line in margin_lines(report):
+        for line in margin_lines(report, cruise=float(world.uav.speed)):
             out.print(line, markup=False)
     rejected = sorted({u for v in report.violations for u in v.uavs})
     if (out_dir / "plan.html").exists() and (report.model is not None or rejected):

@@ -88,11 +88,15 @@ def margins_record(report: Any, pairs: int = 20) -> dict[str, Any]:
             "pairs": [p.to_dict() for p in tight + failing]}  # fmt: skip
 
 
-def margin_lines(report: Any, k: int = 5) -> list[str]:
-    """What the console says of the margins: the fleet's least, and the tightest pairs."""
+def margin_lines(report: Any, k: int = 5, cruise: float = 0.0) -> list[str]:
+    """What the console says of the margins: the fleet's least, and the tightest pairs. The
+    speed margin is a fraction of the planned speed that includes the model's wind (its share
+    at the UAVs' ``cruise`` speed, m/s), so the model's speed error it is held against does."""
     import math
 
-    rec = report.model or {}
+    rec = dict(report.model or {})
+    if rec.get("wind") and cruise > 0:
+        rec["speed"] = float(rec.get("speed", 0.0)) + float(rec["wind"]) / cruise
 
     def show(v: float, unit: str, scale: float = 1.0) -> str:
         return "any" if not math.isfinite(v) else f"{v * scale:.3g} {unit}".strip()
@@ -225,7 +229,7 @@ def verify(
         out.print(f"warning: {w}", markup=False)
     for line in summary_lines(report, str(shown)):
         out.print(line, markup=False)
-    for line in margin_lines(report):
+    for line in margin_lines(report, cruise=float(world.uav.speed)):
         out.print(line, markup=False)
     out.print("[bold green]OK[/]" if report.ok else "[bold red]FAILED[/]")
     if json_out is not None:

@@ -155,18 +155,23 @@ def default_for(uav: Any) -> ExecutionModel:
     errors, and for a UAV that names its airframe (``uav.airframe``) the larger of its
     tracking error and the one calibrated in flight simulation for that airframe
     (:attr:`uavplan.world.airframes.Airframe.track_h`, ``track_v``), and the part of the
-    calibration's wind (``turn_wind``) that the airframe has no speed to spare for
-    (:func:`~uavplan.world.airframes.top_speed`): a fixed wing that cannot fly faster than
-    it is planned to falls behind its schedule into a headwind (a multirotor's controller
-    holds its ground velocity). A UAV that names no airframe gets
-    :data:`DEFAULT` (its class is only a guess from its limits)."""
+    calibration's wind (``turn_wind``) that the airframe has no airspeed to spare for, above
+    its cruise (:func:`~uavplan.world.airframes.top_speed`) or below it (down to its minimum
+    airspeed, ``uav.min_speed``): a fixed wing that cannot fly faster than it is planned to
+    falls behind its schedule into a headwind, and one that cannot fly slower runs ahead of
+    it with the wind behind (a UAV of one airspeed, as RSCDWOA's, both: simulated with 3 m/s
+    of wind it arrived up to 107 s early after 2,000 s of flight, 5 %, beyond the default's
+    3 %); a multirotor's controller holds its ground velocity. A UAV that names no airframe
+    gets :data:`DEFAULT` (its class is only a guess from its limits)."""
     from uavplan.world.airframes import AIRFRAMES, top_speed
 
     if getattr(uav, "airframe", None) not in AIRFRAMES:
         return DEFAULT
     af = AIRFRAMES[uav.airframe]
     h, v = max(DEFAULT.track_h, af.track_h), max(DEFAULT.track_v, af.track_v)
-    spare = top_speed(af, uav) - float(uav.speed)
+    up = top_speed(af, uav) - float(uav.speed)
+    v_min = float(getattr(uav, "min_speed", 0.0))
+    spare = min(up, float(uav.speed) - v_min) if v_min > 0 else up  # one airspeed: 0
     wind = round(max(0.0, af.turn_wind - spare), 3) if af.kind == "fixed-wing" else 0.0
     if (h, v, wind) == (DEFAULT.track_h, DEFAULT.track_v, 0.0):
         return DEFAULT
