@@ -113,7 +113,7 @@ def init_state(P: FloatArray, n_pts: NDArray[np.int64], speeds: FloatArray,
     drawn from the error's stationary distribution. With the steady ``wind`` (3,) and the
     fixed wing's ``prm`` (:func:`params`), established in that wind as well: crabbed so that
     its ground track runs along the leg, at the airspeed that gives the leg's ground speed
-    (within its speed range), the speed loop's integral holding it there."""
+    (within its speed range, the speed loop's feed-forward; its integral starts at 0)."""
     U = P.shape[0]
     st = np.zeros((U, len(STATE)))
     d = P[:, 1] - P[:, 0] if P.shape[1] > 1 else np.zeros((U, 3))
@@ -121,11 +121,10 @@ def init_state(P: FloatArray, n_pts: NDArray[np.int64], speeds: FloatArray,
     gam = np.arctan2(d[:, 2], np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9))
     va = np.where(n_pts > 1, speeds[:, 0], 0.0)
     if wind is not None and prm is not None and np.any(wind[:2]):
-        ki_s, v_min, v_max = prm[8], prm[18], prm[19]
+        v_min, v_max = prm[18], prm[19]
         air = np.stack([va * np.cos(psi) - wind[0], va * np.sin(psi) - wind[1]], axis=1)
         va_wind = np.clip(np.hypot(air[:, 0], air[:, 1]) / np.cos(gam), v_min, v_max)
         moving = n_pts > 1
-        st[:, 10] = np.where(moving, (va_wind - va) / max(ki_s, 1e-9), 0.0)
         psi = np.where(moving, np.arctan2(air[:, 1], air[:, 0]), psi)
         va = np.where(moving, va_wind, va)
     st[:, 0:3] = P[:, 0]
@@ -271,13 +270,18 @@ def step_fleet(
                 bank_cmd = min(max(math.atan(a_lat / G0), -max_bank), max_bank)
                 bank += (bank_cmd - bank) * (1.0 - math.exp(-dt / tau_bank))
                 psi += G0 * math.tan(bank) / max(va, 1.0) * dt
-                # speed: the ground speed, held through the airspeed
+                # speed: the ground speed, held through the airspeed: fed forward, the
+                # airspeed that flies the leg's ground speed along it in the steady wind (an
+                # autopilot's wind estimate; gusts it does not know), the PI loop the rest
                 vg_along = gx * ux + gy * uy
                 err = v_leg - vg
+                ax_ff = v_leg * ux - wind[0]
+                ay_ff = v_leg * uy - wind[1]
+                va_ff = math.sqrt(ax_ff * ax_ff + ay_ff * ay_ff) / max(cg, 0.1)
                 # the integral's share bounded by the speed range (anti-windup)
                 i_max = (v_max - v_min) / max(ki_s, 1e-9)
                 integ = min(max(integ + err * dt, -i_max), i_max)
-                va_cmd = min(max(v_leg + k_s * err + ki_s * integ, v_min), v_max)
+                va_cmd = min(max(va_ff + k_s * err + ki_s * integ, v_min), v_max)
                 va += (va_cmd - va) * (1.0 - math.exp(-dt / tau_v))
                 # height: a climb rate as a flight-path angle within the limits; the climb
                 # rate fed forward is the path's slope tau_g seconds ahead (the flight-path
