@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-from tests.planners.test_planners import easy_2d as _scene
 
+from planners.test_planners import easy_2d as _scene
 from uavplan.planners import get_planner
 from uavplan.problems import PathProblem, work
 
