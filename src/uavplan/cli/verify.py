@@ -94,9 +94,11 @@ def margin_lines(report: Any, k: int = 5, cruise: float = 0.0) -> list[str]:
     at the UAVs' ``cruise`` speed, m/s), so the model's speed error it is held against does."""
     import math
 
+    from uavplan.verify.robust import timing_of
+
     rec = dict(report.model or {})
     if rec.get("wind") and cruise > 0:
-        rec["speed"] = float(rec.get("speed", 0.0)) + float(rec["wind"]) / cruise
+        rec["speed"] = timing_of(rec, cruise).rho
 
     def show(v: float, unit: str, scale: float = 1.0) -> str:
         return "any" if not math.isfinite(v) else f"{v * scale:.3g} {unit}".strip()

@@ -159,10 +159,9 @@ def default_for(uav: Any) -> ExecutionModel:
     its cruise (:func:`~uavplan.world.airframes.top_speed`) or below it (down to its minimum
     airspeed, ``uav.min_speed``): a fixed wing that cannot fly faster than it is planned to
     falls behind its schedule into a headwind, and one that cannot fly slower runs ahead of
-    it with the wind behind (a UAV of one airspeed, as RSCDWOA's, both: simulated with 3 m/s
-    of wind it arrived up to 107 s early after 2,000 s of flight, 5 %, beyond the default's
-    3 %); a multirotor's controller holds its ground velocity. A UAV that names no airframe
-    gets :data:`DEFAULT` (its class is only a guess from its limits)."""
+    it with the wind behind (a UAV of one airspeed, as RSCDWOA's, both; docs/results.md gives
+    its simulated flights); a multirotor's controller holds its ground velocity. A UAV that
+    names no airframe gets :data:`DEFAULT` (its class is only a guess from its limits)."""
     from uavplan.world.airframes import AIRFRAMES, top_speed
 
     if getattr(uav, "airframe", None) not in AIRFRAMES:
