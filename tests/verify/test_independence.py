@@ -9,11 +9,13 @@ from pathlib import Path
 import uavplan.verify
 
 #: What the verifier may import: the plan file reader (typed trajectories), the scenario as
-#: data (its classes; the terrain's grid, not its clearance kernels), the tolerances, the
+#: data (its classes; the terrain's grid, not its clearance kernels; the airframes' limits and
+#: calibration wind), the tolerances, the
 #: obstacle index (its broad phase only: which segments are near which obstacle; the exact
 #: tests are its own), itself.
 ALLOWED = {
     "uavplan.io.plan_file",
+    "uavplan.world.airframes",
     "uavplan.world.obstacle_index",
     "uavplan.world.obstacles",
     "uavplan.world.scenario",

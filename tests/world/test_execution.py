@@ -6,19 +6,25 @@ bound is attained)."""
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from uavplan.io.plan_file import Trajectory
 from uavplan.scenarios import resolve
+from uavplan.verify.kinematics import heights_in_wind
 from uavplan.world.dynamic import MovingObstacle, min_distances, robust_min_distances
 from uavplan.world.execution import (
     DEFAULT,
     NOMINAL,
     ExecutionModel,
+    default_for,
+    height_lag,
     reach_rise,
+    slope_wind,
     widened,
     windows,
 )
@@ -382,3 +388,80 @@ def test_a_fixed_wing_plans_no_slower_than_it_flies_with_the_wind_behind_it() ->
     assert faster.uav.min_speed == pytest.approx(v) and faster.uav.speed == sc.uav.speed
     assert flyable_speeds(resolve("quadrotors@4"))[1] == 0.0
     assert flyable_speeds(resolve("rscdwoa-static"))[1] == 0.0  # min speed = cruise: no room
+
+
+def test_a_fixed_wing_lags_its_plan_where_it_descends_steeper_than_it_flies_in_wind() -> None:
+    """A 28.6 degree descent at 13 m/s over the ground with 3 m/s behind: flown at 10 m/s
+    through the air at the 30 degree limit, it descends at most 10/13 tan 30 over the ground,
+    so it falls behind by the difference per metre, and a level leg after it gives that back
+    at the same rate (never below the plan); in still air, or within the limit, no lag."""
+    g = math.tan(math.radians(28.6))
+    w = 10.0 / 13.0 * math.tan(math.radians(30.0))
+    x = np.array([0.0, 100.0, 500.0, 550.0, 900.0])
+    z = np.array([300.0, 300.0, 300.0 - 400.0 * g, 300.0 - 400.0 * g, 300.0 - 400.0 * g])
+    p = np.column_stack([x, np.zeros_like(x), z])
+    t = x / 13.0
+    off = height_lag(p[None], t[None], 3.0, 30.0, 30.0)[0]
+    lag = 400.0 * (g - w)
+    assert off == pytest.approx([0.0, 0.0, lag, lag - 50.0 * w, 0.0])
+    assert not height_lag(p[None], t[None], 0.0, 30.0, 30.0).any()  # still air: 30 degrees
+    assert height_lag(p[None], t[None], 3.0, None, None) == pytest.approx(0.0)
+    climb = p * np.array([1.0, 1.0, -1.0]) + np.array([0.0, 0.0, 600.0])  # the mirror image
+    assert height_lag(climb[None], t[None], 3.0, 30.0, 30.0)[0] == pytest.approx(-off)
+
+
+@given(st.integers(0, 2**31 - 1))
+@settings(max_examples=25, deadline=None)
+def test_the_height_lag_is_a_finely_stepped_pursuit_of_the_plan(seed: int) -> None:
+    """Against brute force: a UAV stepped every few centimetres along random timed 3-D paths,
+    each step changing height toward the plan's as far as its slope over the ground allows
+    there; a population at once is each path alone, and the verifier's own walk
+    (:func:`uavplan.verify.kinematics.heights_in_wind`) is the same."""
+    rng = np.random.default_rng(seed)
+    pop, n, wind = 3, 6, float(rng.uniform(0.0, 5.0))
+    p = np.zeros((pop, n, 3))
+    p[:, 1:, :2] = np.cumsum(rng.uniform(20.0, 120.0, (pop, n - 1, 2)), axis=1)
+    p[:, :, 2] = 300.0 + np.cumsum(rng.uniform(-60.0, 60.0, (pop, n)), axis=1)
+    L = np.hypot(*np.diff(p[..., :2], axis=1).transpose(2, 0, 1))
+    t = np.concatenate([np.zeros((pop, 1)), np.cumsum(L / rng.uniform(8.0, 20.0, L.shape), 1)], 1)
+    off = height_lag(p, t, wind, 25.0, 35.0)
+    for i in range(pop):
+        assert off[i] == pytest.approx(height_lag(p[i : i + 1], t[i : i + 1], wind, 25.0, 35.0)[0])
+        own = heights_in_wind(Trajectory("u", p[i], t[i]), wind, 25.0, 35.0)  # the verifier's
+        assert off[i] == pytest.approx(own, abs=1e-9)
+        zu, want = p[i, 0, 2], [0.0]
+        for k in range(n - 1):
+            v = L[i, k] / (t[i, k + 1] - t[i, k])
+            share = max(v - wind, 0.0) / v
+            up, down = share * math.tan(math.radians(25)), share * math.tan(math.radians(35))
+            m = 4000
+            ds = L[i, k] / m
+            for j in range(1, m + 1):
+                zp = p[i, k, 2] + (p[i, k + 1, 2] - p[i, k, 2]) * j / m
+                zu += min(max(zp - zu, -down * ds), up * ds)
+            want.append(zu - p[i, k + 1, 2])
+        assert off[i] == pytest.approx(want, abs=0.02)  # the steps: 4,000 a segment
+
+
+def test_a_step_straight_up_is_flown_as_a_gap_by_both_walks() -> None:
+    """No height changes without a distance flown: a vertical step opens the whole step as a
+    gap, which the next level leg closes at the UAV's slope (both implementations)."""
+    p = np.array([[0.0, 0, 100], [0.0, 0, 120], [400.0, 0, 120]])
+    t = np.array([0.0, 1.0, 31.0])
+    want = [0.0, -20.0, min(-20.0 + 400 * math.tan(math.radians(30)) * (1 - 3 / (400 / 30)), 0)]
+    assert height_lag(p[None], t[None], 3.0, 30.0, 30.0)[0] == pytest.approx(want)
+    assert heights_in_wind(Trajectory("u", p, t), 3.0, 30.0, 30.0) == pytest.approx(want)
+
+
+def test_the_wind_a_flights_heights_are_checked_in() -> None:
+    """A named fixed wing under a model: its calibration's wind (or the model's, if larger);
+    nominal, a multirotor, or a UAV without an airframe: none."""
+    sc = resolve("ppswarm1@4")
+    model = default_for(sc.uav)
+    assert slope_wind(sc.uav, model) == pytest.approx(3.0)
+    assert slope_wind(sc.uav, model.record()) == pytest.approx(3.0)
+    assert slope_wind(sc.uav, dataclasses.replace(model, wind=5.0)) == pytest.approx(5.0)
+    assert slope_wind(sc.uav, NOMINAL) == 0.0 and slope_wind(sc.uav, None) == 0.0
+    q = resolve("quadrotors@4")
+    assert slope_wind(q.uav, default_for(q.uav)) == 0.0
+    assert slope_wind(dataclasses.replace(sc.uav, airframe=None), DEFAULT) == 0.0

@@ -31,6 +31,10 @@ optional times ``(pop, n)``.
   interior point the heading change is at most ``MAX_SAMPLE_TURN_DEG`` and the curvature
   estimate, the heading change over the mean length of the two segments, at most
   ``(1 + TURN_RTOL) / turn_radius``; consecutive points with the same x, y are merged).
+  Under the world's execution model (not nominal) a named fixed wing's ``climb`` also asks
+  the heights it flies in its calibration's wind (:func:`uavplan.world.execution.height_lag`):
+  that flight must pass the static checks and end within the model's vertical error of its
+  goal (the verifier's "heights flown in the wind").
   A planned polyline is a geometric path and is not checked for them; the trajectory a UAV
   flies (:mod:`uavplan.planners.core.flight`) is.
 
@@ -551,15 +555,60 @@ class MotionValidator:
         idx = np.arange(b.paths.shape[0])
         args = self._static_args
         fused = self._static_fused
+        lag = False  # the fused kernel checks the climb angles, and not the heights' lag
         if args is not None and not skipped & fused:
             idx = idx[VK.static_world_ok(b.paths, args)]
             names = [c for c in names if c not in fused]
+            lag = "climb" in fused and "climb" in applicable
         for c in names:
             if not idx.size:
                 break
             sub = b if idx.size == b.paths.shape[0] else b.subset(idx)
             idx = idx[~self._check(c, sub)]
+        if idx.size and lag and self._slope_wind:
+            sub = b if idx.size == b.paths.shape[0] else b.subset(idx)
+            idx = idx[~self._lag_fails(sub)]  # the fused kernel checked the angles alone
         return idx
+
+    @cached_property
+    def _slope_wind(self) -> float:
+        """The wind a timed flight's heights are flown in (:func:`uavplan.world.execution.
+        slope_wind`: under the world's execution model, for a named fixed wing), 0: none;
+        only for the flights themselves (``kinematics``)."""
+        from uavplan.world.execution import slope_wind
+
+        sc = self.scenario
+        if not self.kinematics or sc.dim != 3:
+            return 0.0
+        return slope_wind(sc.uav, sc.execution)
+
+    def _lag_fails(self, b: Batch) -> BoolArray:
+        """(pop,) whether a flight, flown as high as its airframe's flight-path angle in the
+        wind lets it follow its planned heights (:func:`uavplan.world.execution.height_lag`),
+        ends farther from its goal's height than the model's vertical tracking error, or
+        leaves the world's static clearances (bounds, obstacles, the terrain and the band:
+        under a model the world is the widened one, so the model's vertical tracking error
+        comes on top of the lag)."""
+        from uavplan.world.execution import height_lag
+        from uavplan.world.tolerances import LAG_TOL
+
+        uav = self.scenario.uav
+        off = height_lag(b.paths, b.times, self._slope_wind, uav.max_climb_angle,
+                         uav.max_descent_angle)  # fmt: skip
+        model = self.scenario.execution
+        end = max(LAG_TOL, model.track_v if model is not None else 0.0)
+        bad = np.abs(off[:, -1]) > end  # it reaches its goal farther than the model's error
+        rows = np.flatnonzero(~bad & (np.max(np.abs(off), axis=1) > LAG_TOL))
+        if not rows.size:
+            return bad
+        lagged = np.array(b.paths[rows])
+        lagged[..., 2] += off[rows]
+        sub = Batch(self, np.ascontiguousarray(lagged), np.asarray(b.times)[rows])
+        static = [c for c in self.checks() if c in STATIC and c != "climb"]
+        ok = self.passing(sub, skip=set(self.checks()) - set(static))
+        bad[rows] = True
+        bad[rows[ok]] = False
+        return bad
 
     def _check(self, name: str, b: Batch) -> BoolArray:
         sc = self.scenario
@@ -595,7 +644,8 @@ class MotionValidator:
         if name == "speed":
             return speed_violations(b.paths, b.times, sc.uav.min_speed, sc.uav.v_max)
         if name == "climb":
-            return climb_violations(b.paths, sc.uav.max_climb_angle, sc.uav.max_descent_angle)
+            bad = climb_violations(b.paths, sc.uav.max_climb_angle, sc.uav.max_descent_angle)
+            return bad | self._lag_fails(b) if self._slope_wind else bad
         if name == "turn":
             return turn_violations(b.paths, sc.uav.turn_radius)
         raise ValueError(f"unknown check {name!r}; checks: {CHECKS}")

@@ -185,3 +185,50 @@ def check_turn(traj: Trajectory, turn_radius: float) -> list[Violation]:
             )
         )
     return out
+
+
+# ================================================================================ heights in wind
+def heights_in_wind(
+    traj: Trajectory, wind: float, max_climb: float | None, max_descent: float | None
+) -> FloatArray:
+    """(n,) the height a fixed wing flies at each point of ``traj`` less the planned one, with
+    ``wind`` m/s behind it: on a segment flown at ``v`` m/s over the ground its height changes
+    at most ``(v - wind) / v`` times the tangent of its climb (descent) limit per metre, and
+    it steers toward the planned height (up while below it, down while above, on it while the
+    plan's slope allows). The verifier's own walk, one segment at a time: from the gap at the
+    segment's start, the distance to where the gap closes, then the gap the rest of the
+    segment opens (the planner's vectorized ``uavplan.world.execution.height_lag`` answers
+    the same, tested against this)."""
+    p = np.asarray(traj.points, dtype=np.float64)
+    t = np.asarray(traj.times, dtype=np.float64)
+    tan_up = math.inf if max_climb is None else math.tan(math.radians(max_climb))
+    tan_down = math.inf if max_descent is None else math.tan(math.radians(max_descent))
+    out = np.zeros(len(p))
+    gap = 0.0
+    for k in range(len(p) - 1):
+        h = math.hypot(p[k + 1, 0] - p[k, 0], p[k + 1, 1] - p[k, 1])
+        dz = p[k + 1, 2] - p[k, 2]
+        if h <= 0.0:  # a step straight up or down: no height changes without a distance flown
+            gap -= dz
+            out[k + 1] = gap
+            continue
+        dt = t[k + 1] - t[k]
+        share = 1.0 if dt <= 0.0 else min(max((h / dt - wind) / (h / dt), 0.0), 1.0)
+        up, down, plan = share * tan_up, share * tan_down, dz / h
+
+        def opens(left: float, up: float = up, down: float = down, plan: float = plan) -> float:
+            # on the plan, the gap its slope opens beyond the UAV's over ``left`` metres
+            return (
+                (up - plan) * left if plan > up else (-down - plan) * left if plan < -down else 0.0
+            )
+
+        # the gap's rate while it closes (or grows): the UAV at its limit toward the plan
+        rate = (-down - plan) if gap > 0 else (up - plan) if gap < 0 else 0.0
+        if gap == 0.0:
+            gap = opens(h)
+        elif gap * rate < 0.0 and -gap / rate < h:
+            gap = opens(h + gap / rate)
+        else:
+            gap += rate * h
+        out[k + 1] = gap
+    return out

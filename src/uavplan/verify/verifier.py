@@ -68,6 +68,12 @@ Semantics (frame: metres, x east, y north, z up, absolute altitudes; seconds):
   discrete curvature ``theta / mean(L_a, L_b)`` at most ``(1 + TURN_RTOL) / turn_radius``).
   A planned polyline is a geometric path: checked with ``kinematics=False`` it gets clearances,
   separation, times and the maximum speed only.
+* **Heights flown in the wind** (under a model that is not nominal, for a UAV that names a
+  fixed-wing airframe): the flight as flown with the airframe's calibration wind behind it,
+  pursuing its planned heights within the flight-path angle that wind leaves over the ground
+  (:func:`uavplan.verify.kinematics.heights_in_wind`), keeps the model's vertical error from the
+  ground, the band and the bounds (reported as their kinds) and reaches its goal within the
+  model's vertical error (``climb``); lags under ``LAG_TOL`` are not checked.
 * **Warnings** (not violations): the plan's scenario name differs from the scenario's; a UAV's
   first or last point differs from its task's start or goal; a UAV the plan calls feasible
   fails a check.
@@ -86,7 +92,7 @@ from numpy.typing import NDArray
 
 from uavplan.io.plan_file import Trajectory, TrajectoryKind, parse_plan
 from uavplan.verify import robust as R
-from uavplan.verify.kinematics import check_climb, check_turn
+from uavplan.verify.kinematics import check_climb, check_turn, heights_in_wind
 from uavplan.verify.obstacles import check_circles, check_cylinders, check_polygons
 from uavplan.verify.report import (
     KINDS,
@@ -100,6 +106,7 @@ from uavplan.verify.source_terrain import check_source_terrain, read_source, sou
 from uavplan.verify.terrain import check_terrain, terrain_clearance_extrema, within_reach
 from uavplan.verify.timing import check_bounds, check_speed, check_times
 from uavplan.world.scenario import Scenario
+from uavplan.world.tolerances import LAG_TOL
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -270,6 +277,7 @@ def _under_model(
         lambda tr, reach: source_clearance(tr, source, reach, targets))  # fmt: skip
     what_model = (f"the execution model's tracking error ({timing.track_h:g} m horizontal, "
                   f"{timing.track_v:g} m vertical)")  # fmt: skip
+    wind = _slope_wind(u, rec)
     ground_refs = sc.terrain is not None or (
         sc.altitude is not None and sc.altitude.reference == "ground")  # fmt: skip
     for tr in trajs:
@@ -310,6 +318,8 @@ def _under_model(
                     f"{tr.id}: keeps only {tol:.3f} m {axis} from its {by}, under "
                     f"{what_model}",
                 ))  # fmt: skip
+        if wind and tr.dim == 3:
+            out += _lagged_under(tr, sc, src, timing, wind, what_model)
     if sc.moving_obstacles:
         for tr in timed:
             found, pm = R.moving_under(tr, sc.moving_obstacles, timing)
@@ -332,6 +342,60 @@ def _under_model(
     report.pair_margins.sort(key=lambda p: (p.takeoff_s, p.speed, p.track_h))
     report.uav_margins = [margins[t.id] for t in trajs]
     return out
+
+
+def _slope_wind(uav: Any, rec: Mapping[str, Any]) -> float:
+    """The wind a fixed wing's heights are flown in under the model ``rec`` (not nominal): the
+    larger of the model's and its airframe's calibration wind (``turn_wind``); 0 for a UAV
+    that names no fixed-wing airframe or declares no climb or descent limit."""
+    from uavplan.world.airframes import AIRFRAMES
+
+    af = AIRFRAMES.get(getattr(uav, "airframe", None) or "")
+    if af is None or af.kind != "fixed-wing":
+        return 0.0
+    if uav.max_climb_angle is None and uav.max_descent_angle is None:
+        return 0.0
+    return max(float(rec.get("wind", 0.0) or 0.0), float(af.turn_wind))
+
+
+def _lagged_under(
+    tr: Trajectory, sc: Scenario, src: Any, timing: Any, wind: float, what_model: str
+) -> list[Violation]:
+    """A fixed wing's flight flown as high as its flight-path angle in ``wind`` lets it follow
+    its planned heights (:func:`uavplan.verify.kinematics.heights_in_wind`) must still leave the
+    model's vertical tracking error to the ground, the band and the bounds."""
+    u = sc.uav
+    off = heights_in_wind(tr, wind, u.max_climb_angle, u.max_descent_angle)
+    k = int(np.argmax(np.abs(off)))
+    if abs(off[k]) <= LAG_TOL:
+        return []
+    pairs = (("climbs", u.max_climb_angle), ("descents", u.max_descent_angle))
+    limits = ", ".join(f"{w} within {a:g} degrees" for w, a in pairs if a is not None)
+    why = (f"{tr.id}: flown with {wind:g} m/s of wind behind it, its slopes are steeper than its "
+           f"airframe flies over the ground ({limits} through the air)")  # fmt: skip
+    if abs(off[-1]) > max(LAG_TOL, timing.track_v) + TOL:
+        side = "above" if off[-1] > 0 else "below"
+        return [Violation(
+            "climb", (tr.id,), float(tr.times[-1]), (tuple(float(x) for x in tr.points[-1]),),
+            abs(float(off[-1])), max(LAG_TOL, timing.track_v),
+            f"{why}: it reaches its goal's position {abs(off[-1]):.1f} m {side} the goal, "
+            f"beyond {what_model}",
+        )]  # fmt: skip
+    pts = np.array(tr.points)
+    pts[:, 2] += off
+    lagged = Trajectory(tr.id, pts, tr.times, tr.feasible)
+    ev, by = R.vertical_clearance(lagged, sc, src, terrain_clearance_extrema, timing.track_h,
+                                  within_reach)  # fmt: skip
+    if ev >= timing.track_v - TOL:
+        return []
+    side = "above" if off[k] > 0 else "below"
+    return [Violation(
+        _STATIC_KIND.get(by, "bounds"), (tr.id,), float(tr.times[k]),
+        (tuple(float(x) for x in pts[k]),), ev, timing.track_v,
+        f"{why}: up to {abs(off[k]):.1f} m {side} "
+        f"its plan at t={tr.times[k]:.1f} s, it then keeps only {ev:.3f} m vertically from its "
+        f"{by}, under {what_model}",
+    )]  # fmt: skip
 
 
 def verify_plan(

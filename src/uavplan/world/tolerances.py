@@ -44,3 +44,7 @@ TURN_RTOL = 0.01
 MAX_SAMPLE_TURN_DEG = 30.0
 #: Degrees of slack on the climb and descent angle limits (coordinates rounded to 6 decimals).
 ANGLE_TOL_DEG = 1e-4
+#: Metres: a fixed wing's height flown in the wind that stays within this of its plan is not
+#: checked again (the calibrated tracking error was measured on flights that carry such gaps;
+#: :func:`uavplan.world.execution.height_lag`).
+LAG_TOL = 0.5
