@@ -204,8 +204,22 @@ def heights_in_wind(
     tan_up = math.inf if max_climb is None else math.tan(math.radians(max_climb))
     tan_down = math.inf if max_descent is None else math.tan(math.radians(max_descent))
     out = np.zeros(len(p))
+    if len(p) < 2:
+        return out
+    # the gap stays 0 up to the first segment steeper than the UAV can fly there
+    d = np.diff(p, axis=0)
+    h_all = np.hypot(d[:, 0], d[:, 1])
+    dt_all = np.diff(t)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v_all = np.where(dt_all > 0, h_all / dt_all, np.inf)
+        share_all = np.where(np.isfinite(v_all), np.clip((v_all - wind) / v_all, 0.0, 1.0), 1.0)
+        slope_all = np.where(h_all > 0, d[:, 2] / h_all, 0.0)
+        steep = (slope_all > share_all * tan_up) | (slope_all < -share_all * tan_down)
+    steep |= (h_all <= 0) & (d[:, 2] != 0)
+    if not steep.any():
+        return out
     gap = 0.0
-    for k in range(len(p) - 1):
+    for k in range(int(np.argmax(steep)), len(p) - 1):
         h = math.hypot(p[k + 1, 0] - p[k, 0], p[k + 1, 1] - p[k, 1])
         dz = p[k + 1, 2] - p[k, 2]
         if h <= 0.0:  # a step straight up or down: no height changes without a distance flown

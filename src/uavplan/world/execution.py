@@ -276,9 +276,14 @@ def height_lag(
     up = share * (math.inf if max_climb is None else math.tan(math.radians(max_climb)))
     down = share * (math.inf if max_descent is None else math.tan(math.radians(max_descent)))
     out = np.zeros(P.shape[:2])
+    # the gap stays 0 up to the first segment steeper than the UAV flies (or straight up)
+    steep = (sp > up) | (sp < -down) | ((L <= 0) & (d[..., 2] != 0))
+    first = np.flatnonzero(steep.any(axis=0))
+    if not first.size:
+        return out
     e = np.zeros(P.shape[0])  # the UAV's height less the plan's
     with np.errstate(invalid="ignore", divide="ignore"):  # 0 * inf: no limit, no distance
-        for k in range(d.shape[1]):
+        for k in range(int(first[0]), d.shape[1]):
             u_, d_, s_, L_ = up[:, k], down[:, k], sp[:, k], L[:, k]
             # pursuing the plan's height: descending as steeply as it can while above it,
             # climbing while below; the gap closes (or opens) at the difference of the slopes
