@@ -188,6 +188,14 @@ def check_turn(traj: Trajectory, turn_radius: float) -> list[Violation]:
 
 
 # ================================================================================ heights in wind
+def _opens(left: float, up: float, down: float, plan: float) -> float:
+    """The gap a plan of slope ``plan`` opens over ``left`` metres beyond a UAV on it that
+    climbs at most ``up`` and descends at most ``down`` per metre."""
+    if plan > up:
+        return (up - plan) * left
+    return (-down - plan) * left if plan < -down else 0.0
+
+
 def heights_in_wind(
     traj: Trajectory, wind: float, max_climb: float | None, max_descent: float | None
 ) -> FloatArray:
@@ -220,28 +228,19 @@ def heights_in_wind(
         return out
     gap = 0.0
     for k in range(int(np.argmax(steep)), len(p) - 1):
-        h = math.hypot(p[k + 1, 0] - p[k, 0], p[k + 1, 1] - p[k, 1])
-        dz = p[k + 1, 2] - p[k, 2]
+        h = float(h_all[k])
         if h <= 0.0:  # a step straight up or down: no height changes without a distance flown
-            gap -= dz
+            gap -= float(d[k, 2])
             out[k + 1] = gap
             continue
-        dt = t[k + 1] - t[k]
-        share = 1.0 if dt <= 0.0 else min(max((h / dt - wind) / (h / dt), 0.0), 1.0)
-        up, down, plan = share * tan_up, share * tan_down, dz / h
-
-        def opens(left: float, up: float = up, down: float = down, plan: float = plan) -> float:
-            # on the plan, the gap its slope opens beyond the UAV's over ``left`` metres
-            return (
-                (up - plan) * left if plan > up else (-down - plan) * left if plan < -down else 0.0
-            )
-
+        up, down = float(share_all[k]) * tan_up, float(share_all[k]) * tan_down
+        plan = float(slope_all[k])
         # the gap's rate while it closes (or grows): the UAV at its limit toward the plan
         rate = (-down - plan) if gap > 0 else (up - plan) if gap < 0 else 0.0
         if gap == 0.0:
-            gap = opens(h)
+            gap = _opens(h, up, down, plan)
         elif gap * rate < 0.0 and -gap / rate < h:
-            gap = opens(h + gap / rate)
+            gap = _opens(h + gap / rate, up, down, plan)
         else:
             gap += rate * h
         out[k + 1] = gap

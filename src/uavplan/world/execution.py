@@ -233,9 +233,8 @@ def slope_wind(uav: Any, model: Any) -> float:
 
     if model is None:
         return 0.0
-    rec = model.record() if hasattr(model, "record") else dict(model)
-    keys = ("takeoff_s", "speed", "track_h", "track_v", "wind")
-    if not any(float(rec.get(k, 0.0) or 0.0) for k in keys):
+    m = model if isinstance(model, ExecutionModel) else ExecutionModel.from_record(model)
+    if m.nominal:
         return 0.0
     af = AIRFRAMES.get(getattr(uav, "airframe", None) or "")
     if af is None or af.kind != "fixed-wing":
@@ -243,7 +242,7 @@ def slope_wind(uav: Any, model: Any) -> float:
     if getattr(uav, "max_climb_angle", None) is None and getattr(uav, "max_descent_angle",
                                                                  None) is None:  # fmt: skip
         return 0.0
-    return float(max(float(rec.get("wind", 0.0) or 0.0), af.turn_wind))
+    return float(max(m.wind, af.turn_wind))
 
 
 def height_lag(
