@@ -284,6 +284,47 @@ def test_the_default_takes_a_named_airframes_calibrated_tracking_error() -> None
         assert m.wind == 0.0  # every built-in airframe has the speed to spare for the wind
 
 
+def test_a_larger_fleet_states_a_larger_tracking_error() -> None:
+    """The stated error is the quantile a flight exceeds with probability 0.1 / n on the
+    calibration's exponential tail above its 95th percentile, rounded up to half a metre,
+    never below the airframe's 99th percentile (a fleet of up to ten); checked against the
+    tail's own exceedance probability and by hand."""
+    from dataclasses import replace
+    from types import SimpleNamespace
+
+    from uavplan.world.airframes import FLEET_ALPHA, SMALL_FIXED_WING, fleet_tracking
+
+    af = replace(SMALL_FIXED_WING, track_h=6.0, track_v=8.0, tail_h=(3.5, 0.5),
+                 tail_v=(6.0, 0.8))  # fmt: skip
+    assert fleet_tracking(af, 1) == fleet_tracking(af, 10) == (6.0, 8.0)
+    # 1,000 UAVs: u + scale * ln(0.05 * 1000 / 0.1): 3.5 + 3.11 = 6.61 -> 7.0;
+    # 6.0 + 4.97 = 10.97 -> 11.0
+    assert fleet_tracking(af, 1000) == (7.0, 11.0)
+    for n in (40, 100, 500, 1000, 5000):
+        h, v = fleet_tracking(af, n)
+        for x, base, (u, scale) in ((h, 6.0, af.tail_h), (v, 8.0, af.tail_v)):
+
+            def beyond(e: float, u: float = u, scale: float = scale, n: int = n) -> float:
+                """The fleet's expected flights beyond ``e`` on the tail."""
+                return n * 0.05 * math.exp(-(e - u) / scale)
+
+            assert beyond(x) <= FLEET_ALPHA + 1e-12
+            assert x == base or beyond(x - 0.5) > FLEET_ALPHA  # half a metre less would not do
+    assert fleet_tracking(af, 500) <= fleet_tracking(af, 1000)
+    assert fleet_tracking(replace(af, tail_h=None, tail_v=None), 1000) == (6.0, 8.0)
+    uav = SimpleNamespace(airframe=af.name, speed=20.0, v_max=20.0)
+    from uavplan.world import airframes
+
+    saved = airframes.AIRFRAMES[af.name]
+    airframes.AIRFRAMES[af.name] = af
+    try:
+        small, big = default_for(uav, 5), default_for(uav, 1000)
+    finally:
+        airframes.AIRFRAMES[af.name] = saved
+    assert (small.track_h, small.track_v) == (6.0, 8.0) and "fleet" not in small.source
+    assert (big.track_h, big.track_v) == (7.0, 11.0) and "for a fleet of 1000" in big.source
+
+
 def test_a_fixed_wing_without_speed_to_spare_plans_for_the_wind(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:

@@ -456,7 +456,7 @@ def plan(
             help="Plan for an exact execution (no take-off, speed or tracking error) instead "
             "of the scenario's execution model or uavplan's default (take-off ±2 s, speed "
             "±3 %, tracking 3 m horizontal and 2 m vertical, or the tracking error calibrated "
-            "for the UAV's named airframe when larger)."
+            "for the UAV's named airframe and the fleet's size when larger)."
         ),
     ] = False,
 ) -> None:

@@ -112,7 +112,11 @@ def planning_world(
 
     original = scenario
     by_default = not nominal and model is None and scenario.execution is None
-    model = NOMINAL if nominal else (model or scenario.execution or default_for(scenario.uav))
+    model = (
+        NOMINAL
+        if nominal
+        else (model or scenario.execution or default_for(scenario.uav, len(scenario.tasks)))
+    )
     given_r, r, af = float(scenario.uav.turn_radius), 0.0, None
     given_v, v = float(scenario.uav.min_speed), 0.0
     if by_default:  # uavplan's default also turns and slows no more than the airframe flies
@@ -157,7 +161,7 @@ def fleet_as_planned(scenario: Scenario, ref: str, record: dict[str, Any] | None
         return scenario
     try:
         model = ExecutionModel.from_record(record)
-        if scenario.execution is None and model == default_for(scenario.uav):
+        if scenario.execution is None and model == default_for(scenario.uav, len(scenario.tasks)):
             pw = planning_world(scenario, ref)  # uavplan's default, its flyable turns and speeds
         else:
             pw = planning_world(scenario, ref, model=model)

@@ -51,7 +51,12 @@ class Airframe:
             class, m (horizontal, vertical): the largest per-flight error of the class's
             calibration flights (``benchmarks/calibrate_tracking.py``: the 99th percentile of
             each UAV flight's largest error, rounded up to half a metre; the default model
-            never assumes less than 3 m and 2 m).
+            never assumes less than 3 m and 2 m): the figure for a fleet of up to ten.
+        tail_h, tail_v: the same flights' per-flight largest errors (horizontal, vertical) as
+            ``(u, scale)``: their 95th percentile ``u`` and the scale of the exponential tail
+            fitted above it (the mean excess over ``u``), from which :func:`fleet_tracking`
+            reads the error a larger fleet's flights stay within (None: ``track_h``,
+            ``track_v`` for every fleet).
         turn_wind: the wind (m/s) a fixed wing's planned turns leave room for, the
             calibration's: uavplan's default plans its turns no tighter than the airframe can
             fly at its bank limit with this much wind behind it (:func:`turn_radius_in_wind`)
@@ -93,6 +98,8 @@ class Airframe:
     tau_att: float = 0.15
     track_h: float = 3.0
     track_v: float = 2.0
+    tail_h: tuple[float, float] | None = None
+    tail_v: tuple[float, float] | None = None
     turn_wind: float = 3.0
     speed_margin: float = 0.25
     turn_accel: float = 0.0
@@ -101,9 +108,42 @@ class Airframe:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
 
 
+#: The expected number of a fleet's flights that leave the tracking error uavplan's default
+#: model states, in one execution (:func:`fleet_tracking`).
+FLEET_ALPHA = 0.1
+
+
+def fleet_tracking(af: Airframe, n_uavs: int) -> tuple[float, float]:
+    """The tracking error ``(h, v)`` uavplan's default model states for a fleet of ``n_uavs``
+    UAVs of airframe ``af``.
+
+    The airframe's ``track_h``, ``track_v`` are the 99th percentile of a calibration flight's
+    largest error: about one flight in a hundred leaves them, so a fleet of hundreds has
+    several flights outside its plan's model in every execution, and any of them near the
+    band's edge or another UAV breaks the plan. For a fleet, the stated error is the quantile
+    a flight exceeds with probability ``FLEET_ALPHA / n_uavs`` (so that the expected number of
+    the fleet's flights beyond it in one execution is at most :data:`FLEET_ALPHA`): on the
+    exponential tail fitted to the calibration flights above their 95th percentile ``u``
+    (``tail_h``, ``tail_v``), ``u + scale * ln(0.05 n / FLEET_ALPHA)``, rounded up to half a
+    metre, never below ``track_h``, ``track_v``. An exponential tail is the extreme-value
+    model of a maximum whose parent distribution is light-tailed (the Gumbel domain: Gaussian
+    navigation error, turbulence); beyond the calibration's flights it is an extrapolation,
+    which the fleets' simulated executions check (docs/results.md)."""
+
+    def one(base: float, tail: tuple[float, float] | None) -> float:
+        if tail is None or n_uavs <= 0:
+            return base
+        u, scale = tail
+        q = u + scale * math.log(0.05 * n_uavs / FLEET_ALPHA)
+        return max(base, math.ceil(2.0 * q - 1e-9) / 2.0)
+
+    return one(af.track_h, af.tail_h), one(af.track_v, af.tail_v)
+
+
 #: A small fixed wing (the PPSwarm UAV: 20 m/s, 20 m turns, a 64 degree bank at cruise; up to
 #: 1.3 times its cruise airspeed, as small survey airframes fly 15-20 m/s and reach 25-30).
 SMALL_FIXED_WING = Airframe("small-fixed-wing", "fixed-wing", track_h=6.0, track_v=8.0,
+                            tail_h=(4.20, 0.49), tail_v=(6.50, 0.74),
                             speed_margin=0.3)  # fmt: skip
 #: A fast fixed wing (RSCDWOA's UAV: 50 m/s, 2 km turns): slower responses, gentle banks.
 FAST_FIXED_WING = Airframe("fast-fixed-wing", "fixed-wing", tau_speed=4.0, tau_bank=0.6,
@@ -121,6 +161,8 @@ QUADROTOR = Airframe(
     accept=2.0,
     track_h=4.5,
     track_v=4.0,
+    tail_h=(2.93, 0.38),
+    tail_v=(3.06, 0.39),
     speed_margin=0.0,
     turn_accel=3.0,
 )

@@ -150,7 +150,7 @@ NOMINAL = ExecutionModel()
 DEFAULT = ExecutionModel(2.0, 0.03, 3.0, 2.0, 0.0, "uavplan's default for small UAVs")
 
 
-def default_for(uav: Any) -> ExecutionModel:
+def default_for(uav: Any, n_uavs: int = 1) -> ExecutionModel:
     """uavplan's default model for a scenario's UAV: :data:`DEFAULT`'s take-off and speed
     errors, and for a UAV that names its airframe (``uav.airframe``) the larger of its
     tracking error and the one calibrated in flight simulation for that airframe
@@ -162,12 +162,14 @@ def default_for(uav: Any) -> ExecutionModel:
     it with the wind behind (a UAV of one airspeed, as RSCDWOA's, both; docs/results.md gives
     its simulated flights); a multirotor's controller holds its ground velocity. A UAV that
     names no airframe gets :data:`DEFAULT` (its class is only a guess from its limits)."""
-    from uavplan.world.airframes import AIRFRAMES, top_speed
+    from uavplan.world.airframes import AIRFRAMES, fleet_tracking, top_speed
 
     if getattr(uav, "airframe", None) not in AIRFRAMES:
         return DEFAULT
     af = AIRFRAMES[uav.airframe]
-    h, v = max(DEFAULT.track_h, af.track_h), max(DEFAULT.track_v, af.track_v)
+    fh, fv = fleet_tracking(af, n_uavs)
+    h, v = max(DEFAULT.track_h, fh), max(DEFAULT.track_v, fv)
+    fleet = f" for a fleet of {n_uavs}" if (fh, fv) != (af.track_h, af.track_v) else ""
     up = top_speed(af, uav) - float(uav.speed)
     v_min = float(getattr(uav, "min_speed", 0.0))
     spare = min(up, float(uav.speed) - v_min) if v_min > 0 else up  # one airspeed: 0
@@ -175,8 +177,8 @@ def default_for(uav: Any) -> ExecutionModel:
     if (h, v, wind) == (DEFAULT.track_h, DEFAULT.track_v, 0.0):
         return DEFAULT
     return replace(DEFAULT, track_h=h, track_v=v, wind=wind,
-                   source=f"uavplan's default for a {af.name}, tracking calibrated in "
-                   "flight simulation")  # fmt: skip
+                   source=f"uavplan's default for a {af.name}{fleet}, tracking calibrated "
+                   "in flight simulation")  # fmt: skip
 
 
 def flyable_turns(scenario: Scenario) -> tuple[Scenario, float]:
