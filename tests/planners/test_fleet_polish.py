@@ -134,15 +134,40 @@ def test_a_uav_no_repair_helps_keeps_its_plan_and_the_story_says_what_was_tried(
 
     sc, fr, cfg = planned
     task, _, bad = _through_a_cylinder(sc, fr)
-    monkeypatch.setattr(fleet_polish, "_rrt_path", lambda *a: None)
+    seeds: list[int] = []
+    monkeypatch.setattr(fleet_polish, "_rrt_path", lambda s, t, seed: seeds.append(seed))
     out = polish_fleet(sc, bad, 7, cfg)
     assert not out.flown_feasible and out.info["repair"] == {}
+    assert len(set(seeds)) == len(seeds) == fleet_polish.RRT_TRIES + fleet_polish.RRT_MORE
     tried = out.info["unrepaired"][task.id]
     assert "later take-offs: none flies" in tried
-    assert f"{fleet_polish.RRT_TRIES} RRT* tries: no path whose flight passes even alone" in tried
+    n = fleet_polish.RRT_TRIES + fleet_polish.RRT_MORE  # none flew alone: the more tried too
+    assert f"{n} RRT* tries: no path whose flight passes even alone" in tried
     plan = FleetPlan(sc, "ppswarm", {}, 7, out.results, out)
     (e,) = [e for e in plan_events(plan) if e.kind == "unresolved"]
     assert e.uav == task.id and "cylinders" in e.detail and tried in e.detail
+
+
+def test_more_rrt_tries_only_when_no_path_flew_even_alone(planned, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """A path that flies alone but at no take-off (patched: the UAV's own path through the
+    cylinder, so every slot fails) stops the search after the first tries; the more tries are
+    for UAVs whose every path failed even alone (the test above)."""
+    from uavplan.planners.fleet import fleet_polish
+
+    sc, fr, cfg = planned
+    task, k, bad = _through_a_cylinder(sc, fr)
+    calls: list[int] = []
+
+    def through(s: Any, t: Any, seed: int) -> Any:
+        calls.append(seed)
+        return np.asarray(bad.results[k].waypoints)
+
+    monkeypatch.setattr(fleet_polish, "_rrt_path", through)
+    out = polish_fleet(sc, bad, 7, cfg)
+    assert not out.flown_feasible and len(calls) == fleet_polish.RRT_TRIES
+    tried = out.info["unrepaired"][task.id]
+    assert f"{fleet_polish.RRT_TRIES} RRT* path(s): none flies at any take-off tried" in tried
+    assert "even alone" not in tried
 
 
 def test_a_fleet_that_needs_nothing_is_left_as_it_is(planned) -> None:  # type: ignore[no-untyped-def]
