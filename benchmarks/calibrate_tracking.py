@@ -51,6 +51,12 @@ def main() -> None:
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--classes", nargs="+", default=list(CLASSES))
+    ap.add_argument(
+        "--scenario",
+        default=None,
+        help="fly this scenario's plan instead of the class's built-in (one class; e.g. "
+        "ppswarm1@500: a large fleet's flights, where the tail is used)",
+    )
     ap.add_argument("--runs", type=int, default=20)
     ap.add_argument("--wind", type=float, default=3.0)
     ap.add_argument("--turbulence", default="light")
@@ -77,10 +83,12 @@ def main() -> None:
         " | flights beyond e_h / e_v | s per run"
     )
     for name in args.classes:
-        ref = CLASSES[name]
+        ref = args.scenario or CLASSES[name]
         with tempfile.TemporaryDirectory() as tmp:
             out = Path(tmp)
             cmd = ["plan", ref, "--seed", str(args.seed), "--out", str(out)]
+            if "@" in ref:  # a generated fleet: PPSwarm with one restart, as the fleets are made
+                cmd += ["-a", "ppswarm", "--param", "n_restart=1"]
             r = CliRunner().invoke(app, cmd + (["--nominal"] if args.plans == "nominal" else []))
             if r.exit_code not in (0, 1):
                 raise SystemExit(f"uavplan plan {ref} failed: {r.output}")
