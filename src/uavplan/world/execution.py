@@ -153,8 +153,10 @@ DEFAULT = ExecutionModel(2.0, 0.03, 3.0, 2.0, 0.0, "uavplan's default for small 
 def default_for(uav: Any, n_uavs: int = 1) -> ExecutionModel:
     """uavplan's default model for a scenario's UAV: :data:`DEFAULT`'s take-off and speed
     errors, and for a UAV that names its airframe (``uav.airframe``) the larger of its
-    tracking error and the one calibrated in flight simulation for that airframe
-    (:attr:`uavplan.world.airframes.Airframe.track_h`, ``track_v``), and the part of the
+    tracking error and the one calibrated in flight simulation for that airframe and a fleet
+    of ``n_uavs`` (:func:`uavplan.world.airframes.fleet_tracking`: the 99th percentile of a
+    calibration flight's largest error up to ten UAVs, more for a larger fleet, so that one
+    execution's flights are not expected to leave it), and the part of the
     calibration's wind (``turn_wind``) that the airframe has no airspeed to spare for, above
     its cruise (:func:`~uavplan.world.airframes.top_speed`) or below it (down to its minimum
     airspeed, ``uav.min_speed``): a fixed wing that cannot fly faster than it is planned to
