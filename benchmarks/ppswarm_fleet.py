@@ -9,6 +9,7 @@ run.
     python benchmarks/ppswarm_fleet.py --runs 40:5 500:5         # chosen (UAVs:N_restart) pairs
     python benchmarks/ppswarm_fleet.py --runs 40:5 --reference main --repeat 3
     python benchmarks/ppswarm_fleet.py --runs 40:5 --modes after --kernel-share
+    python benchmarks/ppswarm_fleet.py --runs 500:1 1000:1 --modes in-loop --model default
 
 Default pairs: 40 UAVs with N_restart 5 (Table 1), 100-500 with 1, 500 with 5, 1,000 with 1
 (1,000 UAVs sit in stacked start layers, see ``uavplan.world.fleet_tasks``).
@@ -25,6 +26,11 @@ flight fails (the plan says so), UAVs delayed, the independent verifier's verdic
 declared trajectories (kinematic limits included), the fleet cost, the paper's time and the
 speed-up against it; with a reference, the speed-up against the reference and whether both gave
 the same fleet (cost equal to 1e-9, the same failed UAVs).
+
+``--model default`` plans each fleet as ``uavplan plan`` does without ``--nominal`` (in the
+world widened by uavplan's default execution model for the fleet, with the airframe's flyable
+turns and speeds; the planner alone, no repair after planning) and verifies it in the given
+world under that model; the default is the nominal fleets of the paper.
 
 ``--kernel-share`` also times every call from Python into a Numba kernel, by module, and prints
 the share of the run spent outside them (issue 18's target: at most 20 % outside the cost and
