@@ -134,6 +134,71 @@ def test_conformance_to_the_execution_model() -> None:
     assert conformance(flown(2.3), planned, 2.0, 0.0, 3.0, 2.0)[1].max() > 0
 
 
+def _helix_plan_and_flights(rng: np.random.Generator) -> tuple[object, list[object]]:
+    """A plan that climbs in a tight helix (its passes 6 m apart vertically, so each
+    sample's nearest point could be the wrong pass), then a straight leg, its first metre
+    flown in five seconds (a near hold: at an exact one, where two segments are equally
+    near, the kernel and the reference may take either, by round-off); flights
+    along it late or early by drifting amounts, off it by noise, one 20 m to the side."""
+    from uavplan.io.plan_file import Trajectory
+
+    s = np.linspace(0.0, 4 * 2 * math.pi, 400)
+    helix = np.stack([40 * np.cos(s), 40 * np.sin(s), 100 + 6 * s / (2 * math.pi)], axis=1)
+    leg = np.stack([np.linspace(41, 600, 60), np.zeros(60), np.full(60, 124.0)], axis=1)
+    pts = np.vstack([helix, leg])
+    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    t = np.concatenate([[0.0], np.cumsum(seg / 15.0)])
+    t[len(helix) :] += 5.0  # the near hold
+    planned = Trajectory("a", pts, t, True)
+    flights = []
+    for k in range(6):
+        tt = np.arange(-3.0, t[-1] + 10.0, 0.5)
+        shift = rng.uniform(-4, 4) + rng.uniform(-0.05, 0.05) * (tt - tt[0])
+        q = np.stack([np.interp(tt - shift, t, pts[:, i]) for i in range(3)], axis=1)
+        q += rng.normal(0.0, 1.5, q.shape)
+        if k == 4:  # nearer the next pass up than its own: only the window tells them apart
+            q[:, 2] += 4.0
+        if k == 5:
+            q[:, 1] += 20.0
+        flights.append(Trajectory("a", q, tt, True))
+    return planned, flights
+
+
+def test_the_error_kernels_answer_as_the_numpy_references() -> None:
+    """The Numba kernels of the errors against the plan and of the conformance give the NumPy
+    references' answers on flights that drift in time, near a plan that passes close to
+    itself, and far off it; the errors kernel also where the plan's times are not ordered."""
+    from uavplan.sim import _error_kernels as EK
+    from uavplan.sim.runs import conformance_reference, errors_against_reference
+
+    planned, flights = _helix_plan_and_flights(np.random.default_rng(3))
+    outside = 0
+    for tr in flights:
+        for got, want in zip(errors_against(tr, planned, 5.0),
+                             errors_against_reference(tr, planned, 5.0), strict=True):  # fmt: skip
+            np.testing.assert_allclose(got, want, rtol=0, atol=1e-9)
+        lag, excess = conformance(tr, planned, 2.0, 0.03, 3.0, 2.0)
+        lag_r, excess_r = conformance_reference(tr, planned, 2.0, 0.03, 3.0, 2.0)
+        np.testing.assert_array_equal(lag, lag_r)
+        np.testing.assert_array_equal(np.isinf(excess), np.isinf(excess_r))
+        fin = np.isfinite(excess_r)
+        np.testing.assert_allclose(excess[fin], excess_r[fin], rtol=0, atol=1e-12)
+        outside += int(np.isinf(excess).sum())
+    assert outside > 100  # the flight 20 m off took the scan over every shift
+    # the plan's segments in reverse order: times no longer ordered, the same answers
+    tr = flights[0]
+    P, tp = planned.points, planned.times
+    outs = []
+    for order in (slice(None), slice(None, None, -1)):
+        h, v, te = (np.empty(len(tr.times)) for _ in range(3))
+        EK.errors_kernel(tr.points, tr.times, np.ascontiguousarray(P[:-1][order]),
+                         np.ascontiguousarray(P[1:][order]), np.ascontiguousarray(tp[:-1][order]),
+                         np.ascontiguousarray(tp[1:][order]), 5.0, h, v, te)  # fmt: skip
+        outs.append((h, v, te))
+    for a, b in zip(*outs, strict=True):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-9)
+
+
 def _straight_into_wind(margin: float, wind: float) -> float:
     """When a small fixed wing reaches the end of a 2 km leg commanded at 20 m/s over the
     ground, flown into a steady headwind (no gusts, no navigation error): 100 s planned."""

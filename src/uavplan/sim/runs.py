@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uavplan.io.plan_file import PlanFile, Trajectory
+from uavplan.sim import _error_kernels as EK
 from uavplan.sim.fleet import DRAWS, init_state, params, step_fleet
 from uavplan.sim.missions import Legs, mission_legs
 from uavplan.sim.turbulence import INTENSITIES
@@ -93,6 +94,21 @@ def pack(legs: list[Legs]) -> tuple[FloatArray, NDArray[np.int64], FloatArray, F
 def errors_against(
     track: Trajectory, planned: Trajectory, window: float = 120.0
 ) -> tuple[FloatArray, ...]:
+    """:func:`errors_against_reference`'s answers from a Numba kernel
+    (:func:`uavplan.sim._error_kernels.errors_kernel`: only the segments within the window)."""
+    Q = np.ascontiguousarray(track.points, dtype=np.float64)
+    P = np.ascontiguousarray(planned.points, dtype=np.float64)
+    tp = np.ascontiguousarray(planned.times, dtype=np.float64)
+    n = len(Q)
+    h, v, te = np.empty(n), np.empty(n), np.empty(n)
+    EK.errors_kernel(Q, np.ascontiguousarray(track.times, dtype=np.float64), P[:-1], P[1:],
+                     tp[:-1], tp[1:], float(window), h, v, te)  # fmt: skip
+    return h, v, te
+
+
+def errors_against_reference(
+    track: Trajectory, planned: Trajectory, window: float = 120.0
+) -> tuple[FloatArray, ...]:
     """Per sample of ``track``: the horizontal and vertical distances to the nearest point of
     the ``planned`` path (nearest in 3-D, each segment's point horizontally nearest, among the
     segments the plan flies within ``window`` seconds of the sample's time: a path that
@@ -133,6 +149,23 @@ LAG_SPAN, LAG_STEP = 60.0, 0.05
 
 
 def conformance(
+    track: Trajectory, planned: Trajectory, delta0: float, rho: float, e_h: float, e_v: float
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`conformance_reference`'s answers from a Numba kernel
+    (:func:`uavplan.sim._error_kernels.conformance_kernel`: the shifts searched outwards from
+    none, all of them only where none is in tolerance)."""
+    taus = np.arange(-LAG_SPAN, LAG_SPAN + LAG_STEP / 2, LAG_STEP)
+    t = np.ascontiguousarray(track.times, dtype=np.float64)
+    tp = np.ascontiguousarray(planned.times, dtype=np.float64)
+    lag, need = np.empty(len(t)), np.empty(len(t))
+    EK.conformance_kernel(t, np.ascontiguousarray(track.points, dtype=np.float64), taus, tp,
+                          np.ascontiguousarray(planned.points, dtype=np.float64),
+                          max(e_h, 1e-6), max(e_v, 1e-6), lag, need)  # fmt: skip
+    allowed = delta0 + rho * np.maximum(t - tp[0], 0.0)
+    return lag, need - allowed
+
+
+def conformance_reference(
     track: Trajectory, planned: Trajectory, delta0: float, rho: float, e_h: float, e_v: float
 ) -> tuple[FloatArray, FloatArray]:
     """How a flown ``track`` conforms to its ``planned`` trajectory under an execution model
