@@ -199,6 +199,30 @@ def test_the_error_kernels_answer_as_the_numpy_references() -> None:
         np.testing.assert_allclose(a, b, rtol=0, atol=1e-9)
 
 
+def test_a_long_flight_far_off_its_schedule_is_measured_against_its_own_stretch() -> None:
+    """A fast fixed wing of one airspeed 130 s ahead of a 50-minute plan in a 3 m/s tailwind
+    (6 % of 50 m/s) within a model that allows 2 s + 9 %: its errors are measured against the
+    stretch it flies (a two-minute window matched it to the window's end, hundreds of metres
+    off) and it conforms (shifts of a minute left it never conforming)."""
+    from uavplan.io.plan_file import Trajectory
+    from uavplan.sim.runs import error_window
+
+    t = np.arange(0.0, 3000.01, 10.0)
+    planned = Trajectory("a", np.stack([50.0 * t, 0 * t, 1000 + 0 * t], axis=1), t, True)
+    tt = np.arange(0.0, 2870.0, 0.5)
+    ahead = np.minimum(0.06 * tt, 130.0)  # seconds ahead of the plan
+    q = np.stack([50.0 * (tt + ahead), 1.0 + 0 * tt, 1002 + 0 * tt], axis=1)
+    flown = Trajectory("a", q, tt, True)
+    window = error_window(planned, 1.0, 3.0, 50.0)
+    assert window == pytest.approx(1.0 + 3000 * 3 / 50 + 60)
+    h, v, te = errors_against(flown, planned, window)
+    assert h.max() < 1.0 + 1e-9 and np.abs(v).max() < 2.0 + 1e-9
+    assert te.min() == pytest.approx(-130.0, abs=0.1)
+    assert errors_against(flown, planned)[0].max() > 400.0  # two minutes: 10 s of 50 m/s short
+    lag, excess = conformance(flown, planned, 2.0, 0.09, 8.5, 12.5)
+    assert excess.max() <= 0 and lag.min() == pytest.approx(-130.0, abs=0.2)
+
+
 def _straight_into_wind(margin: float, wind: float) -> float:
     """When a small fixed wing reaches the end of a 2 km leg commanded at 20 m/s over the
     ground, flown into a steady headwind (no gusts, no navigation error): 100 s planned."""

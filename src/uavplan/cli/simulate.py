@@ -204,14 +204,16 @@ def _figure(folder: Path, plan: Any, world: Any, rows: list[dict[str, Any]], see
     import numpy as np
 
     from uavplan.bench.simulation import conditions_of
-    from uavplan.sim.runs import errors_against, simulate_once
+    from uavplan.sim.runs import error_window, errors_against, simulate_once
 
     ex = simulate_once(plan, world, seed, conditions_of(options), af,
                        int(options.get("max_items", 500)))  # fmt: skip
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(13, 5))
     planned = plan.trajectories("flown")
     for tr, pl in zip(ex.tracks, planned, strict=True):
-        h, _, _ = errors_against(tr, pl)
+        window = error_window(pl, abs(ex.takeoff_errors[tr.id]), float(np.linalg.norm(ex.wind)),
+                              float(world.uav.speed))  # fmt: skip
+        h, _, _ = errors_against(tr, pl, window)
         a1.plot(tr.times, h, lw=0.6, alpha=0.6)
     rec = dict(plan.execution or {})
     if rec.get("track_h"):

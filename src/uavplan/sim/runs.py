@@ -143,9 +143,37 @@ def errors_against_reference(
     return h, v, te
 
 
-#: The schedule shifts :func:`conformance` tries, s (a flight more than this far off its
-#: schedule reads as never conforming).
+#: The least time window of :func:`errors_against`, s, and what :func:`error_window` adds to
+#: the schedule error a flight can reach.
+ERROR_WINDOW, WINDOW_SLACK = 120.0, 60.0
+
+
+def error_window(planned: Trajectory, takeoff_error: float, wind: float, speed: float) -> float:
+    """The time window (s) a flight's errors against ``planned`` are measured in: the
+    schedule error it can reach (its take-off error, and over its planned duration the share
+    ``wind / speed`` by which a UAV of one airspeed runs ahead or behind in a steady wind),
+    plus :data:`WINDOW_SLACK`, at least :data:`ERROR_WINDOW`. A fast fixed wing of one
+    airspeed on a 50-minute flight runs minutes off its plan's times in 3 m/s; with a fixed
+    two-minute window its samples were matched to the nearest segment of the wrong
+    stretch, hundreds of metres off."""
+    span = float(planned.times[-1] - planned.times[0])
+    reach = takeoff_error + span * wind / max(speed, 1e-9)
+    return max(ERROR_WINDOW, reach + WINDOW_SLACK)
+
+
+#: The schedule shifts :func:`conformance` tries reach at least this far, s, in steps of
+#: ``LAG_STEP`` (a flight farther off its schedule reads as never conforming).
 LAG_SPAN, LAG_STEP = 60.0, 0.05
+
+
+def shifts(track: Trajectory, planned: Trajectory, delta0: float, rho: float) -> FloatArray:
+    """The schedule shifts :func:`conformance` tries: ``LAG_STEP`` apart, symmetric about 0,
+    out to :data:`LAG_SPAN` or twice the largest the model allows over the flight
+    (``delta0 + rho * (t - planned take-off)``), whichever is more: a fast fixed wing of one
+    airspeed is allowed minutes on a long flight."""
+    allowed = delta0 + rho * max(float(track.times[-1] - planned.times[0]), 0.0)
+    span = max(LAG_SPAN, math.ceil(2.0 * allowed / LAG_STEP) * LAG_STEP)
+    return np.arange(-span, span + LAG_STEP / 2, LAG_STEP)
 
 
 def conformance(
@@ -154,7 +182,7 @@ def conformance(
     """:func:`conformance_reference`'s answers from a Numba kernel
     (:func:`uavplan.sim._error_kernels.conformance_kernel`: the shifts searched outwards from
     none, all of them only where none is in tolerance)."""
-    taus = np.arange(-LAG_SPAN, LAG_SPAN + LAG_STEP / 2, LAG_STEP)
+    taus = shifts(track, planned, delta0, rho)
     t = np.ascontiguousarray(track.times, dtype=np.float64)
     tp = np.ascontiguousarray(planned.times, dtype=np.float64)
     lag, need = np.empty(len(t)), np.empty(len(t))
@@ -181,7 +209,7 @@ def conformance_reference(
     made and verified for (ASTM F3548's conformance of an operational intent). Unlike the
     nearest-point timing error of :func:`errors_against`, a pass of the path near another
     pass of itself cannot be mistaken for it: positions are compared at times."""
-    taus = np.arange(-LAG_SPAN, LAG_SPAN + LAG_STEP / 2, LAG_STEP)
+    taus = shifts(track, planned, delta0, rho)
     t = track.times
     tp, pp = planned.times, planned.points
     lag = np.empty(len(t))
@@ -272,7 +300,9 @@ def simulate_once(
         m = int(out_n[i])
         tr = Trajectory(lg.uav, out_xyz[i, :m].copy(), out_t[i, :m].copy(), True)
         tracks.append(tr)
-        h, v, te = errors_against(tr, pl)
+        h, v, te = errors_against(tr, pl, error_window(pl, abs(float(errs[i])),
+                                                      float(np.linalg.norm(wind)),
+                                                      float(scenario.uav.speed)))  # fmt: skip
         ex.track_h[lg.uav] = float(h.max()) if m else math.nan
         ex.track_v[lg.uav] = float(np.abs(v).max()) if m else math.nan
         ex.timing[lg.uav] = (float(te.min()), float(te.max())) if m else (math.nan, math.nan)
