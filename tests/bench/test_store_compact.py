@@ -51,3 +51,18 @@ def test_the_command_says_what_it_did_and_refuses_a_folder_without_runs(tmp_path
     r = CliRunner().invoke(app, ["bench", "compact", str(tmp_path / "nothing")])
     assert r.exit_code == 2
     assert "no runs/ folder" in r.output and "Traceback" not in r.output
+
+
+def test_columns_read_from_every_shard_and_a_missing_one_names_the_shard(tmp_path: Path) -> None:
+    """Reading some columns reads them from every shard (the last row of a run wins); a
+    column a shard lacks is an error that names the shard, as an unreadable shard is."""
+    import pytest
+
+    from uavplan.bench.store import StoreError
+
+    s = _store(tmp_path)
+    df = s.read(columns=["run_id", "status"])
+    assert list(df.columns) == ["run_id", "status"] and len(df) == 20
+    assert df.set_index("run_id").loc["r5", "status"] == "error"
+    with pytest.raises(StoreError, match=r"part-.*\.parquet: not a readable Parquet shard.*nope"):
+        s.read(columns=["run_id", "nope"])
