@@ -451,6 +451,27 @@ def test_a_fixed_wing_lags_its_plan_where_it_descends_steeper_than_it_flies_in_w
     assert height_lag(climb[None], t[None], 3.0, 30.0, 30.0)[0] == pytest.approx(-off)
 
 
+def test_a_flights_lag_extent_is_its_largest_lag_and_each_segments_larger_end() -> None:
+    """The descent above: the largest ``|lag|`` of the flight and per segment the larger of
+    its ends' (the lag's extremes lie at the points); a lag within ``LAG_TOL`` counts as none."""
+    from uavplan.world.execution import lag_extents
+    from uavplan.world.tolerances import LAG_TOL
+
+    g = math.tan(math.radians(28.6))
+    x = np.array([0.0, 100.0, 500.0, 550.0, 900.0])
+    z = np.array([300.0, 300.0, 300.0 - 400.0 * g, 300.0 - 400.0 * g, 300.0 - 400.0 * g])
+    p = np.column_stack([x, np.zeros_like(x), z])[None]
+    t = (x / 13.0)[None]
+    off = np.abs(height_lag(p, t, 3.0, 30.0, 30.0))[0]
+    top, seg = lag_extents(p, t, 3.0, 30.0, 30.0)
+    assert top[0] == pytest.approx(off.max()) and off.max() > 30.0
+    assert seg[0] == pytest.approx(np.maximum(off[:-1], off[1:]))
+    shallow = p.copy()
+    shallow[0, 2:, 2] = 300.0 - 400.0 * math.tan(math.radians(23.9)) - LAG_TOL / 2
+    top, seg = lag_extents(shallow, t, 3.0, 30.0, 30.0)
+    assert top[0] == 0.0 and not seg.any()
+
+
 @given(st.integers(0, 2**31 - 1))
 @settings(max_examples=25, deadline=None)
 def test_the_height_lag_is_a_finely_stepped_pursuit_of_the_plan(seed: int) -> None:

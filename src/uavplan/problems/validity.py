@@ -305,11 +305,12 @@ class Batch:
 
     @cached_property
     def conflicts(self) -> BoolArray:
-        """(pop,) whether each path comes closer than the separation to a reserved UAV."""
+        """(pop,) whether each path comes closer than the separation to a reserved UAV (a
+        flight whose heights lag in the wind held off by its lag: the table's ``held``)."""
         table = self.validator.reservations
         if table is None or len(table) == 0:
             return np.zeros(self.paths.shape[0], dtype=bool)
-        return table.conflicts(self.paths3, self.times)
+        return table.conflicts(self.paths3, self.times, held=self.validator._slope_wind > 0)
 
 
 class MotionValidator:
@@ -638,7 +639,15 @@ class MotionValidator:
             return np.asarray(bad)
         if name == "moving":
             radii = np.array([o.radius for o in sc.moving_obstacles])
-            return np.asarray(np.any(b.moving_dist < radii, axis=(1, 2)))
+            if not self._slope_wind:
+                return np.asarray(np.any(b.moving_dist < radii, axis=(1, 2)))
+            # a fixed wing's heights lag its plan in the wind: held that much farther off
+            from uavplan.world.execution import lag_extents
+
+            uav = sc.uav
+            extra = lag_extents(b.paths, b.times, self._slope_wind, uav.max_climb_angle,
+                                uav.max_descent_angle)[0]  # fmt: skip
+            return np.asarray(np.any(b.moving_dist < radii + extra[:, None, None], axis=(1, 2)))
         if name == "separation":
             return b.conflicts
         if name == "speed":

@@ -566,17 +566,21 @@ def _pack(trajs: Sequence[Trajectory]) -> tuple[FloatArray, FloatArray, IntArray
 
 
 def separation_under(
-    trajs: Sequence[Trajectory], s2: float, timing: Timing
+    trajs: Sequence[Trajectory], s2: float, timing: Timing, lags: Sequence[float] | None = None
 ) -> tuple[list[Violation], list[PairMargin]]:
     """Every pair of UAVs under the model: a violation for each pair that can come closer
-    than ``s2`` plus the tracking gap, and the margins of every pair that can come within
-    ``s2 + 2 gap + 10`` m at all (the others tolerate any timing)."""
+    than ``s2`` plus the tracking gap (plus both UAVs' ``lags``: how far each one's heights
+    can lag its plan, m, per trajectory), and the margins of every pair that can come within
+    ``s2 + 2 gap + 10`` m (and the two largest lags) at all (the others tolerate any
+    timing)."""
     if len(trajs) < 2:
         return [], []
     P, T, owner, valid = _pack(trajs)
     take = np.array([float(trajs[k].times[0]) for k in range(len(trajs))])[np.maximum(owner, 0)]
-    required = s2 + timing.gap
-    search = s2 + 2.0 * timing.gap + 10.0
+    lag = np.zeros(len(trajs)) if lags is None else np.asarray(lags, dtype=np.float64)
+    base = s2 + timing.gap
+    top2 = np.sort(lag)[-2:].sum() if len(lag) > 1 else 0.0
+    search = s2 + 2.0 * timing.gap + 10.0 + float(top2)
     pairs = _close_pairs(P, owner, valid, float(search), float(max(search, 20.0)), T, take,
                          TAKEOFF_CAP, SPEED_CAP)  # fmt: skip
     if not len(pairs):
@@ -589,23 +593,29 @@ def separation_under(
     stops = np.concatenate([cuts, [len(key)]])
     # whether a pair fails is decided by its segment pairs that are closer than required
     # without any timing (a timed distance is never less): the bisections read those alone
-    near = _pair_dists(P, pairs) < required - TOL + 1e-6
+    need = base + lag[owner[pairs[:, 0]]] + lag[owner[pairs[:, 1]]]
+    near = _pair_dists(P, pairs) < need - TOL + 1e-6
     close = np.ascontiguousarray(pairs[near])
     at = np.concatenate([[0], np.cumsum(near)])
     out: list[Violation] = []
     margins: list[PairMargin] = []
     for s, e in zip(starts, stops, strict=True):
-        a, b = trajs[int(owner[pairs[s, 0]])], trajs[int(owner[pairs[s, 1]])]
+        ia, ib = int(owner[pairs[s, 0]]), int(owner[pairs[s, 1]])
+        a, b = trajs[ia], trajs[ib]
+        required = base + float(lag[ia] + lag[ib])
         m = _pair_margin(P, T, pairs, take, int(s), int(e), required, timing, a.id, b.id, False,
                          (close, int(at[s]), int(at[e])))  # fmt: skip
         margins.append(m)
         if not m.ok:
+            lagged = ", ".join(f"{t.id}'s heights lagging up to {fmt_num(float(lag[k]))} m"
+                               for k, t in ((ia, a), (ib, b)) if lag[k] > 0)  # fmt: skip
             out.append(Violation(
                 "separation", (a.id, b.id), m.time, m.where, m.distance, required,
                 f"{a.id} and {b.id} can come {fmt_num(m.distance)} m apart under the execution "
                 f"model (take-off ±{timing.delta0:g} s, speed ±{100 * timing.rho:.3g} %), "
                 f"about t={m.time:.1f} s, where {fmt_num(required)} m is needed (S2 {s2:g} m + "
-                f"{fmt_num(timing.gap)} m of tracking): {a.id} near "
+                f"{fmt_num(timing.gap)} m of tracking{' + ' + lagged if lagged else ''}): "
+                f"{a.id} near "
                 f"{fmt_points(m.where[0])}, {b.id} near {fmt_points(m.where[1])}; it tolerates "
                 f"take-off ±{_show(m.takeoff_s)} s, speed ±{_show(100 * m.speed)} %, tracking "
                 f"{_show(m.track_h)} m horizontal and {_show(m.track_v)} m vertical",
@@ -685,9 +695,10 @@ def _largest(fails: Any, cap: float, known: float = 0.0) -> float:
 
 
 def moving_under(
-    traj: Trajectory, obstacles: Sequence[Any], timing: Timing
+    traj: Trajectory, obstacles: Sequence[Any], timing: Timing, lag: float = 0.0
 ) -> tuple[list[Violation], list[PairMargin]]:
-    """The UAV against each moving obstacle (on its own schedule) under the model."""
+    """The UAV against each moving obstacle (on its own schedule) under the model, its
+    heights lagging its plan by up to ``lag`` m."""
     out: list[Violation] = []
     margins: list[PairMargin] = []
     for oi, obs in enumerate(obstacles):
@@ -703,7 +714,7 @@ def moving_under(
         ib = np.flatnonzero(valid & (owner == 1))
         pairs = np.stack(np.meshgrid(ia, ib, indexing="ij"), axis=-1).reshape(-1, 2)
         pairs = np.ascontiguousarray(pairs, dtype=np.int64)
-        required = float(obs.radius) + timing.norm
+        required = float(obs.radius) + timing.norm + float(lag)
         m = _pair_margin(P, T, pairs, take, 0, len(pairs), required, timing, traj.id, other.id,
                          True)  # fmt: skip
         margins.append(m)
@@ -713,7 +724,9 @@ def moving_under(
                 f"{traj.id} can come {fmt_num(m.distance)} m from the centre of moving obstacle "
                 f"{oi} under the execution model, about t={m.time:.1f} s, where "
                 f"{fmt_num(required)} m is needed (radius {obs.radius:g} m + "
-                f"{fmt_num(timing.norm)} m of tracking); it tolerates take-off "
+                f"{fmt_num(timing.norm)} m of tracking"
+                f"{f' + {fmt_num(float(lag))} m of height lag' if lag else ''}); "
+                f"it tolerates take-off "
                 f"±{_show(m.takeoff_s)} s, speed ±{_show(100 * m.speed)} %",
             ))  # fmt: skip
     return out, margins

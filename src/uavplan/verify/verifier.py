@@ -73,7 +73,10 @@ Semantics (frame: metres, x east, y north, z up, absolute altitudes; seconds):
   pursuing its planned heights within the flight-path angle that wind leaves over the ground
   (:func:`uavplan.verify.kinematics.heights_in_wind`), keeps the model's vertical error from the
   ground, the band and the bounds (reported as their kinds) and reaches its goal within the
-  model's vertical error (``climb``); lags under ``LAG_TOL`` are not checked.
+  model's vertical error (``climb``); and a pair of UAVs (a UAV and a moving obstacle) must
+  keep what the model requires plus the largest lag of each UAV whose heights lag (the lag
+  is between 0 and that in a calmer wind, so each UAV stays within it of its plan); lags under
+  ``LAG_TOL`` are not checked.
 * **Warnings** (not violations): the plan's scenario name differs from the scenario's; a UAV's
   first or last point differs from its task's start or goal; a UAV the plan calls feasible
   fails a check.
@@ -320,9 +323,12 @@ def _under_model(
                 ))  # fmt: skip
         if wind and tr.dim == 3:
             out += _lagged_under(tr, sc, src, timing, wind, what_model)
+    # how far each fixed wing's heights can lag its plan in that wind: the pairs and the
+    # moving obstacles are held that much farther apart
+    lags = {tr.id: _lag_extent(tr, sc, wind) for tr in timed}
     if sc.moving_obstacles:
         for tr in timed:
-            found, pm = R.moving_under(tr, sc.moving_obstacles, timing)
+            found, pm = R.moving_under(tr, sc.moving_obstacles, timing, lags[tr.id])
             out += found
             for p in pm:
                 margins[tr.id].take("takeoff_s", p.takeoff_s, p.other)
@@ -330,7 +336,9 @@ def _under_model(
                 margins[tr.id].take("track_h", p.track_h, p.other)
                 margins[tr.id].take("track_v", p.track_v, p.other)
             report.pair_margins += pm
-    found, pm = R.separation_under(timed, float(u.separation_radius), timing)
+    found, pm = R.separation_under(
+        timed, float(u.separation_radius), timing, [lags[tr.id] for tr in timed]
+    )
     out += [v for v in found if v.uavs not in skip_pairs]
     for p in pm:
         for a in (p.uav, p.other):
@@ -356,6 +364,18 @@ def _slope_wind(uav: Any, rec: Mapping[str, Any]) -> float:
     if uav.max_climb_angle is None and uav.max_descent_angle is None:
         return 0.0
     return max(float(rec.get("wind", 0.0) or 0.0), float(af.turn_wind))
+
+
+def _lag_extent(tr: Trajectory, sc: Scenario, wind: float) -> float:
+    """The largest height lag of a fixed wing's flight in ``wind``
+    (:func:`uavplan.verify.kinematics.heights_in_wind`), 0 within ``LAG_TOL`` or without
+    wind: how much farther from the other UAVs and the moving obstacles it is held."""
+    if not wind or tr.dim != 3:
+        return 0.0
+    u = sc.uav
+    off = heights_in_wind(tr, wind, u.max_climb_angle, u.max_descent_angle)
+    top = float(np.max(np.abs(off))) if len(off) else 0.0
+    return top if top > LAG_TOL else 0.0
 
 
 def _lagged_under(

@@ -305,6 +305,29 @@ def height_lag(
     return out
 
 
+def lag_extents(
+    paths: np.ndarray, times: np.ndarray, wind: float, max_climb: float | None,
+    max_descent: float | None,
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """How far a fixed wing's heights can be off its timed paths ``(pop, n, 3)`` (times
+    ``(pop, n)``) by its :func:`height_lag` in ``wind``: per path the largest ``|lag|``
+    ``(pop,)`` and per segment the larger of its ends' ``(pop, n - 1)`` (along a segment the
+    lag's extremes lie at its ends); 0 where the path's lag stays within
+    :data:`~uavplan.world.tolerances.LAG_TOL` (the calibrated tracking error carries such
+    lags). In a calmer wind the lag is between 0 and these, so a UAV is within its path's
+    segment's extent of where it was planned (and the model's tracking error of that): what
+    separation is checked with."""
+    from uavplan.world.tolerances import LAG_TOL
+
+    off = np.abs(height_lag(paths, times, wind, max_climb, max_descent))
+    top = off.max(axis=1) if off.shape[1] else np.zeros(off.shape[0])
+    seg = np.maximum(off[:, :-1], off[:, 1:])
+    small = top <= LAG_TOL
+    top[small] = 0.0
+    seg[small] = 0.0
+    return top, seg
+
+
 def windows(t0: float, delta0: float, rho: float, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``T(tau)`` for a UAV taking off at ``t0``: the earliest and latest actual times it can be
     at its path's point ``tau`` (arrays like ``tau``)."""

@@ -484,10 +484,12 @@ def path_query_from(paths, times, p, args, first):  # pragma: no cover - numba
     the same path at nearby take-off times starts where the last conflict was found, most
     often found again at once. ``args``: the tuple
     ``(dt, origin, cell, dims, sep, tkey, tstart, tcount, e_idx, rp0, rp1, rt0, rt1, rpad,
-    want_min, box, w, timed, delta0, rho, rtake, take_min, ekeys)``
+    want_min, box, w, timed, delta0, rho, rtake, take_min, ekeys, qgrow)``
     (:meth:`ReservationTable.query_args`; ``timed``: the pieces are compared under the
     execution model's windows, ``rtake`` the take-off time of each reserved piece's
-    trajectory, ``take_min`` the earliest of them, the path's its first time)."""
+    trajectory, ``take_min`` the earliest of them, the path's its first time; ``qgrow``: how
+    much farther than the table's separation ``sep`` is, which the cells searched around the
+    path grow by: :meth:`ReservationTable.held_off`)."""
     (
         dt,
         origin,
@@ -512,6 +514,7 @@ def path_query_from(paths, times, p, args, first):  # pragma: no cover - numba
         rtake,
         take_min,
         ekeys,
+        qgrow,
     ) = args
     N = paths.shape[1]
     t0 = times[p, 0]
@@ -543,9 +546,9 @@ def path_query_from(paths, times, p, args, first):  # pragma: no cover - numba
                 for d in range(3):
                     a0[d] = paths[p, s, d] + fa * (paths[p, s + 1, d] - paths[p, s, d])
                     a1[d] = paths[p, s, d] + fb * (paths[p, s + 1, d] - paths[p, s, d])
-                ix0, ix1 = _cell_range(a0[0], a1[0], 0.0, origin[0], cell, nx)
-                iy0, iy1 = _cell_range(a0[1], a1[1], 0.0, origin[1], cell, ny)
-                iz0, iz1 = _cell_range(a0[2], a1[2], 0.0, origin[2], cell, nz)
+                ix0, ix1 = _cell_range(a0[0], a1[0], qgrow, origin[0], cell, nx)
+                iy0, iy1 = _cell_range(a0[1], a1[1], qgrow, origin[1], cell, ny)
+                iz0, iz1 = _cell_range(a0[2], a1[2], qgrow, origin[2], cell, nz)
                 k0 = k
                 k1 = k
                 w_lo = lo
@@ -712,6 +715,13 @@ class ReservationTable:
             it only changes speed).
         timing: ``(delta0, rho)``: every UAV's take-off and speed error (the module
             docstring); None or zeros: trajectories are flown exactly.
+        lag: ``(wind, max_climb, max_descent)``: the trajectories are a fixed wing's flights
+            whose heights lag their plan in that wind
+            (:func:`uavplan.world.execution.lag_extents`); every reserved trajectory is
+            padded by its largest lag, and every queried path is held that much farther off
+            (its own largest lag), as the verifier holds each pair: the separation holds
+            wherever both UAVs are between their planned and their lagged heights. None (or
+            no wind): no lag.
     """
 
     def __init__(
@@ -722,6 +732,7 @@ class ReservationTable:
         dt: float = 1.0,
         cell: float | None = None,
         timing: tuple[float, float] | None = None,
+        lag: tuple[float, float | None, float | None] | None = None,
     ) -> None:
         axes = np.asarray(separation, dtype=np.float64).reshape(-1)
         if axes.size not in (1, 3) or not np.all(axes > 0) or not dt > 0:
@@ -743,6 +754,8 @@ class ReservationTable:
         #: whether trajectories are compared under the execution model's windows
         self.timed = bool(delta0 or rho)
         self.delta0, self.rho = delta0, rho
+        #: the lag of the flights (``(wind, max_climb, max_descent)``), None: none
+        self.lag = lag if lag is not None and lag[0] > 0 else None
         if self.timed and self.axes is not None:
             raise ValueError("a per-axis separation under an execution model: use the sphere "
                              "that holds the box (ReservationTable.for_scenario does)")  # fmt: skip
@@ -790,7 +803,8 @@ class ReservationTable:
         scenario's execution model, when it has one: the separation widened by what tracking
         error takes away (``sqrt((2 e_h)^2 + (2 e_v)^2)``; a per-axis separation widened axis
         by axis, or, when the schedule may drift, the sphere that holds the widened box), and
-        the take-off and speed errors as windows. Under a model whose schedule drifts the
+        the take-off and speed errors as windows, and a fixed wing's height lag in the wind its
+        heights are checked in (``lag``). Under a model whose schedule drifts the
         time bucket is at least the take-off window, ``2 delta0``: a candidate piece looks in
         every bucket its window can meet, so buckets narrower than the window only add
         lookups of the same reserved pieces (the answers are exact at any bucket)."""
@@ -800,18 +814,22 @@ class ReservationTable:
             lo, hi = np.append(lo, 0.0), np.append(hi, 1.0)
         if model is None or model.nominal:
             return cls.for_uav(lo, hi, uav, margin, dt=dt)
+        from uavplan.world.execution import slope_wind
+
         timing = model.timing(uav.speed)
         if model.timed:
             dt = max(dt, 2.0 * float(model.takeoff_s))
+        wind = slope_wind(uav, model) if scenario.dim == 3 else 0.0
+        lag = (wind, uav.max_climb_angle, uav.max_descent_angle) if wind > 0 else None
         axes = getattr(uav, "s2_axes", None)
         if axes is not None:
             grown = np.asarray(axes, dtype=np.float64) + margin
             grown += 2.0 * np.array([model.track_h, model.track_h, model.track_v])
             if not model.timed:
-                return cls(lo, hi, [float(g) for g in grown], dt=dt)
-            return cls(lo, hi, float(np.linalg.norm(grown)), dt=dt, timing=timing)
+                return cls(lo, hi, [float(g) for g in grown], dt=dt, lag=lag)
+            return cls(lo, hi, float(np.linalg.norm(grown)), dt=dt, timing=timing, lag=lag)
         sep = float(uav.s2) + margin + model.tracking_gap()
-        return cls(lo, hi, sep, dt=dt, timing=timing if model.timed else None)
+        return cls(lo, hi, sep, dt=dt, timing=timing if model.timed else None, lag=lag)
 
     def window(self, t0: float, tau: FloatArray) -> tuple[FloatArray, FloatArray]:
         """The earliest and latest actual times of path times ``tau`` of a trajectory taking
@@ -851,16 +869,27 @@ class ReservationTable:
         reserved as fewer segments (:func:`simplify_timed`), each padded by its largest
         deviation from the trajectory: a query then finds every approach closer than the
         separation to the true trajectory, and may also reject one up to the pad farther
-        (conservative); distances reported are lower bounds within the pad.
+        (conservative); distances reported are lower bounds within the pad. A table with a
+        :attr:`lag` pads every segment by the trajectory's largest lag as well.
         """
         pts = np.ascontiguousarray(points, dtype=np.float64)
         ts = np.ascontiguousarray(times, dtype=np.float64)
         if pts.ndim != 2 or pts.shape[1] != 3 or ts.shape != (pts.shape[0],):
             raise ValueError(f"need points (n, 3) and times (n,), got {pts.shape}, {ts.shape}")
         seg_pad = np.zeros(max(pts.shape[0] - 1, 0))
+        lag = np.zeros(seg_pad.shape[0])
+        if self.lag is not None and pts.shape[0] >= 2:
+            from uavplan.world.execution import lag_extents
+
+            # the whole flight held off by its largest lag, as the verifier holds it
+            lag = np.full(seg_pad.shape[0], lag_extents(pts[None], ts[None], *self.lag)[0][0])
         if tolerance > 0 and pts.shape[0] > 2:
             keep, seg_pad = _simplify(pts, ts, float(tolerance), 64)
+            if lag.any():  # a kept segment's lag: the largest of the segments it stands for
+                seg_pad = seg_pad + np.maximum.reduceat(lag, keep[:-1])
             pts, ts = np.ascontiguousarray(pts[keep]), np.ascontiguousarray(ts[keep])
+        else:
+            seg_pad = seg_pad + lag
         p0, p1, t0, t1, k = _split(pts, ts, self.dt)
         # a Euclidean deviation of ``pad`` moves the scaled Chebyshev distance by at most
         # ``pad max(w)``
@@ -962,16 +991,47 @@ class ReservationTable:
             self._tkey, self._tstart, self._tcount, self._idx,
             self._p0, self._p1, self._t0, self._t1, self._pad, bool(want_min),
             self.axes is not None, self._w, self.timed, self.delta0, self.rho, self._take,
-            float(self._take.min()) if self._take.size else 0.0, self._keys,
+            float(self._take.min()) if self._take.size else 0.0, self._keys, 0.0,
         )  # fmt: skip
         self._args[bool(want_min)] = args
         return args
 
-    def conflicts(self, paths: FloatArray, times: FloatArray) -> NDArray[np.bool_]:
+    def held_off(self, paths: FloatArray, times: FloatArray) -> FloatArray:
+        """(pop,) how much farther than the separation each timed path is held from the
+        reserved trajectories: its largest height lag under :attr:`lag` (0 without one), in
+        the table's distance (the scaled Chebyshev one of a per-axis separation moves by at
+        most that times the largest weight)."""
+        if self.lag is None:
+            return np.zeros(np.shape(paths)[0] if np.ndim(paths) == 3 else 1)
+        from uavplan.world.execution import lag_extents
+
+        p, t = self._prepared(paths, times)
+        return np.asarray(lag_extents(p, t, *self.lag)[0] * float(self._w.max()))
+
+    def _held_args(self, extra: float) -> tuple[Any, ...]:
+        """:meth:`query_args` (stopping at the first conflict) for a path held ``extra``
+        farther: the separation that much larger, the cells searched around it that much
+        wider (a reserved piece is entered in the cells within the separation of it)."""
+        a = self.query_args(False)
+        return (*a[:4], self.separation + extra, *a[5:-1], float(extra))
+
+    def conflicts(
+        self, paths: FloatArray, times: FloatArray, held: bool = True
+    ) -> NDArray[np.bool_]:
         """Whether each timed path (pop, n, 3) at ``times`` (pop, n) comes closer than the
         separation to a reserved trajectory at some instant (closer than the separation plus
-        the pad to a padded one), (pop,) bool."""
-        return np.asarray(self._run(paths, times, False) < self.separation)
+        the pad to a padded one, and, with a :attr:`lag` and ``held``, plus the path's own
+        largest lag: :meth:`held_off`; a planned polyline, which is not what flies, is asked
+        with ``held=False``), (pop,) bool."""
+        out = np.asarray(self._run(paths, times, False) < self.separation)
+        if self.lag is None or self.n_pieces == 0 or not held:
+            return out
+        extra = self.held_off(paths, times)
+        p, t = self._prepared(paths, times)
+        for i in np.flatnonzero((extra > 0) & ~out):
+            e = float(extra[i])
+            out[i] = _query(p[i : i + 1], t[i : i + 1], self._held_args(e))[0] < self.separation + e
+        return out
 
     def first_free(
         self,
@@ -994,7 +1054,9 @@ class ReservationTable:
         if self.n_pieces == 0:
             return (int(start) if start < stop else -1), int(first)
         p, t = self._prepared(points, times)
-        i, hint = _first_free(p[0], t[0], w, int(start), stop, self.query_args(False), int(first))
+        extra = float(self.held_off(p, t)[0])  # a wait moves all times: the same lag
+        args = self._held_args(extra) if extra > 0 else self.query_args(False)
+        i, hint = _first_free(p[0], t[0], w, int(start), stop, args, int(first))
         return int(i), int(hint)
 
     def min_distance(self, paths: FloatArray, times: FloatArray) -> FloatArray:
