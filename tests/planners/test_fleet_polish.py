@@ -170,6 +170,28 @@ def test_more_rrt_tries_only_when_no_path_flew_even_alone(planned, monkeypatch) 
     assert "even alone" not in tried
 
 
+def test_among_moving_obstacles_no_rrt_path_is_tried_and_the_uav_is_left(
+    planned, monkeypatch
+) -> None:  # type: ignore[no-untyped-def]
+    """RRT* cannot plan around moving obstacles (its graph has no time): with one in the
+    world, the failing UAV gets no RRT* try, is left unrepaired, and the story says why."""
+    from uavplan.planners.fleet import fleet_polish
+    from uavplan.world.dynamic import MovingObstacle
+
+    sc, fr, cfg = planned
+    far = MovingObstacle(5.0, np.array([0.0, 1e4]), np.array([[-900.0, -900.0, 0.0]] * 2))
+    moving = dataclasses.replace(sc, moving_obstacles=(far,))
+    task, _, bad = _through_a_cylinder(moving, fr)
+
+    def never(*args: Any) -> Any:
+        raise AssertionError("RRT* tried among moving obstacles")
+
+    monkeypatch.setattr(fleet_polish, "_rrt_path", never)
+    out = polish_fleet(moving, bad, 7, cfg)
+    assert not out.flown_feasible
+    assert "it cannot plan around moving obstacles" in out.info["unrepaired"][task.id]
+
+
 def test_a_fleet_that_needs_nothing_is_left_as_it_is(planned) -> None:  # type: ignore[no-untyped-def]
     sc, fr, cfg = planned
     out = polish_fleet(sc, fr, 7, cfg)

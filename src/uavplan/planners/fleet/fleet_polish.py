@@ -22,7 +22,9 @@ fails the fleet), in the plan's priority order:
    ``delay_step`` seconds later, then at the first free step of ``delay_step`` before every
    other UAV has landed (where separation is the only check that reads time: batched table
    queries), and, last, after every other UAV has landed (whatever the execution model lets
-   the schedules drift: no other flight is left to meet); up to :data:`RRT_TRIES` RRT* runs.
+   the schedules drift: no other flight is left to meet); up to :data:`RRT_TRIES` RRT* runs
+   (none among moving obstacles, which RRT* cannot plan around: there the UAV is left
+   unrepaired, and the fleet refused).
 
 A new flight is kept only when it passes every check (world, the others, the kinematic limits)
 and its track does not cross itself; the UAV's result then says so (``info["repaired"]``) and
@@ -345,7 +347,11 @@ def polish_fleet(
                               fill=delay_step)  # fmt: skip
         alone = 0  # RRT* tries whose path flies nowhere, even alone
         tries = 0
-        for a, ss in enumerate(rngs[k].spawn(RRT_TRIES + RRT_MORE) if new is None else ()):
+        searches = rngs[k].spawn(RRT_TRIES + RRT_MORE) if new is None else ()
+        if new is None and scenario.moving_obstacles:  # RRT*'s graph has no time
+            searches = ()
+            tried.append("no RRT* path: it cannot plan around moving obstacles")
+        for a, ss in enumerate(searches):
             if a == RRT_TRIES and alone < RRT_TRIES:
                 break  # some path flew alone: its take-offs were tried, and none flies
             tries += 1
