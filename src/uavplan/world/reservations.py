@@ -877,19 +877,15 @@ class ReservationTable:
         if pts.ndim != 2 or pts.shape[1] != 3 or ts.shape != (pts.shape[0],):
             raise ValueError(f"need points (n, 3) and times (n,), got {pts.shape}, {ts.shape}")
         seg_pad = np.zeros(max(pts.shape[0] - 1, 0))
-        lag = np.zeros(seg_pad.shape[0])
+        lag = 0.0  # the whole flight held off by its largest lag, as the verifier holds it
         if self.lag is not None and pts.shape[0] >= 2:
             from uavplan.world.execution import lag_extents
 
-            # the whole flight held off by its largest lag, as the verifier holds it
-            lag = np.full(seg_pad.shape[0], lag_extents(pts[None], ts[None], *self.lag)[0][0])
+            lag = float(lag_extents(pts[None], ts[None], *self.lag)[0][0])
         if tolerance > 0 and pts.shape[0] > 2:
             keep, seg_pad = _simplify(pts, ts, float(tolerance), 64)
-            if lag.any():  # a kept segment's lag: the largest of the segments it stands for
-                seg_pad = seg_pad + np.maximum.reduceat(lag, keep[:-1])
             pts, ts = np.ascontiguousarray(pts[keep]), np.ascontiguousarray(ts[keep])
-        else:
-            seg_pad = seg_pad + lag
+        seg_pad = seg_pad + lag
         p0, p1, t0, t1, k = _split(pts, ts, self.dt)
         # a Euclidean deviation of ``pad`` moves the scaled Chebyshev distance by at most
         # ``pad max(w)``
