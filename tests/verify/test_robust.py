@@ -517,6 +517,34 @@ def test_a_pair_is_held_apart_by_each_uav_s_height_lag() -> None:
     assert not found
 
 
+def test_each_pair_of_segments_is_held_apart_by_its_own_lags() -> None:
+    """Lags given per segment: a flight whose heights lag 25 m on its first segment only
+    passes 20 m beside another on its second (S2 10 m), where the whole flight's lag would
+    refuse it; beside the first it fails, the message naming that segment's lag. A moving
+    obstacle beside the second segment likewise."""
+    from uavplan.verify.robust import moving_under
+    from uavplan.world.dynamic import MovingObstacle
+
+    a = Trajectory("a", np.array([[0.0, 0.0, 100.0], [1000.0, 0.0, 100.0],
+                                  [2000.0, 0.0, 100.0]]), np.array([0.0, 50.0, 100.0]))  # fmt: skip
+    seg = np.array([25.0, 0.0])
+    timing = Timing(0.0, 0.0, 0.0, 0.0)
+    for x, ok in ((1200.0, True), (200.0, False)):
+        b = Trajectory("b", np.array([[x, 20.0, 100.0], [x + 600.0, 20.0, 100.0]]),
+                       np.array([x / 20.0, (x + 600.0) / 20.0]))  # fmt: skip
+        found, margins = separation_under([a, b], 10.0, timing, [seg, np.zeros(1)])
+        assert (not found) == ok, x
+        whole, _ = separation_under([a, b], 10.0, timing, [25.0, 0.0])
+        assert len(whole) == 1
+        if not ok:
+            assert "a's heights lagging up to 25.000 m" in found[0].message
+            assert margins[0].required == pytest.approx(35.0)
+        obs = MovingObstacle(5.0, b.times, b.points)  # radius 5 + lag 25 > 20 beside seg 1
+        got, _ = moving_under(a, [obs], timing, seg)
+        assert (not got) == ok, x
+        assert len(moving_under(a, [obs], timing, 25.0)[0]) == 1
+
+
 def test_the_verifier_holds_a_pair_apart_by_the_lag_of_their_descents_in_the_wind() -> None:
     """Two small fixed wings 15 m apart side by side descend 87 m over 160 m (28.6 degrees,
     their limit 30) at 20 m/s along the path, 17.6 m/s over the ground: with the calibration's

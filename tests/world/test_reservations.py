@@ -349,10 +349,10 @@ def _descent_and_level() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return a, b, x / 13.0
 
 
-def test_a_lagging_flight_is_held_off_by_its_largest_lag_reserved_or_asked() -> None:
+def test_a_lagging_flight_is_held_off_by_its_lag_reserved_or_asked() -> None:
     """With a lag (wind, climb and descent limits), a reserved flight whose heights lag is
-    padded by its largest lag, and a path asked about is held off by its own; the first free
-    take-off says the same; without wind there is no lag."""
+    padded by its segments' lags, and a path asked about is held off by its own; the first
+    free take-off says the same; without wind there is no lag."""
     from uavplan.world.execution import lag_extents
 
     a, b, t = _descent_and_level()
@@ -373,9 +373,34 @@ def test_a_lagging_flight_is_held_off_by_its_largest_lag_reserved_or_asked() -> 
         waits = np.array([0.0, 200.0])  # after the reserved flight has landed: clear
         assert plain.first_free(asked, t, waits, 0, 2)[0] == 0
         assert lagged.first_free(asked, t, waits, 0, 2)[0] == 1
-    # held off by the largest lag, no more
+    # held off by the lag of the descent's segment (the largest), no more
     table = ReservationTable(lo, hi, 10.0, lag=(3.0, 30.0, 30.0))
     table.add("r", a, t)
     for side, conflict in ((10.0 + top - 0.5, True), (10.0 + top + 0.5, False)):
         level = b + np.array([0.0, side - 30.0, 0.0])
         assert table.conflicts(level[None], t[None])[0] == conflict
+
+
+def test_a_flight_is_held_off_by_the_lag_of_its_segment_not_of_its_whole_flight() -> None:
+    """The descent of :func:`_descent_and_level` flown on level to 2 km: its lag closes a
+    few hundred metres after the descent, and a level flight 30 m beside its last kilometre
+    only (S2 10 m) keeps clear whichever of the two is reserved or asked, though the whole
+    flight's largest lag (over 20 m) would not let it; beside the descent it does not."""
+    from uavplan.world.execution import lag_extents
+
+    a, _, _ = _descent_and_level()
+    a = np.vstack([a, [[1000.0, 0.0, a[-1, 2]], [2000.0, 0.0, a[-1, 2]]]])
+    t = np.hypot(np.diff(a[:, 0]), np.diff(a[:, 2])).cumsum() / 13.0
+    t = np.concatenate([[0.0], t])
+    top, seg = lag_extents(a[None], t[None], 3.0, 30.0, 30.0)
+    assert top[0] > 20.0 and seg[0, -1] == 0.0 and seg[0, 1] == top[0]
+    lo, hi = np.array([-100.0, -100.0, -200.0]), np.array([2100.0, 200.0, 500.0])
+    for x0, z, clear in ((1200.0, a[-1, 2], True), (100.0, 300.0, False)):
+        # level beside a from x0 for 800 m, at a's own times there
+        bx = np.array([x0, x0 + 800.0])
+        b = np.column_stack([bx, np.full(2, 30.0), np.full(2, z)])
+        tb = np.interp(bx, a[:, 0], t)
+        for reserved, rt, asked, at in ((a, t, b, tb), (b, tb, a, t)):
+            table = ReservationTable(lo, hi, 10.0, lag=(3.0, 30.0, 30.0))
+            table.add("r", reserved, rt)
+            assert bool(table.conflicts(asked[None], at[None])[0]) == (not clear), (x0, reserved)

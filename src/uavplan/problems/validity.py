@@ -641,13 +641,14 @@ class MotionValidator:
             radii = np.array([o.radius for o in sc.moving_obstacles])
             if not self._slope_wind:
                 return np.asarray(np.any(b.moving_dist < radii, axis=(1, 2)))
-            # a fixed wing's heights lag its plan in the wind: held that much farther off
+            # a fixed wing's heights lag its plan in the wind: each segment held that much
+            # farther off (the larger of its ends' lags), as the verifier holds it
             from uavplan.world.execution import lag_extents
 
             uav = sc.uav
             extra = lag_extents(b.paths, b.times, self._slope_wind, uav.max_climb_angle,
-                                uav.max_descent_angle)[0]  # fmt: skip
-            return np.asarray(np.any(b.moving_dist < radii + extra[:, None, None], axis=(1, 2)))
+                                uav.max_descent_angle)[1]  # fmt: skip
+            return np.asarray(np.any(b.moving_dist < radii + extra[:, :, None], axis=(1, 2)))
         if name == "separation":
             return b.conflicts
         if name == "speed":

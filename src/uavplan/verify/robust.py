@@ -58,6 +58,9 @@ TAKEOFF_CAP = 60.0
 SPEED_CAP = 0.2
 #: Bisection steps (take-off to 60 / 2^14 s = 0.004 s; speed to 0.2 / 2^14)
 BISECT = 14
+#: A pair whose segments need different distances (height lags that vary along the flights)
+#: is checked in at most this many groups, each against its largest need.
+LEVELS = 8
 
 
 # ================================================================================ window QP
@@ -565,21 +568,71 @@ def _pack(trajs: Sequence[Trajectory]) -> tuple[FloatArray, FloatArray, IntArray
     return P, T, owner, valid
 
 
+def _row_lags(trajs: Sequence[Trajectory], lags: Sequence[Any] | None, n: int) -> FloatArray:
+    """Each packed row's height lag (:func:`_pack`'s rows; a row is the segment it starts): a
+    trajectory's ``lags`` entry is one number for its whole flight or one per segment."""
+    out = np.zeros(n)
+    if lags is None:
+        return out
+    r = 0
+    for t, lg in zip(trajs, lags, strict=True):
+        m = len(t.times)
+        out[r : r + max(m - 1, 0)] = np.asarray(lg, dtype=np.float64) if m > 1 else 0.0
+        r += m
+    return out
+
+
+def _levels(need: FloatArray) -> list[NDArray[np.intp]]:
+    """Indices into ``need`` in groups checked against one requirement each (the group's
+    largest need, so every segment pair is held at least to its own): one group where all
+    needs are equal, else at most :data:`LEVELS` groups of equal size in order of need."""
+    if not len(need) or float(need.max() - need.min()) <= 1e-9:
+        return [np.arange(len(need))]
+    order = np.argsort(need, kind="stable")
+    return [g for g in np.array_split(order, min(LEVELS, len(need))) if len(g)]
+
+
+def _levelled_margin(
+    P: FloatArray, T: FloatArray, rows: IntArray, take: FloatArray, need: FloatArray,
+    timing: Timing, a: str, b: str, moving: bool,
+) -> tuple[PairMargin, NDArray[np.intp]]:  # fmt: skip
+    """One pair's margin when its segment pairs ``rows`` need different distances ``need``
+    (their UAVs' height lags differ along the flights): each group of :func:`_levels` checked
+    against its largest need; the margins the least over the groups, the distance and the
+    requirement those of the group with the least slack (returned with its rows' indices)."""
+    best: tuple[float, PairMargin, NDArray[np.intp]] | None = None
+    lo = [math.inf] * 4
+    for g in _levels(need):
+        gp = np.ascontiguousarray(rows[g])
+        m = _pair_margin(P, T, gp, take, 0, len(gp), float(need[g].max()), timing, a, b, moving)
+        lo = [min(x, y) for x, y in zip(lo, (m.takeoff_s, m.speed, m.track_h, m.track_v),
+                                        strict=True)]  # fmt: skip
+        slack = m.distance - m.required
+        if best is None or slack < best[0]:
+            best = (slack, m, g)
+    assert best is not None
+    m = best[1]
+    return replace(m, takeoff_s=lo[0], speed=lo[1], track_h=lo[2], track_v=lo[3]), best[2]
+
+
 def separation_under(
-    trajs: Sequence[Trajectory], s2: float, timing: Timing, lags: Sequence[float] | None = None
+    trajs: Sequence[Trajectory], s2: float, timing: Timing, lags: Sequence[Any] | None = None
 ) -> tuple[list[Violation], list[PairMargin]]:
     """Every pair of UAVs under the model: a violation for each pair that can come closer
     than ``s2`` plus the tracking gap (plus both UAVs' ``lags``: how far each one's heights
-    can lag its plan, m, per trajectory), and the margins of every pair that can come within
+    can lag its plan, m, per trajectory one number or one per segment: each pair of segments
+    held apart by its own two), and the margins of every pair that can come within
     ``s2 + 2 gap + 10`` m (and the two largest lags) at all (the others tolerate any
     timing)."""
     if len(trajs) < 2:
         return [], []
     P, T, owner, valid = _pack(trajs)
     take = np.array([float(trajs[k].times[0]) for k in range(len(trajs))])[np.maximum(owner, 0)]
-    lag = np.zeros(len(trajs)) if lags is None else np.asarray(lags, dtype=np.float64)
+    rowlag = _row_lags(trajs, lags, len(P))
     base = s2 + timing.gap
-    top2 = np.sort(lag)[-2:].sum() if len(lag) > 1 else 0.0
+    tops = np.zeros(len(trajs))
+    np.maximum.at(tops, np.maximum(owner, 0), rowlag)
+    top2 = np.sort(tops)[-2:].sum()
     search = s2 + 2.0 * timing.gap + 10.0 + float(top2)
     pairs = _close_pairs(P, owner, valid, float(search), float(max(search, 20.0)), T, take,
                          TAKEOFF_CAP, SPEED_CAP)  # fmt: skip
@@ -591,30 +644,40 @@ def separation_under(
     cuts = np.flatnonzero(np.diff(key)) + 1
     starts = np.concatenate([[0], cuts])
     stops = np.concatenate([cuts, [len(key)]])
-    # whether a pair fails is decided by its segment pairs that are closer than required
+    # whether a pair fails is decided by its segment pairs that are closer than they need
     # without any timing (a timed distance is never less): the bisections read those alone
-    need = base + lag[owner[pairs[:, 0]]] + lag[owner[pairs[:, 1]]]
+    need = base + rowlag[pairs[:, 0]] + rowlag[pairs[:, 1]]
     near = _pair_dists(P, pairs) < need - TOL + 1e-6
     close = np.ascontiguousarray(pairs[near])
+    close_need = need[near]
     at = np.concatenate([[0], np.cumsum(near)])
     out: list[Violation] = []
     margins: list[PairMargin] = []
     for s, e in zip(starts, stops, strict=True):
         ia, ib = int(owner[pairs[s, 0]]), int(owner[pairs[s, 1]])
         a, b = trajs[ia], trajs[ib]
-        required = base + float(lag[ia] + lag[ib])
-        m = _pair_margin(P, T, pairs, take, int(s), int(e), required, timing, a.id, b.id, False,
-                         (close, int(at[s]), int(at[e])))  # fmt: skip
+        cs, ce = int(at[s]), int(at[e])
+        cn = close_need[cs:ce]
+        held = close[cs:ce]
+        if len(_levels(cn)) == 1:
+            required = float(cn.max()) if len(cn) else float(need[s:e].max())
+            m = _pair_margin(P, T, pairs, take, int(s), int(e), required, timing, a.id, b.id,
+                             False, (close, cs, ce))  # fmt: skip
+        else:
+            m, g = _levelled_margin(P, T, held, take, cn, timing, a.id, b.id, False)
+            held = held[g]
         margins.append(m)
         if not m.ok:
-            lagged = ", ".join(f"{t.id}'s heights lagging up to {fmt_num(float(lag[k]))} m"
-                               for k, t in ((ia, a), (ib, b)) if lag[k] > 0)  # fmt: skip
+            la = float(rowlag[held[:, 0]].max()) if len(held) else 0.0
+            lb = float(rowlag[held[:, 1]].max()) if len(held) else 0.0
+            lagged = ", ".join(f"{t.id}'s heights lagging up to {fmt_num(lg)} m"
+                               for t, lg in ((a, la), (b, lb)) if lg > 0)  # fmt: skip
             out.append(Violation(
-                "separation", (a.id, b.id), m.time, m.where, m.distance, required,
+                "separation", (a.id, b.id), m.time, m.where, m.distance, m.required,
                 f"{a.id} and {b.id} can come {fmt_num(m.distance)} m apart under the execution "
                 f"model (take-off ±{timing.delta0:g} s, speed ±{100 * timing.rho:.3g} %), "
-                f"about t={m.time:.1f} s, where {fmt_num(required)} m is needed (S2 {s2:g} m + "
-                f"{fmt_num(timing.gap)} m of tracking{' + ' + lagged if lagged else ''}): "
+                f"about t={m.time:.1f} s, where {fmt_num(m.required)} m is needed (S2 {s2:g} m "
+                f"+ {fmt_num(timing.gap)} m of tracking{' + ' + lagged if lagged else ''}): "
                 f"{a.id} near "
                 f"{fmt_points(m.where[0])}, {b.id} near {fmt_points(m.where[1])}; it tolerates "
                 f"take-off ±{_show(m.takeoff_s)} s, speed ±{_show(100 * m.speed)} %, tracking "
@@ -695,12 +758,15 @@ def _largest(fails: Any, cap: float, known: float = 0.0) -> float:
 
 
 def moving_under(
-    traj: Trajectory, obstacles: Sequence[Any], timing: Timing, lag: float = 0.0
+    traj: Trajectory, obstacles: Sequence[Any], timing: Timing, lag: Any = 0.0
 ) -> tuple[list[Violation], list[PairMargin]]:
     """The UAV against each moving obstacle (on its own schedule) under the model, its
-    heights lagging its plan by up to ``lag`` m."""
+    heights lagging its plan by up to ``lag`` m (one number, or one per segment: each segment
+    held off by its own)."""
     out: list[Violation] = []
     margins: list[PairMargin] = []
+    seg_lag = np.zeros(max(len(traj.times) - 1, 0))
+    seg_lag[:] = np.asarray(lag, dtype=np.float64) if len(seg_lag) else 0.0
     for oi, obs in enumerate(obstacles):
         ot = np.asarray(obs.times, dtype=np.float64)
         op = np.asarray(obs.positions, dtype=np.float64)[:, :3]
@@ -714,18 +780,23 @@ def moving_under(
         ib = np.flatnonzero(valid & (owner == 1))
         pairs = np.stack(np.meshgrid(ia, ib, indexing="ij"), axis=-1).reshape(-1, 2)
         pairs = np.ascontiguousarray(pairs, dtype=np.int64)
-        required = float(obs.radius) + timing.norm + float(lag)
-        m = _pair_margin(P, T, pairs, take, 0, len(pairs), required, timing, traj.id, other.id,
-                         True)  # fmt: skip
+        need = float(obs.radius) + timing.norm + seg_lag[pairs[:, 0]]
+        if len(_levels(need)) == 1:
+            m = _pair_margin(P, T, pairs, take, 0, len(pairs), float(need.max()), timing,
+                             traj.id, other.id, True)  # fmt: skip
+            lg = float(seg_lag.max()) if len(seg_lag) else 0.0
+        else:
+            m, g = _levelled_margin(P, T, pairs, take, need, timing, traj.id, other.id, True)
+            lg = float(seg_lag[pairs[g, 0]].max())
         margins.append(m)
         if not m.ok:
             out.append(Violation(
-                "moving", (traj.id,), m.time, (m.where[0],), m.distance, required,
+                "moving", (traj.id,), m.time, (m.where[0],), m.distance, m.required,
                 f"{traj.id} can come {fmt_num(m.distance)} m from the centre of moving obstacle "
                 f"{oi} under the execution model, about t={m.time:.1f} s, where "
-                f"{fmt_num(required)} m is needed (radius {obs.radius:g} m + "
+                f"{fmt_num(m.required)} m is needed (radius {obs.radius:g} m + "
                 f"{fmt_num(timing.norm)} m of tracking"
-                f"{f' + {fmt_num(float(lag))} m of height lag' if lag else ''}); "
+                f"{f' + {fmt_num(lg)} m of height lag' if lg else ''}); "
                 f"it tolerates take-off "
                 f"±{_show(m.takeoff_s)} s, speed ±{_show(100 * m.speed)} %",
             ))  # fmt: skip

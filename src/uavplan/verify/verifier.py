@@ -74,9 +74,10 @@ Semantics (frame: metres, x east, y north, z up, absolute altitudes; seconds):
   (:func:`uavplan.verify.kinematics.heights_in_wind`), keeps the model's vertical error from the
   ground, the band and the bounds (reported as their kinds) and reaches its goal within the
   model's vertical error (``climb``); and a pair of UAVs (a UAV and a moving obstacle) must
-  keep what the model requires plus the largest lag of each UAV whose heights lag (the lag
-  is between 0 and that in a calmer wind, so each UAV stays within it of its plan); lags under
-  ``LAG_TOL`` are not checked.
+  keep what the model requires plus, for each pair of segments, the lag of each segment of a
+  UAV whose heights lag (the larger of its ends': along a segment the lag closes and opens at
+  most once; in a calmer wind it is between 0 and that, so each UAV stays within its
+  segment's lag of its plan); a flight whose lag stays under ``LAG_TOL`` is not checked.
 * **Warnings** (not violations): the plan's scenario name differs from the scenario's; a UAV's
   first or last point differs from its task's start or goal; a UAV the plan calls feasible
   fails a check.
@@ -323,8 +324,8 @@ def _under_model(
                 ))  # fmt: skip
         if wind and tr.dim == 3:
             out += _lagged_under(tr, sc, src, timing, wind, what_model)
-    # how far each fixed wing's heights can lag its plan in that wind: the pairs and the
-    # moving obstacles are held that much farther apart
+    # how far each fixed wing's heights can lag its plan in that wind, segment by segment:
+    # the pairs and the moving obstacles are held that much farther apart
     lags = {tr.id: _lag_extent(tr, sc, wind) for tr in timed}
     if sc.moving_obstacles:
         for tr in timed:
@@ -366,16 +367,20 @@ def _slope_wind(uav: Any, rec: Mapping[str, Any]) -> float:
     return max(float(rec.get("wind", 0.0) or 0.0), float(af.turn_wind))
 
 
-def _lag_extent(tr: Trajectory, sc: Scenario, wind: float) -> float:
-    """The largest height lag of a fixed wing's flight in ``wind``
-    (:func:`uavplan.verify.kinematics.heights_in_wind`), 0 within ``LAG_TOL`` or without
-    wind: how much farther from the other UAVs and the moving obstacles it is held."""
-    if not wind or tr.dim != 3:
-        return 0.0
+def _lag_extent(tr: Trajectory, sc: Scenario, wind: float) -> FloatArray:
+    """Per segment, how far a fixed wing's heights can lag its plan in ``wind``
+    (:func:`uavplan.verify.kinematics.heights_in_wind`; the larger of the segment's ends',
+    where a segment's extremes lie), all 0 when the whole flight's lag is within ``LAG_TOL``
+    or without wind: how much farther from the other UAVs and the moving obstacles each
+    segment is held."""
+    n = max(len(tr.times) - 1, 0)
+    if not wind or tr.dim != 3 or not n:
+        return np.zeros(n)
     u = sc.uav
-    off = heights_in_wind(tr, wind, u.max_climb_angle, u.max_descent_angle)
-    top = float(np.max(np.abs(off))) if len(off) else 0.0
-    return top if top > LAG_TOL else 0.0
+    off = np.abs(heights_in_wind(tr, wind, u.max_climb_angle, u.max_descent_angle))
+    if float(off.max()) <= LAG_TOL:
+        return np.zeros(n)
+    return np.maximum(off[:-1], off[1:])
 
 
 def _lagged_under(

@@ -487,9 +487,10 @@ def path_query_from(paths, times, p, args, first):  # pragma: no cover - numba
     want_min, box, w, timed, delta0, rho, rtake, take_min, ekeys, qgrow)``
     (:meth:`ReservationTable.query_args`; ``timed``: the pieces are compared under the
     execution model's windows, ``rtake`` the take-off time of each reserved piece's
-    trajectory, ``take_min`` the earliest of them, the path's its first time; ``qgrow``: how
-    much farther than the table's separation ``sep`` is, which the cells searched around the
-    path grow by: :meth:`ReservationTable.held_off`)."""
+    trajectory, ``take_min`` the earliest of them, the path's its first time; ``qgrow``: per
+    segment of the path (an empty array: none) how much farther than ``sep`` it is held,
+    subtracted from its distances as a reserved piece's pad is, the cells searched around it
+    grown by as much: :meth:`ReservationTable.held_off`)."""
     (
         dt,
         origin,
@@ -536,6 +537,7 @@ def path_query_from(paths, times, p, args, first):  # pragma: no cover - numba
         tb = times[p, s + 1]
         if not tb > ta:
             continue
+        g = qgrow[s] if qgrow.shape[0] > s else 0.0
         k = int(np.floor(ta / dt))
         lo = ta
         while lo < tb and not done:
@@ -546,9 +548,9 @@ def path_query_from(paths, times, p, args, first):  # pragma: no cover - numba
                 for d in range(3):
                     a0[d] = paths[p, s, d] + fa * (paths[p, s + 1, d] - paths[p, s, d])
                     a1[d] = paths[p, s, d] + fb * (paths[p, s + 1, d] - paths[p, s, d])
-                ix0, ix1 = _cell_range(a0[0], a1[0], qgrow, origin[0], cell, nx)
-                iy0, iy1 = _cell_range(a0[1], a1[1], qgrow, origin[1], cell, ny)
-                iz0, iz1 = _cell_range(a0[2], a1[2], qgrow, origin[2], cell, nz)
+                ix0, ix1 = _cell_range(a0[0], a1[0], g, origin[0], cell, nx)
+                iy0, iy1 = _cell_range(a0[1], a1[1], g, origin[1], cell, ny)
+                iz0, iz1 = _cell_range(a0[2], a1[2], g, origin[2], cell, nz)
                 k0 = k
                 k1 = k
                 w_lo = lo
@@ -602,7 +604,7 @@ def path_query_from(paths, times, p, args, first):  # pragma: no cover - numba
                                         if (
                                             not want_min
                                             and _box_gap2(a0, a1, rp0[r], rp1[r])
-                                            >= (sep + rpad[r]) ** 2
+                                            >= (sep + rpad[r] + g) ** 2
                                         ):
                                             continue
                                         dist = np.sqrt(
@@ -631,7 +633,7 @@ def path_query_from(paths, times, p, args, first):  # pragma: no cover - numba
                                         if (
                                             not want_min
                                             and _box_gap2(a0, a1, rp0[r], rp1[r])
-                                            >= (sep + rpad[r]) ** 2
+                                            >= (sep + rpad[r] + g) ** 2
                                         ):
                                             continue  # the boxes alone keep them apart
                                         dist = np.sqrt(
@@ -641,7 +643,7 @@ def path_query_from(paths, times, p, args, first):  # pragma: no cover - numba
                                         )
                                     if dist == np.inf:
                                         continue
-                                    dist -= rpad[r]
+                                    dist -= rpad[r] + g
                                     if dist < best:
                                         best = dist
                                         if best < sep and not want_min:
@@ -699,6 +701,10 @@ def _first_free(points, times, waits, start, stop, args, first):  # pragma: no c
     return -1, hint
 
 
+#: ``qgrow`` of a query whose path is held no farther than the separation
+_NO_HOLD = np.zeros(0)
+
+
 class ReservationTable:
     """Reserved timed trajectories and fast exact separation queries against them.
 
@@ -718,8 +724,9 @@ class ReservationTable:
         lag: ``(wind, max_climb, max_descent)``: the trajectories are a fixed wing's flights
             whose heights lag their plan in that wind
             (:func:`uavplan.world.execution.lag_extents`); every reserved trajectory is
-            padded by its largest lag, and every queried path is held that much farther off
-            (its own largest lag), as the verifier holds each pair: the separation holds
+            padded segment by segment by its lag (the larger of the segment's ends'), and
+            every segment of a queried path is held that much farther off (its own lag), as
+            the verifier holds each pair of segments: the separation holds
             wherever both UAVs are between their planned and their lagged heights. None (or
             no wind): no lag.
     """
@@ -870,21 +877,24 @@ class ReservationTable:
         deviation from the trajectory: a query then finds every approach closer than the
         separation to the true trajectory, and may also reject one up to the pad farther
         (conservative); distances reported are lower bounds within the pad. A table with a
-        :attr:`lag` pads every segment by the trajectory's largest lag as well.
+        :attr:`lag` pads every segment by its lag as well (the larger of its ends', in the table's
+        wind: :func:`~uavplan.world.execution.lag_extents`).
         """
         pts = np.ascontiguousarray(points, dtype=np.float64)
         ts = np.ascontiguousarray(times, dtype=np.float64)
         if pts.ndim != 2 or pts.shape[1] != 3 or ts.shape != (pts.shape[0],):
             raise ValueError(f"need points (n, 3) and times (n,), got {pts.shape}, {ts.shape}")
         seg_pad = np.zeros(max(pts.shape[0] - 1, 0))
-        lag = 0.0  # the whole flight held off by its largest lag, as the verifier holds it
+        lag = np.zeros_like(seg_pad)  # each segment held off by its lag, as the verifier holds it
         if self.lag is not None and pts.shape[0] >= 2:
             from uavplan.world.execution import lag_extents
 
-            lag = float(lag_extents(pts[None], ts[None], *self.lag)[0][0])
+            lag = lag_extents(pts[None], ts[None], *self.lag)[1][0]
         if tolerance > 0 and pts.shape[0] > 2:
             keep, seg_pad = _simplify(pts, ts, float(tolerance), 64)
             pts, ts = np.ascontiguousarray(pts[keep]), np.ascontiguousarray(ts[keep])
+            if lag.size and keep.size > 1:  # a kept segment: the largest lag of those it spans
+                lag = np.maximum.reduceat(lag, keep[:-1])
         seg_pad = seg_pad + lag
         p0, p1, t0, t1, k = _split(pts, ts, self.dt)
         # a Euclidean deviation of ``pad`` moves the scaled Chebyshev distance by at most
@@ -987,46 +997,49 @@ class ReservationTable:
             self._tkey, self._tstart, self._tcount, self._idx,
             self._p0, self._p1, self._t0, self._t1, self._pad, bool(want_min),
             self.axes is not None, self._w, self.timed, self.delta0, self.rho, self._take,
-            float(self._take.min()) if self._take.size else 0.0, self._keys, 0.0,
+            float(self._take.min()) if self._take.size else 0.0, self._keys, _NO_HOLD,
         )  # fmt: skip
         self._args[bool(want_min)] = args
         return args
 
     def held_off(self, paths: FloatArray, times: FloatArray) -> FloatArray:
-        """(pop,) how much farther than the separation each timed path is held from the
-        reserved trajectories: its largest height lag under :attr:`lag` (0 without one), in
-        the table's distance (the scaled Chebyshev one of a per-axis separation moves by at
-        most that times the largest weight)."""
+        """(pop, n - 1) how much farther than the separation each segment of each timed path is
+        held from the reserved trajectories: its height lag under :attr:`lag` (the larger of
+        its ends', :func:`~uavplan.world.execution.lag_extents`; 0 without one), in the
+        table's distance (the scaled Chebyshev one of a per-axis separation moves by at most
+        that times the largest weight)."""
+        p, t = self._prepared(paths, times)
         if self.lag is None:
-            return np.zeros(np.shape(paths)[0] if np.ndim(paths) == 3 else 1)
+            return np.zeros((p.shape[0], max(p.shape[1] - 1, 0)))
         from uavplan.world.execution import lag_extents
 
-        p, t = self._prepared(paths, times)
-        return np.asarray(lag_extents(p, t, *self.lag)[0] * float(self._w.max()))
+        return np.asarray(lag_extents(p, t, *self.lag)[1] * float(self._w.max()))
 
-    def _held_args(self, extra: float) -> tuple[Any, ...]:
-        """:meth:`query_args` (stopping at the first conflict) for a path held ``extra``
-        farther: the separation that much larger, the cells searched around it that much
-        wider (a reserved piece is entered in the cells within the separation of it)."""
+    def _held_args(self, extra: FloatArray) -> tuple[Any, ...]:
+        """:meth:`query_args` (stopping at the first conflict) for a path whose segments are
+        held ``extra`` (n - 1,) farther: subtracted from their distances, the cells searched
+        around each that much wider (a reserved piece is entered in the cells within the
+        separation of it)."""
         a = self.query_args(False)
-        return (*a[:4], self.separation + extra, *a[5:-1], float(extra))
+        return (*a[:-1], np.ascontiguousarray(extra, dtype=np.float64))
 
     def conflicts(
         self, paths: FloatArray, times: FloatArray, held: bool = True
     ) -> NDArray[np.bool_]:
         """Whether each timed path (pop, n, 3) at ``times`` (pop, n) comes closer than the
         separation to a reserved trajectory at some instant (closer than the separation plus
-        the pad to a padded one, and, with a :attr:`lag` and ``held``, plus the path's own
-        largest lag: :meth:`held_off`; a planned polyline, which is not what flies, is asked
-        with ``held=False``), (pop,) bool."""
+        the pad to a padded one, and, with a :attr:`lag` and ``held``, plus the lag of the
+        path's segment: :meth:`held_off`; a planned polyline, which is not what flies, is
+        asked with ``held=False``), (pop,) bool."""
         out = np.asarray(self._run(paths, times, False) < self.separation)
         if self.lag is None or self.n_pieces == 0 or not held:
             return out
         extra = self.held_off(paths, times)
         p, t = self._prepared(paths, times)
-        for i in np.flatnonzero((extra > 0) & ~out):
-            e = float(extra[i])
-            out[i] = _query(p[i : i + 1], t[i : i + 1], self._held_args(e))[0] < self.separation + e
+        for i in np.flatnonzero((extra.max(axis=1, initial=0.0) > 0) & ~out):
+            out[i] = _query(p[i : i + 1], t[i : i + 1], self._held_args(extra[i]))[0] < (
+                self.separation
+            )
         return out
 
     def first_free(
@@ -1050,8 +1063,8 @@ class ReservationTable:
         if self.n_pieces == 0:
             return (int(start) if start < stop else -1), int(first)
         p, t = self._prepared(points, times)
-        extra = float(self.held_off(p, t)[0])  # a wait moves all times: the same lag
-        args = self._held_args(extra) if extra > 0 else self.query_args(False)
+        extra = self.held_off(p, t)[0]  # a wait moves all times: the same lags
+        args = self._held_args(extra) if extra.size and extra.max() > 0 else self.query_args(False)
         i, hint = _first_free(p[0], t[0], w, int(start), stop, args, int(first))
         return int(i), int(hint)
 
