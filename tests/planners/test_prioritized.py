@@ -470,3 +470,22 @@ def test_fleet_keeps_a_per_axis_separation_as_flown() -> None:
         assert rep.min_separation >= 30.0 - 1e-6
     bad_uavs = {u for v in rep.violations for u in v.uavs if v.kind != "separation"}
     assert not bad_uavs & {x.uav_id for x in r.results if x.feasible}
+
+
+def test_rrt_seeding_steps_in_proportion_to_a_large_map() -> None:
+    """On ``rscdwoa-static`` (100 km across, goals 90 km off) PPSwarm's RRT* seeding with its
+    lengths scaled to the map finds every UAV a path; the 50 m default step finds none. On
+    the PPSwarm maps the scaled lengths are the defaults."""
+    from uavplan.planners.sampling.rrt_star import RRTStarConfig, map_scaled_lengths
+
+    sc = resolve("rscdwoa-static")
+    _, found = get_planner("ppswarm")._initial_paths(sc, 10, np.random.SeedSequence(0))
+    assert found == [True] * len(sc.tasks)
+    planner = get_planner("ppswarm", rrt_iterations=1000, rrt_params={"step": 50.0})
+    assert planner._initial_paths(sc, 10, np.random.SeedSequence(0))[1] == [False] * 4
+    d = RRTStarConfig()
+    assert map_scaled_lengths(resolve("ppswarm1")) == {
+        "step": d.step,
+        "goal_radius": d.goal_radius,
+        "near_radius": d.near_radius,
+    }

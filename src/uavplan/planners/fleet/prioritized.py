@@ -26,6 +26,12 @@ Choices where the paper is silent or vague (all parameters of :class:`Prioritize
   RRT* path, as the thin lines of Fig. 2 suggest), blending in the optimizer's gene space (x, y
   and height above ground). ``randpath(T_m)`` is a path of uniform random free waypoints.
 * **Eq. (16)**: ``x_i^last`` are the particle positions the optimizer evaluated last.
+* **RRT*'s lengths** (step, goal and near radii; the paper gives none): its defaults on a map
+  up to 2.5 km across (the paper's), else scaled to the map
+  (:func:`~uavplan.planners.sampling.rrt_star.map_scaled_lengths`: a step of 2 % of the
+  diagonal); ``rrt_params`` overrides them. With the 50 m step a UAV 90 km from its goal gets
+  no RRT* path within the 5,000 iterations, and the tree's Python loop (among moving
+  obstacles) spends them all.
 * **The RRT* path as a particle**: its vertices are kept and the remaining free waypoints are
   spread along its segments in proportion to their lengths, so the particle is the same polyline
   (and as feasible); a path with more vertices than free waypoints is shortcut first, then
@@ -128,7 +134,8 @@ class PrioritizedConfig(FleetPlannerConfig):
                           choices=SEEDINGS)  # fmt: skip
     rrt_iterations: int | None = option(None, "RRT* iterations (default: its max_iterations)",
                                         low=1)  # fmt: skip
-    rrt_params: dict[str, Any] = option(default_factory=dict, doc="RRT* options (step, ...)")
+    rrt_params: dict[str, Any] = option(default_factory=dict, doc="RRT* options (step, ...; "
+                                        "default: its lengths scaled to the map)")  # fmt: skip
     n_waypoints: int | None = option(None, "free waypoints (default: the scenario's)", low=1)
     cost: str | None = option(
         None, "cost preset (default: the scenario's; PPSwarm's scenarios: ppswarm, F1-F4); F5, "
@@ -428,13 +435,14 @@ class PrioritizedPlanner(FleetPlanner):
             if cfg.seeding == "rrt-star":
                 from uavplan.planners.sampling.rrt_star import (
                     RRTStarConfig,
+                    map_scaled_lengths,
                     rrt_star,
                     validity_problem,
                 )
                 from uavplan.problems.validity import greedy_shortcut
 
                 try:
-                    rc = RRTStarConfig(**cfg.rrt_params)
+                    rc = RRTStarConfig(**{**map_scaled_lengths(scenario), **cfg.rrt_params})
                 except (TypeError, PlannerError) as exc:
                     raise PlannerError(f"{self.name}: rrt_params: {exc}") from None
                 res = rrt_star(

@@ -840,18 +840,27 @@ register_planner(RRTStarPlanner)
 RESCUE_STEP_SHARE = 0.02
 
 
+def map_scaled_lengths(scenario: Scenario) -> dict[str, float]:
+    """RRT*'s lengths for ``scenario``'s map: the step :data:`RESCUE_STEP_SHARE` of the
+    horizontal diagonal, at least its default 50 m (the default on a map of up to 2.5 km
+    across, such as the PPSwarm and SPSO maps), the goal radius one step and the near radius
+    two, in the defaults' proportions. A 50 m step reaches no goal 90 km away within 5,000
+    iterations."""
+    lo, hi = scenario.bounds.lo, scenario.bounds.hi
+    d = RRTStarConfig()
+    step = max(d.step, RESCUE_STEP_SHARE * float(np.hypot(hi[0] - lo[0], hi[1] - lo[1])))
+    k = step / d.step
+    return {"step": step, "goal_radius": d.goal_radius * k, "near_radius": d.near_radius * k}
+
+
 def map_scaled_options(scenario: Scenario) -> dict[str, object]:
     """RRT* as a rescue (the single UAV's fallback, a fleet's repair): every edge checked as
-    flown; its step scaled to the map (:data:`RESCUE_STEP_SHARE` of the horizontal diagonal,
-    at least its default 50 m); informed, anytime within its iteration budget, its shortest
-    tree paths tightened, every edge within the UAV's climb and descent angles (a rescue's
-    path must fly: RRT*'s edges otherwise join vertices metres apart at any angle)."""
-    lo, hi = scenario.bounds.lo, scenario.bounds.hi
-    step = max(50.0, RESCUE_STEP_SHARE * float(np.hypot(hi[0] - lo[0], hi[1] - lo[1])))
+    flown; its lengths scaled to the map (:func:`map_scaled_lengths`); informed, anytime
+    within its iteration budget, its shortest tree paths tightened, every edge within the
+    UAV's climb and descent angles (a rescue's path must fly: RRT*'s edges otherwise join
+    vertices metres apart at any angle)."""
     return {
-        "step": step,
-        "goal_radius": step,
-        "near_radius": 2 * step,
+        **map_scaled_lengths(scenario),
         "informed": True,
         "stop_at_goal": False,
         "tighten": True,
