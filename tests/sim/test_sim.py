@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 
 from uavplan.bench.simulation import summarize, wilson
 from uavplan.cli import app
-from uavplan.io.plan_file import read_plan_file
+from uavplan.io.plan_file import Trajectory, read_plan_file
 from uavplan.scenarios import resolve
 from uavplan.sim.runs import Conditions, conformance, errors_against, simulate_once
 from uavplan.sim.turbulence import INTENSITIES, dryden_scales, gust_series
@@ -184,7 +184,23 @@ def test_the_error_kernels_answer_as_the_numpy_references() -> None:
         fin = np.isfinite(excess_r)
         np.testing.assert_allclose(excess[fin], excess_r[fin], rtol=0, atol=1e-12)
         outside += int(np.isinf(excess).sum())
+        # a nominal model (no tolerance: no shift admissible, the nearest by bounded blocks)
+        np.testing.assert_array_equal(
+            conformance(tr, planned, 0.0, 0.0, 0.0, 0.0)[0],
+            conformance_reference(tr, planned, 0.0, 0.0, 0.0, 0.0)[0],
+        )
     assert outside > 100  # the flight 20 m off took the scan over every shift
+    # a plan that jumps (a segment of no time): no speed bounds it, every shift is looked at
+    P, tp = planned.points.copy(), planned.times.copy()
+    k = len(tp) // 2
+    jump = Trajectory("p", np.vstack([P[:k], P[k:] + np.array([0.0, 15.0, 0.0])]),
+                      np.concatenate([tp[:k], tp[k:] - (tp[k] - tp[k - 1])]), True)  # fmt: skip
+    for tr in flights[:2]:
+        for e in (0.0, 3.0):
+            got = conformance(tr, jump, 2.0, 0.03, e, e)
+            want = conformance_reference(tr, jump, 2.0, 0.03, e, e)
+            np.testing.assert_array_equal(got[0], want[0])
+            np.testing.assert_array_equal(np.isinf(got[1]), np.isinf(want[1]))
     # the plan's segments in reverse order: times no longer ordered, the same answers
     tr = flights[0]
     P, tp = planned.points, planned.times
