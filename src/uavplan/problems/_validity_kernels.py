@@ -24,7 +24,8 @@ from uavplan.world.geometry.scene2d import segment_scene_hit
 from uavplan.world.tolerances import ANGLE_TOL_DEG
 
 
-@njit(cache=True, inline="always")
+# compiled once as its own function (see :func:`uavplan.world.reservations.path_query_from`)
+@njit(cache=True)
 def static_path_ok(paths, p, args, waypoint_band=True):  # pragma: no cover - numba
     """Whether path ``p`` of ``paths`` (P, N, 3) passes bounds, cylinders, circles, polygons,
     terrain and the band (:func:`static_world_ok`'s test of one path; the fleet's fused
@@ -133,5 +134,5 @@ def static_world_ok(paths, args):  # pragma: no cover - numba
     P = paths.shape[0]
     out = np.zeros(P, dtype=np.bool_)
     for p in prange(P):
-        out[p] = static_path_ok(paths, p, args)
+        out[p] = static_path_ok(paths, p, args, True)  # the fused objective's signature
     return out
