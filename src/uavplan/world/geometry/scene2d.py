@@ -200,7 +200,8 @@ def _circle_pair(ax, ay, dx, dy, A, inv_a, L, cx, cy, r):  # pragma: no cover - 
     return True, _chord(fx, fy, dx, dy, A, fx * fx + fy * fy - r * r) * L
 
 
-@njit(cache=True, inline="always")
+# compiled once as its own function (see :func:`uavplan.world.reservations.path_query_from`)
+@njit(cache=True)
 def segment_scene_hit(
     ax, ay, bx, by, verts, starts, circ, poly, convex, edges, hull_s, ts
 ):  # pragma: no cover - numba
