@@ -66,3 +66,17 @@ def test_columns_read_from_every_shard_and_a_missing_one_names_the_shard(tmp_pat
     assert df.set_index("run_id").loc["r5", "status"] == "error"
     with pytest.raises(StoreError, match=r"part-.*\.parquet: not a readable Parquet shard.*nope"):
         s.read(columns=["run_id", "nope"])
+
+
+def test_list_columns_are_read_only_when_asked(tmp_path: Path) -> None:
+    """``lists``: the per-run list columns (here ``history``) are left unread unless named
+    (or True, the default: all); the other columns and rows are the same; columns asked for
+    by name are read whatever ``lists`` says."""
+    s = _store(tmp_path)
+    full = s.read()
+    light = s.read(lists=())
+    assert "history" in full and "history" not in light
+    assert list(light.columns) == [c for c in full.columns if c != "history"]
+    pd.testing.assert_frame_equal(light, full.drop(columns="history"))
+    assert "history" in s.read(lists=("history",))
+    assert list(s.read(columns=["run_id", "history"], lists=()).columns) == ["run_id", "history"]

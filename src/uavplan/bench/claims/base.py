@@ -105,27 +105,33 @@ class Results:
     def has(self, plan: str) -> bool:
         return (self.root / plan / "runs").is_dir()
 
-    def frame(self, plan: str) -> pd.DataFrame:
-        """The ok runs of ``plan`` (KeyError when the plan has no stored runs)."""
-        if plan not in self._cache:
+    def frame(self, plan: str, lists: tuple[str, ...] | bool = ()) -> pd.DataFrame:
+        """The ok runs of ``plan`` (KeyError when the plan has no stored runs), without the
+        per-run list columns (histories, waypoints) but ``lists`` (True: all): they hold most
+        of the stored bytes, and most claims read none."""
+        key = f"{plan}|{lists if isinstance(lists, bool) else ','.join(sorted(lists))}"
+        if key not in self._cache:
             if not self.has(plan):
-                self._cache[plan] = None
+                self._cache[key] = None
             else:
                 from uavplan.bench.store import ResultStore
 
-                runs = ResultStore(self.root / plan).read()
-                self._cache[plan] = runs[runs["status"] == "ok"].reset_index(drop=True)
-        found = self._cache[plan]
+                runs = ResultStore(self.root / plan).read(lists=lists)
+                self._cache[key] = runs[runs["status"] == "ok"].reset_index(drop=True)
+        found = self._cache[key]
         if found is None:
             raise KeyError(plan)
         return found
 
-    def derived(self, what: str, plan: str, make: Callable[[pd.DataFrame], Any]) -> Any:
-        """``make(self.frame(plan))``, computed once per ``what`` and plan (several claims
-        read the same measures of one plan's runs)."""
+    def derived(
+        self, what: str, plan: str, make: Callable[[pd.DataFrame], Any],
+        lists: tuple[str, ...] | bool = (),
+    ) -> Any:  # fmt: skip
+        """``make(self.frame(plan, lists))``, computed once per ``what`` and plan (several
+        claims read the same measures of one plan's runs)."""
         key = (what, plan)
         if key not in self._derived:
-            self._derived[key] = make(self.frame(plan))
+            self._derived[key] = make(self.frame(plan, lists))
         return self._derived[key]
 
 

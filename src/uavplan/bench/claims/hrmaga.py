@@ -31,6 +31,8 @@ from uavplan.bench.claims.base import (
 PAPER = "HR-MAGA (Yang, Liu & Li)"
 MAPS = ("hrmaga-spso", "hrmaga-jacksboro", "hrmaga-topobathy", "hrmaga-virtual")
 PAPER_PLAN = "hrmaga-compare-paper"
+#: the list columns the convergence claims read (the others are left unread)
+HISTORIES = ("history", "evaluations_history")
 
 
 def _short(m: str) -> str:
@@ -74,10 +76,11 @@ def _early(g: pd.DataFrame, share: float = 0.25) -> np.ndarray:
 
 def _runs(r: Results, algs: tuple[str, ...]) -> str:
     """The runs a Fig. 8 finding reads, per protocol."""
-    out = [f"{int(r.frame('hrmaga-compare').algorithm.isin(algs).sum())} at one budget"]
+    out = [f"{int(r.frame('hrmaga-compare', HISTORIES).algorithm.isin(algs).sum())} at one budget"]
     if r.has(PAPER_PLAN):
         out.append(
-            f"{int(r.frame(PAPER_PLAN).algorithm.isin(algs).sum())} under the paper's protocol"
+            f"{int(r.frame(PAPER_PLAN, HISTORIES).algorithm.isin(algs).sum())} under the "
+            "paper's protocol"
         )
     return " and ".join(out) + " runs"
 
@@ -93,13 +96,13 @@ def _paper_runs(r: Results, ref: str, other: str, value: Any) -> tuple[str, bool
             f"not run (G = 200 per P-MAGA call: `uavplan bench run {PAPER_PLAN} --scale paper`)",
             None,
         )
-    cells, plus, minus = _signs(r.frame(PAPER_PLAN), ref, other, value)
+    cells, plus, minus = _signs(r.frame(PAPER_PLAN, HISTORIES), ref, other, value)
     return "; ".join(cells), plus >= 3 and minus == 0
 
 
 def _faster(ref: str, other: str, fig: str) -> Claim:
     def judge(r: Results) -> Finding:
-        df = r.frame("hrmaga-compare")
+        df = r.frame("hrmaga-compare", HISTORIES)
         cells, plus, minus = _signs(df, ref, other, _early)
         paper_txt, paper_ok = _paper_runs(r, ref, other, _early)
         ours_ok = plus >= 3 and minus == 0
@@ -169,11 +172,11 @@ def _spread(df: pd.DataFrame) -> tuple[list[str], int]:
 
 def _both(r: Results, measure: Any, holds: Any, what: str, test: str) -> Finding:
     """A Fig. 8 claim measured by ``measure(df) -> (cells, count)`` under both protocols."""
-    df = r.frame("hrmaga-compare")
+    df = r.frame("hrmaga-compare", HISTORIES)
     cells, k = measure(df)
     paper_txt, paper_ok, kp = "not run (G = 200 per P-MAGA call)", None, None
     if r.has(PAPER_PLAN):
-        pc, kp = measure(r.frame(PAPER_PLAN))
+        pc, kp = measure(r.frame(PAPER_PLAN, HISTORIES))
         paper_txt, paper_ok = "; ".join(pc), holds(kp)
     verdict = _verdict(holds(k), paper_ok)
     why = f"{what}: {k} of 4 maps at one budget" + (
@@ -264,7 +267,7 @@ def _converge_iteration(h: Any, tol: float = 0.01) -> float:
 
 
 def _waypoints(r: Results) -> Finding:
-    df = r.frame("hrmaga-waypoints")
+    df = r.frame("hrmaga-waypoints", HISTORIES)
     df = df.assign(
         k=df.algorithm.str.removeprefix("wp").astype(int),
         conv=[_converge_iteration(h) for h in df["history"]],
@@ -307,7 +310,7 @@ register_claim(
 
 
 def _layers(r: Results) -> Finding:
-    df = r.frame("hrmaga-layers")
+    df = r.frame("hrmaga-layers", ("level_history", "level_lengths"))
     drops = []
     for flat, lens in zip(df["level_history"], df["level_lengths"], strict=True):
         parts = np.split(np.asarray(flat, dtype=np.float64), np.cumsum(lens)[:-1])

@@ -31,7 +31,7 @@ PAPER = "RGG-PSO+ (Liu et al.)"
 def _measures(r: Results, plan: str) -> pd.DataFrame:
     from uavplan.bench.papers.rggpso import measures
 
-    return r.derived("measures", plan, measures)
+    return r.derived("measures", plan, measures, ("feasible_history",))  # F-Measure
 
 
 def _order(m: pd.DataFrame, metric: str, better: str, worse: str) -> tuple[bool, str]:

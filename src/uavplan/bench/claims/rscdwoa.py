@@ -261,7 +261,7 @@ def _cells_text(cells: dict[str, tuple[int, int]]) -> str:
 
 
 def _pass_through(r: Results) -> Finding:
-    df = r.frame("rscdwoa-static")
+    df = r.frame("rscdwoa-static", True)
     cells, p = _through(df, ("apf", *FUSED))
     apf_caught = cells["apf"][0] == 0
     paper_ok = p < 0.05 and apf_caught
@@ -271,7 +271,7 @@ def _pass_through(r: Results) -> Finding:
         "",
     )
     if r.has("rscdwoa-static-corridor"):
-        dc = r.frame("rscdwoa-static-corridor")
+        dc = r.frame("rscdwoa-static-corridor", True)
         cc, pc = _through(dc, FUSED)
         share = {a: np.nanmean([h[1] if len(h) > 1 else np.nan
                                 for h in dc.loc[dc.algorithm == a, "arrived_history"]])
@@ -294,7 +294,7 @@ def _pass_through(r: Results) -> Finding:
     ) + also
     runs = ", ".join(f"{a} {int((df.algorithm == a).sum())}" for a in cells)
     if r.has("rscdwoa-static-corridor"):
-        runs += f"; corridor {len(r.frame('rscdwoa-static-corridor'))}"
+        runs += f"; corridor {len(r.frame('rscdwoa-static-corridor', True))}"
     return Finding(
         _cells_text(cells),
         ours,
@@ -331,7 +331,7 @@ def _converges(r: Results) -> Finding:
     parts, worse, better_all = [], [], True
     runs = []
     for plan in ("rscdwoa-static", "rscdwoa-dynamic"):
-        df = r.frame(plan)
+        df = r.frame(plan, True)
         ref = _final_fitness(df, "rscdwoa-apf")
         means = {a: _final_fitness(df, a) for a in FUSED}
         rank = sorted(means, key=lambda a: float(np.mean(means[a])) if means[a].size else 1e99)
@@ -385,7 +385,7 @@ register_claim(
 
 
 def _curvature(r: Results) -> Finding:
-    df = r.frame("rscdwoa-dynamic")
+    df = r.frame("rscdwoa-dynamic", True)
     mx = {
         a: float(
             np.nanmax(
@@ -423,7 +423,7 @@ register_claim(
 
 
 def _table3(r: Results) -> Finding:
-    df = r.frame("rscdwoa-dynamic")
+    df = r.frame("rscdwoa-dynamic", True)
     med = {}
     for a in FUSED:
         g = df[df.algorithm == a]
