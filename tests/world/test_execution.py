@@ -527,3 +527,32 @@ def test_the_wind_a_flights_heights_are_checked_in() -> None:
     q = resolve("quadrotors@4")
     assert slope_wind(q.uav, default_for(q.uav)) == 0.0
     assert slope_wind(dataclasses.replace(sc.uav, airframe=None), DEFAULT) == 0.0
+
+
+def test_an_airframe_whose_tracking_error_is_not_calibrated_is_planned_loudly(tmp_path) -> None:
+    """The fast fixed wing's default tracking error is not calibrated on its plans' flights:
+    `uavplan plan` of its fleet under uavplan's default model says so in the model's source,
+    warns on the console and exits 1 (the plan written); the small fixed wing's, calibrated,
+    says it is; a scenario that states its model (the built-in, nominal) is not warned."""
+    from typer.testing import CliRunner
+
+    from uavplan.cli import app
+    from uavplan.scenarios import builtin_path
+    from uavplan.world.execution import UNCALIBRATED, default_for
+
+    fast = default_for(resolve("rscdwoa-mixed").uav, 4)
+    assert UNCALIBRATED in fast.source
+    assert "calibrated in flight simulation" in default_for(resolve("ppswarm1").uav, 40).source
+    text = builtin_path("rscdwoa-mixed").read_text()
+    text = "\n".join(ln for ln in text.splitlines() if not ln.startswith("execution:"))
+    text = text.replace("goal: [90000, 90000, 1000]", "goal: [90000, 90000, 1020]")
+    (tmp_path / "rmix.yaml").write_text(text)
+    r = CliRunner().invoke(app, ["plan", str(tmp_path / "rmix.yaml"), "--iterations", "1",
+                                 "-o", str(tmp_path / "out")])  # fmt: skip
+    assert r.exit_code == 1, r.output
+    assert "WARNING: this airframe's tracking error" in r.output
+    assert "NOT GUARANTEED as flown" in r.output
+    assert (tmp_path / "out" / "plan.json").exists()
+    r = CliRunner().invoke(app, ["plan", "rscdwoa-mixed", "--iterations", "1",
+                                 "-o", str(tmp_path / "nominal")])  # fmt: skip
+    assert "WARNING: this airframe" not in r.output

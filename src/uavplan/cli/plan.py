@@ -180,6 +180,14 @@ def planning_world(scenario: Any, ref: str, nominal: bool, model: Any = None) ->
             out.print(line, markup=False)
     hint = "" if nominal or pw.model.nominal else "; --nominal plans for an exact execution"
     out.print(f"execution model: {pw.model.describe()} ({pw.source}){hint}", markup=False)
+    from uavplan.world.execution import UNCALIBRATED
+
+    if UNCALIBRATED in pw.source:
+        err.print("WARNING: this airframe's tracking error in uavplan's default model is not "
+                  "calibrated: in simulation its flights leave it (docs/results.md), so the "
+                  "plan's margins hold for flights it does not fly; state the model in the "
+                  "scenario (execution:) or fly the plan with uavplan simulate",
+                  markup=False)  # fmt: skip
     return pw
 
 
@@ -473,6 +481,18 @@ def plan(
     )  # fmt: skip
     _summary(result, times, out_dir)
     if not result.feasible or not verified_by_the_verifier(result, out_dir):
+        raise typer.Exit(1)
+    import json
+
+    from uavplan.world.execution import UNCALIBRATED
+
+    stated = json.loads((out_dir / "plan.json").read_text()).get("execution") or {}
+    if UNCALIBRATED in str(stated.get("source", "")):
+        err.print(
+            "NOT GUARANTEED as flown: verified under a tracking error this airframe's "
+            "simulated flights leave (the WARNING above); exit 1",
+            markup=False,
+        )
         raise typer.Exit(1)
 
 

@@ -150,6 +150,12 @@ NOMINAL = ExecutionModel()
 DEFAULT = ExecutionModel(2.0, 0.03, 3.0, 2.0, 0.0, "uavplan's default for small UAVs")
 
 
+#: How a default model's source says that its airframe's tracking error is not calibrated on
+#: the flights of its plans (an airframe without a fitted tail: the fast fixed wing, whose
+#: simulated flights leave its 8.5 m / 12.5 m; docs/results.md).
+UNCALIBRATED = "assumed, NOT calibrated: simulated flights of its plans leave it"
+
+
 def default_for(uav: Any, n_uavs: int = 1) -> ExecutionModel:
     """uavplan's default model for a scenario's UAV: :data:`DEFAULT`'s take-off and speed
     errors, and for a UAV that names its airframe (``uav.airframe``) the larger of its
@@ -178,9 +184,10 @@ def default_for(uav: Any, n_uavs: int = 1) -> ExecutionModel:
     wind = round(max(0.0, af.turn_wind - spare), 3) if af.kind == "fixed-wing" else 0.0
     if (h, v, wind) == (DEFAULT.track_h, DEFAULT.track_v, 0.0):
         return DEFAULT
+    how = ("tracking calibrated in flight simulation" if af.tail_h is not None else
+           f"tracking {UNCALIBRATED}")  # fmt: skip
     return replace(DEFAULT, track_h=h, track_v=v, wind=wind,
-                   source=f"uavplan's default for a {af.name}{fleet}, tracking calibrated "
-                   "in flight simulation")  # fmt: skip
+                   source=f"uavplan's default for a {af.name}{fleet}, {how}")  # fmt: skip
 
 
 def flyable_turns(scenario: Scenario) -> tuple[Scenario, float]:
