@@ -450,3 +450,23 @@ def test_the_batched_fixed_wing_agrees_with_jsbsim() -> None:
             ref = np.percentile(light[f"reference_{axis}"], q)
             ours = np.percentile(light[f"batched_{axis}"], q)
             assert ref - 0.5 <= ours <= 2.5 * ref, (axis, q, ours, ref)
+
+
+def test_simulate_warns_when_the_flights_leave_the_plans_model(
+    small_plan: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """More than 10 % of the executions with a UAV outside the plan's execution model (the
+    share uavplan's default is fitted for): a WARNING on the console that the plan's margins
+    were verified for other flights; at or under it, none. The exit code stays the
+    violations' (here the summary is the real one with its outside count set)."""
+    import uavplan.bench.simulation as S
+
+    real = S.summarize
+    for outside, warned in ((3, True), (0, False)):
+        monkeypatch.setattr(S, "summarize", lambda rows, k=outside: {
+            **real(rows), "nonconformant_runs": k})  # fmt: skip
+        r = CliRunner().invoke(app, ["simulate", str(small_plan), "--runs", "3", "--executor",
+                                     "serial", "--out", str(tmp_path / "sim")])  # fmt: skip
+        assert ("WARNING: in 3 of 3 executions a UAV flew outside" in r.output) == warned
+        s = json.loads((tmp_path / "sim" / "simulate.json").read_text())["summary"]
+        assert (r.exit_code == 1) == (s["violated"] > 0), r.output
