@@ -96,26 +96,31 @@ def _block_middles(ti, q, taus, tp, px, py, pz, sh, sv, j, L, mids):  # pragma: 
     top = np.inf
     floor = np.inf
     for b in range(nb):
-        lo = b * BLOCK
-        hi = min(lo + BLOCK, K) - 1
-        c = min(lo + BLOCK // 2, K - 1)
+        _, _, c, half = _block(b, taus)
         dk, j = _shift_distance(ti, q, taus, c, tp, px, py, pz, sh, sv, j)
         mids[b] = dk
         top = min(top, dk + 1e-9 * abs(taus[c]))
-        floor = min(floor, dk - L * max(taus[c] - taus[lo], taus[hi] - taus[c]))
+        floor = min(floor, dk - L * half)
     return floor, top, j
+
+
+@njit(cache=True, inline="always")
+def _block(b, taus):  # pragma: no cover - numba
+    """Block ``b`` of the shifts: its first and last index, its middle, and the farthest any
+    of its shifts lies from the middle (s)."""
+    K = len(taus)
+    lo = b * BLOCK
+    hi = min(lo + BLOCK, K) - 1
+    c = min(lo + BLOCK // 2, K - 1)
+    return lo, hi, c, max(taus[c] - taus[lo], taus[hi] - taus[c])
 
 
 @njit(cache=True, inline="always")
 def _may_hold(k, taus, mids, L):  # pragma: no cover - numba
     """Whether shift ``k``'s block can hold a shift in tolerance (distance <= 1) by its
     middle's distance ``mids`` and the bound ``L`` (:func:`_block_middles`)."""
-    K = len(taus)
     b = k // BLOCK
-    lo = b * BLOCK
-    hi = min(lo + BLOCK, K) - 1
-    c = min(lo + BLOCK // 2, K - 1)
-    return mids[b] - L * max(taus[c] - taus[lo], taus[hi] - taus[c]) <= 1.0 + 1e-12
+    return mids[b] - L * _block(b, taus)[3] <= 1.0 + 1e-12
 
 
 @njit(cache=True)
@@ -128,10 +133,7 @@ def _nearest_shift(ti, q, taus, tp, px, py, pz, sh, sv, j, L, mids, top):  # pra
     best = 0
     score = np.inf
     for b in range((K + BLOCK - 1) // BLOCK):
-        lo = b * BLOCK
-        hi = min(lo + BLOCK, K) - 1
-        c = min(lo + BLOCK // 2, K - 1)
-        half = max(taus[c] - taus[lo], taus[hi] - taus[c])
+        lo, hi, _, half = _block(b, taus)
         if math.isfinite(L) and mids[b] - L * half > top * (1.0 + 1e-12) + 1e-12:
             continue
         for k in range(lo, hi + 1):
