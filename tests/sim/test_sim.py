@@ -4,6 +4,7 @@ simulate`` end to end (verdict, files, exit code)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -172,18 +173,26 @@ def test_the_error_kernels_answer_as_the_numpy_references() -> None:
     from uavplan.sim.runs import conformance_reference, errors_against_reference
 
     planned, flights = _helix_plan_and_flights(np.random.default_rng(3))
+    # a vertical slack that varies along the plan (a height lag the verifier allows)
+    g = 2.5 * (1.0 + np.sin(np.linspace(0.0, 6.0, len(planned.times))))
     outside = 0
     for tr in flights:
-        for got, want in zip(errors_against(tr, planned, 5.0),
-                             errors_against_reference(tr, planned, 5.0), strict=True):  # fmt: skip
-            np.testing.assert_allclose(got, want, rtol=0, atol=1e-9)
-        lag, excess = conformance(tr, planned, 2.0, 0.03, 3.0, 2.0)
-        lag_r, excess_r = conformance_reference(tr, planned, 2.0, 0.03, 3.0, 2.0)
-        np.testing.assert_array_equal(lag, lag_r)
-        np.testing.assert_array_equal(np.isinf(excess), np.isinf(excess_r))
-        fin = np.isfinite(excess_r)
-        np.testing.assert_allclose(excess[fin], excess_r[fin], rtol=0, atol=1e-12)
-        outside += int(np.isinf(excess).sum())
+        for sl in (None, g):
+            for got, want in zip(errors_against(tr, planned, 5.0, sl),
+                                 errors_against_reference(tr, planned, 5.0, sl),
+                                 strict=True):  # fmt: skip
+                np.testing.assert_allclose(got, want, rtol=0, atol=1e-9)
+            lag, excess = conformance(tr, planned, 2.0, 0.03, 3.0, 2.0, sl)
+            lag_r, excess_r = conformance_reference(tr, planned, 2.0, 0.03, 3.0, 2.0, sl)
+            np.testing.assert_array_equal(lag, lag_r)
+            np.testing.assert_array_equal(np.isinf(excess), np.isinf(excess_r))
+            fin = np.isfinite(excess_r)
+            np.testing.assert_allclose(excess[fin], excess_r[fin], rtol=0, atol=1e-12)
+            outside += int(np.isinf(excess).sum())
+            np.testing.assert_array_equal(
+                conformance(tr, planned, 0.0, 0.0, 0.0, 0.0, sl)[0],
+                conformance_reference(tr, planned, 0.0, 0.0, 0.0, 0.0, sl)[0],
+            )
         # a nominal model (no tolerance: no shift admissible, the nearest by bounded blocks)
         np.testing.assert_array_equal(
             conformance(tr, planned, 0.0, 0.0, 0.0, 0.0)[0],
@@ -209,10 +218,50 @@ def test_the_error_kernels_answer_as_the_numpy_references() -> None:
         h, v, te = (np.empty(len(tr.times)) for _ in range(3))
         EK.errors_kernel(tr.points, tr.times, np.ascontiguousarray(P[:-1][order]),
                          np.ascontiguousarray(P[1:][order]), np.ascontiguousarray(tp[:-1][order]),
-                         np.ascontiguousarray(tp[1:][order]), 5.0, h, v, te)  # fmt: skip
+                         np.ascontiguousarray(tp[1:][order]), np.zeros(len(tp) - 1),
+                         np.zeros(len(tp) - 1), 5.0, h, v, te)  # fmt: skip
         outs.append((h, v, te))
     for a, b in zip(*outs, strict=True):
         np.testing.assert_allclose(a, b, rtol=0, atol=1e-9)
+
+
+def test_the_height_lag_the_plan_allows_is_not_counted_as_tracking_error() -> None:
+    """A fixed wing planned down a descent steeper than it flies over the ground in its
+    calibration wind stays above the plan by the height lag the verifier allows it: that gap
+    is not tracking error (measured from the lagged band, the flight conforms), while a flight
+    as far above a plan without such a lag is outside its model, and a flight 5 m beyond the
+    lag is measured as 5 m."""
+    from types import SimpleNamespace
+
+    from uavplan.io.plan_file import Trajectory
+    from uavplan.sim.runs import plan_slack
+    from uavplan.world.execution import DEFAULT, height_lag
+
+    t = np.arange(0.0, 201.0, 5.0)
+    x = 20.0 * t
+    z = np.where(t < 100.0, 300.0, np.maximum(300.0 - 20.0 * np.tan(np.radians(20.0)) *
+                                              (t - 100.0), 200.0))  # fmt: skip
+    planned = Trajectory("a", np.stack([x, 0 * t, z], axis=1), t, True)
+    uav = SimpleNamespace(airframe="small-fixed-wing", max_climb_angle=20.0,
+                          max_descent_angle=20.0)  # fmt: skip
+    sc = SimpleNamespace(uav=uav)
+    model = dataclasses.replace(DEFAULT, track_h=6.0, track_v=8.0)
+    slack = plan_slack(planned, sc, model)
+    assert slack is not None and slack.max() > 8.0  # the lag in 3 m/s at 20 m/s: metres
+    assert plan_slack(planned, sc, None) is None  # a nominal plan: none
+    off = height_lag(planned.points[None], t[None], 3.0, 20.0, 20.0)[0]
+    tt = np.arange(0.0, 200.01, 0.5)
+    lagged = np.interp(tt, t, z + off)
+    flown = Trajectory("a", np.stack([20.0 * tt, 0 * tt, lagged], axis=1), tt, True)
+    h, v, _ = errors_against(flown, planned, 120.0, slack)
+    assert np.abs(v).max() < 1e-6 and h.max() < 1e-6
+    assert conformance(flown, planned, 2.0, 0.03, 6.0, 8.0, slack)[1].max() <= 0
+    # without the slack the same flight leaves the model's 8 m
+    assert np.abs(errors_against(flown, planned, 120.0)[1]).max() > 8.0
+    assert np.isinf(conformance(flown, planned, 2.0, 0.03, 6.0, 8.0)[1]).any()
+    beyond = Trajectory("a", flown.points + np.array([0.0, 0.0, 5.0]), tt, True)
+    v5 = errors_against(beyond, planned, 120.0, slack)[1]
+    assert v5.max() == pytest.approx(5.0, abs=0.6)
 
 
 def test_a_long_flight_far_off_its_schedule_is_measured_against_its_own_stretch() -> None:

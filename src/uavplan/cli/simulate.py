@@ -214,7 +214,7 @@ def _figure(folder: Path, plan: Any, world: Any, rows: list[dict[str, Any]], see
     import numpy as np
 
     from uavplan.bench.simulation import conditions_of
-    from uavplan.sim.runs import error_window, errors_against, simulate_once
+    from uavplan.sim.runs import error_window, errors_against, plan_slack, simulate_once
 
     ex = simulate_once(plan, world, seed, conditions_of(options), af,
                        int(options.get("max_items", 500)))  # fmt: skip
@@ -223,7 +223,7 @@ def _figure(folder: Path, plan: Any, world: Any, rows: list[dict[str, Any]], see
     for tr, pl in zip(ex.tracks, planned, strict=True):
         window = error_window(pl, abs(ex.takeoff_errors[tr.id]), float(np.linalg.norm(ex.wind)),
                               float(world.uav.speed))  # fmt: skip
-        h, _, _ = errors_against(tr, pl, window)
+        h, _, _ = errors_against(tr, pl, window, plan_slack(pl, world, plan.execution))
         a1.plot(tr.times, h, lw=0.6, alpha=0.6)
     rec = dict(plan.execution or {})
     if rec.get("track_h"):

@@ -50,8 +50,9 @@ def _interp(x, xp, fp, j):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _shift_distance(t, q, taus, k, tp, px, py, pz, sh, sv, j):  # pragma: no cover - numba
-    """The scaled distance of sample ``q`` at ``t`` from the plan at ``t - taus[k]``."""
+def _shift_distance(t, q, taus, k, tp, px, py, pz, pg, sh, sv, j):  # pragma: no cover - numba
+    """The scaled distance of sample ``q`` at ``t`` from the plan at ``t - taus[k]``, its
+    height difference less the plan's slack there (``pg``, interpolated as the points are)."""
     x = t - taus[k]
     if x < tp[0]:
         x = tp[0]
@@ -60,10 +61,11 @@ def _shift_distance(t, q, taus, k, tp, px, py, pz, sh, sv, j):  # pragma: no cov
     zp, j = _interp(x, tp, pz, j)
     xq, j = _interp(x, tp, px, j)
     yq, j = _interp(x, tp, py, j)
-    dz = zp - q[2]
+    g, j = _interp(x, tp, pg, j)
+    dz = max(abs(zp - q[2]) - g, 0.0)
     dx = xq - q[0]
     dy = yq - q[1]
-    return max(math.hypot(dx, dy) / sh, abs(dz) / sv), j
+    return max(math.hypot(dx, dy) / sh, dz / sv), j
 
 
 #: Shifts per block of the search for the nearest shift where none is admissible.
@@ -71,15 +73,15 @@ BLOCK = 16
 
 
 @njit(cache=True)
-def _plan_speed_bound(tp, pp, sh, sv):  # pragma: no cover - numba
+def _plan_speed_bound(tp, pp, pg, sh, sv):  # pragma: no cover - numba
     """How fast the scaled distance of a sample from the plan at ``t - tau`` can change with
-    ``tau``: the larger of the plan's horizontal and vertical speeds over ``sh`` and ``sv``
-    (inf where a segment moves in no time)."""
+    ``tau``: the larger of the plan's horizontal speed over ``sh`` and its vertical speed plus
+    the rate of its slack ``pg`` over ``sv`` (inf where a segment moves in no time)."""
     L = 0.0
     for k in range(len(tp) - 1):
         dt = tp[k + 1] - tp[k]
         dh = math.hypot(pp[k + 1, 0] - pp[k, 0], pp[k + 1, 1] - pp[k, 1])
-        dz = abs(pp[k + 1, 2] - pp[k, 2])
+        dz = abs(pp[k + 1, 2] - pp[k, 2]) + abs(pg[k + 1] - pg[k])
         if dt > 0.0:
             L = max(L, max(dh / dt / sh, dz / dt / sv))
         elif dh > 0.0 or dz > 0.0:
@@ -88,7 +90,7 @@ def _plan_speed_bound(tp, pp, sh, sv):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _block_middles(ti, q, taus, tp, px, py, pz, sh, sv, j, L, mids):  # pragma: no cover - numba
+def _block_middles(ti, q, taus, tp, px, py, pz, pg, sh, sv, j, L, mids):  # pragma: no cover
     """Each block's middle shift's distance into ``mids``; returns (the least distance any
     shift can have by the blocks' bounds, the best middle's ``distance + 1e-9 |tau|``, j)."""
     K = len(taus)
@@ -97,7 +99,7 @@ def _block_middles(ti, q, taus, tp, px, py, pz, sh, sv, j, L, mids):  # pragma: 
     floor = np.inf
     for b in range(nb):
         _, _, c, half = _block(b, taus)
-        dk, j = _shift_distance(ti, q, taus, c, tp, px, py, pz, sh, sv, j)
+        dk, j = _shift_distance(ti, q, taus, c, tp, px, py, pz, pg, sh, sv, j)
         mids[b] = dk
         top = min(top, dk + 1e-9 * abs(taus[c]))
         floor = min(floor, dk - L * half)
@@ -124,7 +126,7 @@ def _may_hold(k, taus, mids, L):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _nearest_shift(ti, q, taus, tp, px, py, pz, sh, sv, j, L, mids, top):  # pragma: no cover
+def _nearest_shift(ti, q, taus, tp, px, py, pz, pg, sh, sv, j, L, mids, top):  # pragma: no cover
     """The index of the shift of least ``distance + 1e-9 |tau|`` (the first of a tie, as
     an argmin over all), by blocks whose middle's distance (``mids``, the best middle's
     score ``top``: :func:`_block_middles`) bounds theirs (module docstring); every shift
@@ -137,7 +139,7 @@ def _nearest_shift(ti, q, taus, tp, px, py, pz, sh, sv, j, L, mids, top):  # pra
         if math.isfinite(L) and mids[b] - L * half > top * (1.0 + 1e-12) + 1e-12:
             continue
         for k in range(lo, hi + 1):
-            dk, j = _shift_distance(ti, q, taus, k, tp, px, py, pz, sh, sv, j)
+            dk, j = _shift_distance(ti, q, taus, k, tp, px, py, pz, pg, sh, sv, j)
             s = dk + 1e-9 * abs(taus[k])
             if s < score:
                 score = s
@@ -146,17 +148,18 @@ def _nearest_shift(ti, q, taus, tp, px, py, pz, sh, sv, j, L, mids, top):  # pra
 
 
 @njit(cache=True)
-def conformance_kernel(t, Q, taus, tp, pp, sh, sv, lag, need):  # pragma: no cover - numba
+def conformance_kernel(t, Q, taus, tp, pp, pg, sh, sv, lag, need):  # pragma: no cover - numba
     """Per sample ``(t[i], Q[i])``: ``need[i]`` the least ``|tau|`` (of ``taus``, ascending and
     symmetric about 0) that puts it within tolerance of the plan ``(tp, pp)`` at
-    ``t - tau`` (inf: none), ``lag[i]`` the best-aligned shift of that shift's run of
-    admissible shifts, or the nearest shift where none is admissible."""
+    ``t - tau`` (inf: none; its height is in tolerance within ``sv`` of the plan's vertical
+    slack ``pg``), ``lag[i]`` the best-aligned shift of that shift's run of admissible
+    shifts, or the nearest shift where none is admissible."""
     K = len(taus)
     mid = K // 2
     px = np.ascontiguousarray(pp[:, 0])
     py = np.ascontiguousarray(pp[:, 1])
     pz = np.ascontiguousarray(pp[:, 2])
-    L = _plan_speed_bound(tp, pp, sh, sv)
+    L = _plan_speed_bound(tp, pp, pg, sh, sv)
     mids = np.empty((K + BLOCK - 1) // BLOCK)
     j = 0
     for i in range(len(t)):
@@ -168,7 +171,9 @@ def conformance_kernel(t, Q, taus, tp, pp, sh, sv, lag, need):  # pragma: no cov
         for m in range(mid + 1):  # outwards from tau = 0: the smaller |tau|, then the lower index
             if m == 2 * BLOCK and math.isfinite(L):
                 # none near: which blocks can hold a shift in tolerance, by their bounds?
-                floor, top, j = _block_middles(t[i], q, taus, tp, px, py, pz, sh, sv, j, L, mids)
+                floor, top, j = _block_middles(
+                    t[i], q, taus, tp, px, py, pz, pg, sh, sv, j, L, mids
+                )
                 if floor > 1.0 + 1e-12:
                     break
                 bounded = True
@@ -176,10 +181,10 @@ def conformance_kernel(t, Q, taus, tp, pp, sh, sv, lag, need):  # pragma: no cov
             ok_lo = ok_hi = False
             d_lo = d_hi = 0.0
             if not bounded or _may_hold(lo_k, taus, mids, L):
-                d_lo, j = _shift_distance(t[i], q, taus, lo_k, tp, px, py, pz, sh, sv, j)
+                d_lo, j = _shift_distance(t[i], q, taus, lo_k, tp, px, py, pz, pg, sh, sv, j)
                 ok_lo = d_lo <= 1.0
             if m > 0 and hi_k < K and (not bounded or _may_hold(hi_k, taus, mids, L)):
-                d_hi, j = _shift_distance(t[i], q, taus, hi_k, tp, px, py, pz, sh, sv, j)
+                d_hi, j = _shift_distance(t[i], q, taus, hi_k, tp, px, py, pz, pg, sh, sv, j)
                 ok_hi = d_hi <= 1.0
             if ok_lo and ok_hi:
                 least, d_least = (hi_k, d_hi) if abs(taus[hi_k]) < abs(taus[lo_k]) else (lo_k, d_lo)
@@ -195,7 +200,7 @@ def conformance_kernel(t, Q, taus, tp, pp, sh, sv, lag, need):  # pragma: no cov
             score = d_least + 1e-9 * abs(taus[least])
             k = least - 1  # the run of admissible shifts around it, leftwards ...
             while k >= 0:
-                dk, j = _shift_distance(t[i], q, taus, k, tp, px, py, pz, sh, sv, j)
+                dk, j = _shift_distance(t[i], q, taus, k, tp, px, py, pz, pg, sh, sv, j)
                 if not dk <= 1.0:
                     break
                 s = dk + 1e-9 * abs(taus[k])
@@ -205,7 +210,7 @@ def conformance_kernel(t, Q, taus, tp, pp, sh, sv, lag, need):  # pragma: no cov
                 k -= 1
             k = least + 1  # ... and rightwards
             while k < K:
-                dk, j = _shift_distance(t[i], q, taus, k, tp, px, py, pz, sh, sv, j)
+                dk, j = _shift_distance(t[i], q, taus, k, tp, px, py, pz, pg, sh, sv, j)
                 if not dk <= 1.0:
                     break
                 s = dk + 1e-9 * abs(taus[k])
@@ -217,17 +222,18 @@ def conformance_kernel(t, Q, taus, tp, pp, sh, sv, lag, need):  # pragma: no cov
         else:
             need[i] = np.inf
             if math.isfinite(L) and not math.isfinite(top):
-                _, top, j = _block_middles(t[i], q, taus, tp, px, py, pz, sh, sv, j, L, mids)
-            best, j = _nearest_shift(t[i], q, taus, tp, px, py, pz, sh, sv, j, L, mids, top)
+                _, top, j = _block_middles(t[i], q, taus, tp, px, py, pz, pg, sh, sv, j, L, mids)
+            best, j = _nearest_shift(t[i], q, taus, tp, px, py, pz, pg, sh, sv, j, L, mids, top)
             lag[i] = taus[best]
 
 
 @njit(cache=True)
-def errors_kernel(Q, tq, A, B, tA, tB, window, h, v, te):  # pragma: no cover - numba
-    """Per sample ``(Q[i], tq[i])``: the plan's segment (``A -> B``, times ``tA -> tB``)
-    nearest in 3-D (its point horizontally nearest) among those within ``window`` seconds,
-    or among all when none is; ``h``, ``v``, ``te`` the horizontal distance, the height
-    difference and the time error there."""
+def errors_kernel(Q, tq, A, B, tA, tB, gA, gB, window, h, v, te):  # pragma: no cover - numba
+    """Per sample ``(Q[i], tq[i])``: the plan's segment (``A -> B``, times ``tA -> tB``,
+    vertical slack ``gA -> gB``) nearest in 3-D (its point horizontally nearest; heights
+    within the slack count as on it) among those within ``window`` seconds, or among all
+    when none is; ``h``, ``v``, ``te`` the horizontal distance, the height difference beyond
+    the slack and the time error there."""
     n = len(A)
     ordered = True
     for k in range(n - 1):
@@ -266,6 +272,7 @@ def errors_kernel(Q, tq, A, B, tA, tB, window, h, v, te):  # pragma: no cover - 
             fy = qy - (A[k, 1] + s * Dy)
             d2 = fx * fx + fy * fy
             dz = qz - (A[k, 2] + s * (B[k, 2] - A[k, 2]))
+            dz = math.copysign(max(abs(dz) - (gA[k] + s * (gB[k] - gA[k])), 0.0), dz)
             sc = d2 + dz * dz
             if best < 0 or sc < score:
                 best = k

@@ -53,7 +53,8 @@ class Conditions:
 @dataclass
 class Execution:
     """One simulated execution: the tracks (as trajectories the verifier reads), the drawn
-    conditions, per UAV the largest horizontal and vertical tracking errors and the timing
+    conditions, per UAV the largest horizontal and vertical tracking errors (the vertical
+    beyond the height lag the plan was verified with, :func:`plan_slack`) and the timing
     error range (s, actual minus planned time at the same point of the path), and all samples'
     errors pooled (for quantiles); per UAV the range of its schedule lag and how far it went
     outside the plan's execution model (:func:`conformance`: ``excess`` > 0 s: outside)."""
@@ -91,33 +92,45 @@ def pack(legs: list[Legs]) -> tuple[FloatArray, NDArray[np.int64], FloatArray, F
     return P, n, S, H
 
 
+def _slack(planned: Trajectory, slack: FloatArray | None) -> FloatArray:
+    """The plan's vertical slack per point (zeros: none)."""
+    if slack is None:
+        return np.zeros(len(planned.times))
+    return np.ascontiguousarray(slack, dtype=np.float64)
+
+
 def errors_against(
-    track: Trajectory, planned: Trajectory, window: float = 120.0
+    track: Trajectory, planned: Trajectory, window: float = 120.0, slack: FloatArray | None = None
 ) -> tuple[FloatArray, ...]:
     """:func:`errors_against_reference`'s answers from a Numba kernel
     (:func:`uavplan.sim._error_kernels.errors_kernel`: only the segments within the window)."""
     Q = np.ascontiguousarray(track.points, dtype=np.float64)
     P = np.ascontiguousarray(planned.points, dtype=np.float64)
     tp = np.ascontiguousarray(planned.times, dtype=np.float64)
+    g = _slack(planned, slack)
     n = len(Q)
     h, v, te = np.empty(n), np.empty(n), np.empty(n)
     EK.errors_kernel(Q, np.ascontiguousarray(track.times, dtype=np.float64), P[:-1], P[1:],
-                     tp[:-1], tp[1:], float(window), h, v, te)  # fmt: skip
+                     tp[:-1], tp[1:], g[:-1], g[1:], float(window), h, v, te)  # fmt: skip
     return h, v, te
 
 
 def errors_against_reference(
-    track: Trajectory, planned: Trajectory, window: float = 120.0
+    track: Trajectory, planned: Trajectory, window: float = 120.0, slack: FloatArray | None = None
 ) -> tuple[FloatArray, ...]:
     """Per sample of ``track``: the horizontal and vertical distances to the nearest point of
     the ``planned`` path (nearest in 3-D, each segment's point horizontally nearest, among the
     segments the plan flies within ``window`` seconds of the sample's time: a path that
     passes near itself, as a climbing or descending loop does a few metres above or below,
     is not matched to its other pass) and the time error there (actual minus the planned time
-    at that point)."""
+    at that point). ``slack`` (per planned point, m, interpolated along the segments): heights
+    within it of the plan's count as on it, and the vertical distance is what lies beyond it
+    (:func:`plan_slack`: the height lag the verifier allows a fixed wing)."""
     A = planned.points[:-1]
     B = planned.points[1:]
     tA, tB = planned.times[:-1], planned.times[1:]
+    g = _slack(planned, slack)
+    gA, gB = g[:-1], g[1:]
     Q = track.points
     h = np.empty(len(Q))
     v = np.empty(len(Q))
@@ -131,6 +144,7 @@ def errors_against_reference(
         foot = A[None, :, :2] + s[..., None] * D[None]
         d2 = np.sum((q[:, None, :2] - foot) ** 2, axis=2)
         dz = q[:, None, 2] - (A[None, :, 2] + s * (B[None, :, 2] - A[None, :, 2]))
+        dz = np.copysign(np.maximum(np.abs(dz) - (gA[None] + s * (gB - gA)[None]), 0.0), dz)
         tq = track.times[lo : lo + 256, None]
         near = (tB[None] >= tq - window) & (tA[None] <= tq + window)
         j = np.argmin(np.where(near | ~near.any(axis=1, keepdims=True), d2 + dz * dz, np.inf),
@@ -177,8 +191,9 @@ def shifts(track: Trajectory, planned: Trajectory, delta0: float, rho: float) ->
 
 
 def conformance(
-    track: Trajectory, planned: Trajectory, delta0: float, rho: float, e_h: float, e_v: float
-) -> tuple[FloatArray, FloatArray]:
+    track: Trajectory, planned: Trajectory, delta0: float, rho: float, e_h: float, e_v: float,
+    slack: FloatArray | None = None,
+) -> tuple[FloatArray, FloatArray]:  # fmt: skip
     """:func:`conformance_reference`'s answers from a Numba kernel
     (:func:`uavplan.sim._error_kernels.conformance_kernel`: the shifts searched outwards from
     none, all of them only where none is in tolerance)."""
@@ -188,14 +203,16 @@ def conformance(
     lag, need = np.empty(len(t)), np.empty(len(t))
     EK.conformance_kernel(t, np.ascontiguousarray(track.points, dtype=np.float64), taus, tp,
                           np.ascontiguousarray(planned.points, dtype=np.float64),
-                          max(e_h, 1e-6), max(e_v, 1e-6), lag, need)  # fmt: skip
+                          _slack(planned, slack), max(e_h, 1e-6), max(e_v, 1e-6), lag,
+                          need)  # fmt: skip
     allowed = delta0 + rho * np.maximum(t - tp[0], 0.0)
     return lag, need - allowed
 
 
 def conformance_reference(
-    track: Trajectory, planned: Trajectory, delta0: float, rho: float, e_h: float, e_v: float
-) -> tuple[FloatArray, FloatArray]:
+    track: Trajectory, planned: Trajectory, delta0: float, rho: float, e_h: float, e_v: float,
+    slack: FloatArray | None = None,
+) -> tuple[FloatArray, FloatArray]:  # fmt: skip
     """How a flown ``track`` conforms to its ``planned`` trajectory under an execution model
     (take-off error ``delta0`` s, speed fraction ``rho``, tracking errors ``e_h``, ``e_v`` m):
     per sample at time ``t``, the schedule lag (the shift ``tau`` that brings the plan's
@@ -208,17 +225,22 @@ def conformance_reference(
     excess is at most 0: the flown position is always inside the 4-D volume the plan was
     made and verified for (ASTM F3548's conformance of an operational intent). Unlike the
     nearest-point timing error of :func:`errors_against`, a pass of the path near another
-    pass of itself cannot be mistaken for it: positions are compared at times."""
+    pass of itself cannot be mistaken for it: positions are compared at times. Heights within
+    ``slack`` (per planned point, interpolated) of the plan's are within ``e_v`` of it less
+    the slack: the height lag the verifier holds a fixed wing's flight to
+    (:func:`plan_slack`)."""
     taus = shifts(track, planned, delta0, rho)
     t = track.times
     tp, pp = planned.times, planned.points
     lag = np.empty(len(t))
     need = np.empty(len(t))
     sh, sv = max(e_h, 1e-6), max(e_v, 1e-6)
+    g = _slack(planned, slack)
     for lo in range(0, len(t), 32):
         tq = np.clip(t[lo : lo + 32, None] - taus[None], tp[0], tp[-1])
         q = track.points[lo : lo + 32]
-        dz = np.interp(tq, tp, pp[:, 2]) - q[:, None, 2]
+        dz = np.maximum(np.abs(np.interp(tq, tp, pp[:, 2]) - q[:, None, 2])
+                        - np.interp(tq, tp, g), 0.0)  # fmt: skip
         dx = np.interp(tq, tp, pp[:, 0]) - q[:, None, 0]
         dy = np.interp(tq, tp, pp[:, 1]) - q[:, None, 1]
         d = np.maximum(np.hypot(dx, dy) / sh, np.abs(dz) / sv)
@@ -236,6 +258,28 @@ def conformance_reference(
         lag[lo : lo + 32] = taus[np.where(np.isfinite(need[lo : lo + 32]), best, nearest)]
     allowed = delta0 + rho * np.maximum(t - tp[0], 0.0)
     return lag, need - allowed
+
+
+def plan_slack(planned: Trajectory, scenario: Any, model: Any) -> FloatArray | None:
+    """Per point of a ``planned`` trajectory, how far the verifier lets its flight's heights
+    be off the plan's on top of the model's vertical tracking error: a fixed wing's height lag
+    (:func:`uavplan.world.execution.height_lag`) in the wind its heights are checked against
+    (:func:`~uavplan.world.execution.slope_wind`: the model's, at least the airframe's
+    calibration wind), as the verifier's pairs and heights checks allow it; None where there
+    is none (a multirotor, a nominal plan, a lag within
+    :data:`~uavplan.world.tolerances.LAG_TOL`). A descent planned at the airframe's limit is
+    flown above the plan with the wind behind it: that gap is allowed by the plan and is not
+    the tracking error the model states."""
+    from uavplan.world.execution import height_lag, slope_wind
+    from uavplan.world.tolerances import LAG_TOL
+
+    u = scenario.uav
+    wind = slope_wind(u, model)
+    if not wind or planned.dim != 3 or len(planned.times) < 2:
+        return None
+    off = np.abs(height_lag(planned.points[None], planned.times[None], wind,
+                            u.max_climb_angle, u.max_descent_angle))[0]  # fmt: skip
+    return off if float(off.max()) > LAG_TOL else None
 
 
 def simulate_once(
@@ -300,15 +344,16 @@ def simulate_once(
         m = int(out_n[i])
         tr = Trajectory(lg.uav, out_xyz[i, :m].copy(), out_t[i, :m].copy(), True)
         tracks.append(tr)
-        h, v, te = errors_against(tr, pl, error_window(pl, abs(float(errs[i])),
-                                                      float(np.linalg.norm(wind)),
-                                                      float(scenario.uav.speed)))  # fmt: skip
+        slack = plan_slack(pl, scenario, model)
+        window = error_window(pl, abs(float(errs[i])), float(np.linalg.norm(wind)),
+                              float(scenario.uav.speed))  # fmt: skip
+        h, v, te = errors_against(tr, pl, window, slack)
         ex.track_h[lg.uav] = float(h.max()) if m else math.nan
         ex.track_v[lg.uav] = float(np.abs(v).max()) if m else math.nan
         ex.timing[lg.uav] = (float(te.min()), float(te.max())) if m else (math.nan, math.nan)
         if m:
             lag, excess = conformance(tr, pl, delta0, rho, model.track_h if model else 0.0,
-                                      model.track_v if model else 0.0)  # fmt: skip
+                                      model.track_v if model else 0.0, slack)  # fmt: skip
             ex.lag[lg.uav] = (float(lag.min()), float(lag.max()))
             ex.excess[lg.uav] = float(excess.max())
         hs.append(h)
