@@ -217,3 +217,21 @@ def test_spso_fused_with_other_weights(weights: dict[str, float]) -> None:
     a = PathProblem(sc, weights=weights).cost(paths)
     b = PathProblem(sc, weights=weights, fused=False).cost(paths)
     assert_same(a, b, "cost")
+
+
+def test_the_fused_kernel_compiles_once_whatever_terms_a_world_has() -> None:
+    """Worlds with and without the indexed threat pass and with and without moving obstacles,
+    paths read-only or not: one signature of the fused kernel (each new one is a compilation
+    of about ten seconds on a machine's first plan)."""
+    rng = np.random.default_rng(5)
+    many = GRID_MIN_CYLINDERS + 2
+    worlds = [random_world(rng, 2, True, True, "ppswarm"),
+              random_world(rng, many, False, True, "ppswarm"),
+              random_world(rng, 2, False, True, "ppswarm", moving=2),
+              random_world(rng, many, True, True, "ppswarm", moving=1)]  # fmt: skip
+    for sc in worlds:
+        paths = world_paths(rng, 5)
+        PathProblem(sc).cost(paths)
+        paths.setflags(write=False)
+        PathProblem(sc).cost(paths)
+    assert len(C.path_cost_batch.serial.signatures) == 1, C.path_cost_batch.serial.signatures

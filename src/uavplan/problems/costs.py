@@ -299,9 +299,10 @@ def path_cost_batch(
 
     * J2: cylinders as structure of arrays, ``r_in``, ``r_out`` as
       :func:`uavplan.world.geometry.cylinder_threat_batch` takes them (SPSO strict, PPSwarm
-      not); ``threat``: None to compute it here from every pair, or each path's static J2
-      computed apart (the indexed pass); ``moving``: None, or PPSwarm's moving-obstacle term
-      per path, added to it.
+      not); ``threat``: empty to compute it here from every pair, or each path's static J2
+      computed apart (the indexed pass); ``moving``: empty, or PPSwarm's moving-obstacle term
+      per path, added to it (empty arrays rather than None: one signature, one compilation,
+      whichever of them a problem has).
     * J3: heights of the terrain ``H`` (when ``has_terrain``) read at the ``nearest`` node or
       bilinear; SPSO: over the free nodes, inf below ground, else the distance to the band's
       middle; PPSwarm (``has_band``): over every node, in the band's reference
@@ -338,18 +339,18 @@ def path_cost_batch(
             j1 += length
             if model == PPSWARM:
                 psi[q, s] = np.arctan2(dz, length)
-            if threat is None:
+            if threat.shape[0] == 0:
                 for j in range(J):
                     d = clipped_dist(
                         ax, ay, az, ex, ey, inv_ee, flat, inv_dz, cx[j], cy[j], z_lo[j], z_hi[j]
                     )
                     hits += 1 if (d < r_in[j] or (not strict and d == r_in[j])) else 0
                     j2 += (r_out[j] - d) if d <= r_out[j] else 0.0
-        if threat is not None:
+        if threat.shape[0] > 0:
             j2 = threat[q]
         elif hits > 0:
             j2 = np.inf
-        if moving is not None:
+        if moving.shape[0] > 0:
             j2 = j2 + moving[q]
         # J3: nodes
         j3 = 0.0

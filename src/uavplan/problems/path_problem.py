@@ -224,6 +224,10 @@ def _ppswarm_prepare(v: MotionValidator) -> tuple[Any, ...]:
     return (C.PPSWARM, *_world_args(v, R, R + v.scenario.uav.s1))
 
 
+#: An empty per-path term: not given (:func:`uavplan.problems.costs.path_cost_batch`).
+_NONE = np.zeros(0)
+
+
 def _fused(
     ctx: Batch, args: tuple[Any, ...], weights: FloatArray, early: bool
 ) -> tuple[FloatArray, FloatArray]:
@@ -233,7 +237,7 @@ def _fused(
     the tests compare it with."""
     model, cx, cy, lo, hi, r_in, r_out, _, _, *world = args
     p = ctx.paths  # 3-D, C-contiguous float64 (MotionValidator.check_paths)
-    threat = moving = None
+    threat = moving = _NONE
     if G.gridded(p, len(cx)):  # the indexed pass, then the kernel
         threat = G.cylinder_threat(p, ctx.world.cyl_centers, lo, hi, r_in, r_out, model == C.SPSO)
     moving_obstacles = ctx.scenario.moving_obstacles

@@ -63,6 +63,7 @@ from uavplan.problems import work
 from uavplan.world import _terrain_kernels as tk
 from uavplan.world import geometry as G
 from uavplan.world.dynamic import min_distances, robust_min_distances
+from uavplan.world.kernel_arrays import writable
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 from uavplan.world.terrain import Terrain
@@ -358,8 +359,10 @@ class MotionValidator:
 
     # ------------------------------------------------------------------ batches
     def check_paths(self, paths: FloatArray) -> FloatArray:
-        """``paths`` as a C-contiguous (pop, n >= 2, dim) float64 array (a single (n, dim)
-        path becomes a batch of one); ValueError naming the shape otherwise."""
+        """``paths`` as a C-contiguous, writable (pop, n >= 2, dim) float64 array (a single
+        (n, dim) path becomes a batch of one; read-only paths are copied, so that every kernel
+        has one signature, :mod:`uavplan.world.kernel_arrays`); ValueError naming the shape
+        otherwise."""
         p = np.asarray(paths, dtype=np.float64)
         if p.ndim == 2:
             p = p[None]
@@ -367,7 +370,7 @@ class MotionValidator:
             raise ValueError(
                 f"paths must be (pop, n_points >= 2, {self.dim}), got shape {np.shape(paths)}"
             )
-        return np.ascontiguousarray(p)
+        return writable(p)
 
     def batch(self, paths: FloatArray, times: FloatArray | None = None) -> Batch:
         return Batch(self, self.check_paths(paths), times)

@@ -190,7 +190,7 @@ def terrain_clearance_extrema(a: FloatArray, b: FloatArray, terrain: Terrain) ->
     """
     A = np.ascontiguousarray(a, dtype=np.float64).reshape(-1, 3)
     B = np.ascontiguousarray(b, dtype=np.float64).reshape(-1, 3)
-    H = np.ascontiguousarray(terrain.heights, dtype=np.float64)
+    H = _read_only(terrain.heights)
     return np.asarray(
         _terrain_extrema(
             A, B, H, float(terrain.x0), float(terrain.y0), float(terrain.dx), float(terrain.dy)
@@ -278,6 +278,16 @@ _WITHIN: dict[tuple[int, int, int, bool, str], tuple[FloatArray, FloatArray]] = 
 TABLE_BYTES = 768 * 2**20
 
 
+def _read_only(a: FloatArray) -> FloatArray:
+    """``a`` as a C-contiguous, read-only float64 view: a grid reaches its kernel with one
+    signature whether the caller's copy is writable or not (each other signature is a
+    compilation; the planner's side does the same, ``uavplan.world.kernel_arrays``, which the
+    verifier does not import)."""
+    v = np.ascontiguousarray(a, dtype=np.float64).view()
+    v.setflags(write=False)
+    return v
+
+
 class _Extremes:
     """A sparse table of a grid's extremes over square blocks: ``S[k, r, c]`` is the largest
     (smallest) value over rows ``r .. r + 2^k - 1`` and columns ``c .. c + 2^k - 1`` (cut at the
@@ -287,7 +297,7 @@ class _Extremes:
 
     def __init__(self, base: FloatArray, highest: bool, levels: int) -> None:
         self.highest = highest
-        self.S = _extreme_levels(base, levels, highest)
+        self.S = _extreme_levels(_read_only(base), levels, highest)
 
     @property
     def levels(self) -> int:

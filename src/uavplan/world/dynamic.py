@@ -14,6 +14,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from uavplan.world.kernel_arrays import writable
 from uavplan.world.reservations import window_min_dist2
 
 FloatArray = NDArray[np.float64]
@@ -74,11 +75,11 @@ def min_distances(
     (2-D ones at z = 0) and times prepared once for all of them."""
     from uavplan.world.geometry import timed_path_min_distance
 
-    p = np.ascontiguousarray(paths, dtype=np.float64)
+    p = writable(paths)
     if p.shape[-1] == 2:
         p = np.concatenate([p, np.zeros((*p.shape[:-1], 1))], axis=-1)
     # writable like ``p`` (a read-only array would be a second kernel signature to compile)
-    tt = np.require(np.broadcast_to(times, p.shape[:-1]), np.float64, ["C", "W"])
+    tt = writable(np.broadcast_to(times, p.shape[:-1]))
     out = [timed_path_min_distance(p, tt, o.times, o.positions) for o in obstacles]
     return np.stack(out, axis=-1) if out else np.zeros((*p.shape[:-2], p.shape[-2] - 1, 0))
 
@@ -95,10 +96,10 @@ def robust_min_distances(
     path segment and obstacle, the least distance over the pairs of the segment's path time and
     the obstacle's time that can coincide, (pop, n - 1, K). Exact
     (:func:`uavplan.world.reservations.window_min_dist2` per pair of pieces)."""
-    p = np.ascontiguousarray(paths, dtype=np.float64)
+    p = writable(paths)
     if p.shape[-1] == 2:
         p = np.concatenate([p, np.zeros((*p.shape[:-1], 1))], axis=-1)
-    tt = np.require(np.broadcast_to(times, p.shape[:-1]), np.float64, ["C", "W"])
+    tt = writable(np.broadcast_to(times, p.shape[:-1]))
     out = []
     for o in obstacles:
         # the held first and last positions as pieces reaching far before and after

@@ -66,6 +66,7 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from uavplan.kernel_builds import population_kernel
+from uavplan.world.kernel_arrays import writable
 
 if TYPE_CHECKING:
     from uavplan.world.scenario import Scenario
@@ -89,7 +90,7 @@ def split_pieces(points: FloatArray, times: FloatArray, dt: float) -> tuple[Floa
     """
     P = np.asarray(points, dtype=np.float64)
     T = np.asarray(times, dtype=np.float64)
-    return _split(np.ascontiguousarray(P), np.ascontiguousarray(T), float(dt))
+    return _split(writable(P), writable(T), float(dt))
 
 
 @njit(cache=True)
@@ -141,9 +142,7 @@ def simplify_timed(
     At most ``max_window`` original segments merge into one; a segment of zero duration is
     never merged across.
     """
-    P = np.ascontiguousarray(points, dtype=np.float64)
-    T = np.ascontiguousarray(times, dtype=np.float64)
-    return _simplify(P, T, float(tolerance), int(max_window))
+    return _simplify(writable(points), writable(times), float(tolerance), int(max_window))
 
 
 @njit(cache=True)
@@ -882,8 +881,7 @@ class ReservationTable:
         :attr:`lag` pads every segment by its lag as well (the larger of its ends', in the table's
         wind: :func:`~uavplan.world.execution.lag_extents`).
         """
-        pts = np.ascontiguousarray(points, dtype=np.float64)
-        ts = np.ascontiguousarray(times, dtype=np.float64)
+        pts, ts = writable(points), writable(times)
         if pts.ndim != 2 or pts.shape[1] != 3 or ts.shape != (pts.shape[0],):
             raise ValueError(f"need points (n, 3) and times (n,), got {pts.shape}, {ts.shape}")
         seg_pad = np.zeros(max(pts.shape[0] - 1, 0))
@@ -973,8 +971,7 @@ class ReservationTable:
     @staticmethod
     def _prepared(paths: FloatArray, times: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Paths (pop, n, 3) and times (pop, n) as the kernels take them."""
-        p = np.ascontiguousarray(paths, dtype=np.float64)
-        t = np.require(times, np.float64, ["C", "W"])  # one kernel signature: never read-only
+        p, t = writable(paths), writable(times)  # one kernel signature: never read-only
         if p.ndim == 2:
             p, t = p[None], t[None]
         if p.ndim != 3 or p.shape[2] != 3 or t.shape != p.shape[:2]:
@@ -1080,11 +1077,7 @@ class ReservationTable:
     def min_distance_reference(self, points: FloatArray, times: FloatArray) -> float:
         """Brute force over every reserved piece, in NumPy (tests compare :meth:`min_distance`
         with it): every piece of the path against every reserved piece, exact."""
-        a0, a1, t0, t1, _ = _split(
-            np.ascontiguousarray(points, dtype=np.float64),
-            np.ascontiguousarray(times, dtype=np.float64),
-            self.dt,
-        )
+        a0, a1, t0, t1, _ = _split(writable(points), writable(times), self.dt)
         if not len(t0) or not self.n_pieces:
             return float("inf")
         b0, b1, s0, s1 = self._p0, self._p1, self._t0, self._t1

@@ -257,12 +257,15 @@ def cylinder_grid_pass(
 
 
 def as_3d(paths: FloatArray) -> FloatArray:
-    """Contiguous float64 points or paths (``(..., 2 or 3)``), 2-D ones at z = 0 (what the
-    3-D kernels, the reservation table and the Dubins curves read)."""
+    """Contiguous, writable float64 points or paths (``(..., 2 or 3)``), 2-D ones at z = 0
+    (what the 3-D kernels, the reservation table and the Dubins curves read;
+    :mod:`uavplan.world.kernel_arrays`)."""
+    from uavplan.world.kernel_arrays import writable
+
     p = np.asarray(paths, dtype=np.float64)
     if p.shape[-1] == 2:
         p = np.concatenate([p, np.zeros((*p.shape[:-1], 1))], axis=-1)
-    return np.ascontiguousarray(p)
+    return writable(p)
 
 
 def soa(

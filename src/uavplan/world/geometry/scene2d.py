@@ -21,6 +21,7 @@ from uavplan.world.geometry.polygons import (
     convex_hulls,
     polygon_convexity,
 )
+from uavplan.world.kernel_arrays import writable
 from uavplan.world.obstacle_index import (
     box_grid,
     box_pad,
@@ -264,7 +265,7 @@ def scene2d_batch(
     """
     if prep is None:
         prep = scene_prep(centers, radii, verts, starts, margins)
-    p = np.ascontiguousarray(paths, dtype=np.float64)
+    p = writable(paths)
     if prep[-4][3] > 0 and np.isfinite(p[..., :2]).all():
         return scene2d_grid_kernel(p, verts, starts, lo, hi, *prep)
     return scene2d_kernel(p, verts, starts, lo, hi, *prep[:-4])
