@@ -529,20 +529,29 @@ def test_the_wind_a_flights_heights_are_checked_in() -> None:
     assert slope_wind(dataclasses.replace(sc.uav, airframe=None), DEFAULT) == 0.0
 
 
-def test_an_airframe_whose_tracking_error_is_not_calibrated_is_planned_loudly(tmp_path) -> None:
-    """The fast fixed wing's default tracking error is not calibrated on its plans' flights:
+def test_an_airframe_whose_tracking_error_is_not_calibrated_is_planned_loudly(
+    tmp_path, monkeypatch
+) -> None:  # type: ignore[no-untyped-def]
+    """An airframe whose tracking error is not calibrated on its plans' flights (no fitted
+    tail; the fast fixed wing with the figures it had before its calibration, here):
     `uavplan plan` of its fleet under uavplan's default model says so in the model's source,
-    warns on the console and exits 1 (the plan written); the small fixed wing's, calibrated,
-    says it is; a scenario that states its model (the built-in, nominal) is not warned."""
+    warns on the console and exits 1 (the plan written); the built-in airframes, calibrated,
+    say they are; a scenario that states its model (the built-in, nominal) is not warned."""
     from typer.testing import CliRunner
 
     from uavplan.cli import app
     from uavplan.scenarios import builtin_path
+    from uavplan.world import airframes as A
     from uavplan.world.execution import UNCALIBRATED, default_for
 
+    for ref, n in (("ppswarm1", 40), ("rscdwoa-mixed", 4), ("quadrotors", 40)):
+        assert "calibrated in flight simulation" in default_for(resolve(ref).uav, n).source
+    assert all(af.tail_h is not None for af in A.AIRFRAMES.values())
+    assumed = dataclasses.replace(A.FAST_FIXED_WING, track_h=8.5, track_v=12.5, tail_h=None,
+                                  tail_v=None)  # fmt: skip
+    monkeypatch.setitem(A.AIRFRAMES, "fast-fixed-wing", assumed)
     fast = default_for(resolve("rscdwoa-mixed").uav, 4)
     assert UNCALIBRATED in fast.source
-    assert "calibrated in flight simulation" in default_for(resolve("ppswarm1").uav, 40).source
     text = builtin_path("rscdwoa-mixed").read_text()
     text = "\n".join(ln for ln in text.splitlines() if not ln.startswith("execution:"))
     text = text.replace("goal: [90000, 90000, 1000]", "goal: [90000, 90000, 1020]")

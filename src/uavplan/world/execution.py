@@ -151,8 +151,9 @@ DEFAULT = ExecutionModel(2.0, 0.03, 3.0, 2.0, 0.0, "uavplan's default for small 
 
 
 #: How a default model's source says that its airframe's tracking error is not calibrated on
-#: the flights of its plans (an airframe without a fitted tail: the fast fixed wing, whose
-#: simulated flights leave its 8.5 m / 12.5 m; docs/results.md).
+#: the flights of its plans (an airframe without a fitted tail; every built-in airframe has
+#: one: the fast fixed wing, before its calibration, stated 8.5 m / 12.5 m, and its simulated
+#: flights left them; docs/results.md).
 UNCALIBRATED = "assumed, NOT calibrated: simulated flights of its plans leave it"
 
 
