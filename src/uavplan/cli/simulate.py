@@ -247,7 +247,8 @@ def _figure(folder: Path, plan: Any, world: Any, rows: list[dict[str, Any]], see
     a2.set_xlim(lo[0], hi[0])
     a2.set_ylim(lo[1], hi[1])
     a2.set_aspect("equal")
-    a2.set_title(f"{len(rows)} runs: where they violated (planned paths in grey)")
+    where = "where they violated" if len(pts) else "none violated"
+    a2.set_title(f"{len(rows)} runs: {where} (planned paths in grey)")
     fig.tight_layout()
     path = folder / "simulate.png"
     fig.savefig(path, dpi=110)
