@@ -634,8 +634,10 @@ def separation_under(
     np.maximum.at(tops, np.maximum(owner, 0), rowlag)
     top2 = np.sort(tops)[-2:].sum()
     search = s2 + 2.0 * timing.gap + 10.0 + float(top2)
+    # the chunk passed, not omitted: the tests pass it, and an omitted argument is another
+    # signature to compile
     pairs = _close_pairs(P, owner, valid, float(search), float(max(search, 20.0)), T, take,
-                         TAKEOFF_CAP, SPEED_CAP)  # fmt: skip
+                         TAKEOFF_CAP, SPEED_CAP, int(CHUNK_SEGMENTS))  # fmt: skip
     if not len(pairs):
         return [], []
     key = owner[pairs[:, 0]] * len(trajs) + owner[pairs[:, 1]]
