@@ -225,10 +225,10 @@ def conformance_reference(
     excess is at most 0: the flown position is always inside the 4-D volume the plan was
     made and verified for (ASTM F3548's conformance of an operational intent). Unlike the
     nearest-point timing error of :func:`errors_against`, a pass of the path near another
-    pass of itself cannot be mistaken for it: positions are compared at times. Heights within
-    ``slack`` (per planned point, interpolated) of the plan's are within ``e_v`` of it less
-    the slack: the height lag the verifier holds a fixed wing's flight to
-    (:func:`plan_slack`)."""
+    pass of itself cannot be mistaken for it: positions are compared at times. With a
+    ``slack`` (per planned point, interpolated), a height is in tolerance within ``e_v`` plus
+    the slack of the plan's: the height lag the verifier allows a fixed wing's flight on top
+    of the model's error (:func:`plan_slack`)."""
     taus = shifts(track, planned, delta0, rho)
     t = track.times
     tp, pp = planned.times, planned.points
