@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from uavplan.problems.path_problem import Evaluation, PathProblem
 from uavplan.world._terrain_kernels import ground_one
+from uavplan.world.kernel_arrays import read_only
 
 FloatArray = NDArray[np.float64]
 
@@ -168,8 +169,7 @@ def decode_args(
     if terrain is not None:
         H, x0, y0, dx, dy = terrain.heights, terrain.x0, terrain.y0, terrain.dx, terrain.dy
     else:
-        H, x0, y0, dx, dy = np.zeros((2, 2)), 0.0, 0.0, 1.0, 1.0
-        H.setflags(write=False)  # read-only as a terrain's heights: one kernel signature
+        H, x0, y0, dx, dy = read_only(np.zeros((2, 2))), 0.0, 0.0, 1.0, 1.0  # as heights
     if problem.lookup not in ("nearest", "bilinear"):
         raise ValueError(f"unknown terrain lookup method {problem.lookup!r}")
     f64 = [np.ascontiguousarray(a, dtype=np.float64) for a in (start, lo, hi)]

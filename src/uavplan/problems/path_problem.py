@@ -33,6 +33,7 @@ from uavplan.problems import costs as C
 from uavplan.problems import work
 from uavplan.problems.validity import Batch, MotionValidator
 from uavplan.world import geometry as G
+from uavplan.world.kernel_arrays import read_only
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 from uavplan.world.terrain import Terrain
@@ -202,8 +203,7 @@ def _world_args(v: MotionValidator, r_in: FloatArray, r_out: FloatArray) -> tupl
     if t is not None:
         H, x0, y0, dx, dy = t.heights, t.x0, t.y0, t.dx, t.dy
     else:
-        H, x0, y0, dx, dy = np.zeros((1, 1)), 0.0, 0.0, 1.0, 1.0
-        H.setflags(write=False)  # read-only as a terrain's heights: one kernel signature
+        H, x0, y0, dx, dy = read_only(np.zeros((1, 1))), 0.0, 0.0, 1.0, 1.0  # as heights
     band = sc.altitude
     lo, hi = (band.min, band.max) if band is not None else (0.0, 0.0)
     mid = C.altitude_target(lo, hi, v.task.cruise)

@@ -63,7 +63,7 @@ from uavplan.problems import work
 from uavplan.world import _terrain_kernels as tk
 from uavplan.world import geometry as G
 from uavplan.world.dynamic import min_distances, robust_min_distances
-from uavplan.world.kernel_arrays import writable
+from uavplan.world.kernel_arrays import read_only, writable
 from uavplan.world.reservations import ReservationTable
 from uavplan.world.scenario import Scenario, Task
 from uavplan.world.terrain import Terrain
@@ -492,8 +492,7 @@ class MotionValidator:
                 [terrain.x0, terrain.y0, terrain.dx, terrain.dy, nx - 1, ny - 1, tol_u, tol_v]
             )
         else:
-            H = nH = np.zeros((2, 2))
-            H.setflags(write=False)  # read-only as a terrain's heights: one kernel signature
+            H = nH = read_only(np.zeros((2, 2)))  # as a terrain's heights: one signature
             flat, off, shp = nflat, noff, nshp = tk.build_max_pyramid(H)
             grid = np.array([0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0])
         return (

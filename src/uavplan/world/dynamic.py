@@ -68,6 +68,15 @@ class MovingObstacle:
         return min_distances((self,), paths, times)[..., 0]
 
 
+def _timed(paths: ArrayLike, times: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Paths (2-D ones at z = 0) and their times as the kernels take them: contiguous and
+    writable (a read-only array would be a second kernel signature to compile)."""
+    from uavplan.world.geometry import as_3d
+
+    p = as_3d(np.asarray(paths, dtype=np.float64))
+    return p, writable(np.broadcast_to(times, p.shape[:-1]))
+
+
 def min_distances(
     obstacles: Sequence[MovingObstacle], paths: ArrayLike, times: ArrayLike
 ) -> FloatArray:
@@ -75,11 +84,7 @@ def min_distances(
     (2-D ones at z = 0) and times prepared once for all of them."""
     from uavplan.world.geometry import timed_path_min_distance
 
-    p = writable(paths)
-    if p.shape[-1] == 2:
-        p = np.concatenate([p, np.zeros((*p.shape[:-1], 1))], axis=-1)
-    # writable like ``p`` (a read-only array would be a second kernel signature to compile)
-    tt = writable(np.broadcast_to(times, p.shape[:-1]))
+    p, tt = _timed(paths, times)
     out = [timed_path_min_distance(p, tt, o.times, o.positions) for o in obstacles]
     return np.stack(out, axis=-1) if out else np.zeros((*p.shape[:-2], p.shape[-2] - 1, 0))
 
@@ -96,10 +101,7 @@ def robust_min_distances(
     path segment and obstacle, the least distance over the pairs of the segment's path time and
     the obstacle's time that can coincide, (pop, n - 1, K). Exact
     (:func:`uavplan.world.reservations.window_min_dist2` per pair of pieces)."""
-    p = writable(paths)
-    if p.shape[-1] == 2:
-        p = np.concatenate([p, np.zeros((*p.shape[:-1], 1))], axis=-1)
-    tt = writable(np.broadcast_to(times, p.shape[:-1]))
+    p, tt = _timed(paths, times)
     out = []
     for o in obstacles:
         # the held first and last positions as pieces reaching far before and after

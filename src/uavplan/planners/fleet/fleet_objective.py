@@ -46,6 +46,7 @@ from uavplan.problems.encoding import CartesianEncoding
 from uavplan.problems.path_problem import PathProblem
 from uavplan.world._terrain_kernels import bilinear_one
 from uavplan.world.geometry import clipped_dist, seg_setup
+from uavplan.world.kernel_arrays import read_only
 from uavplan.world.reservations import ReservationTable, path_query
 
 FloatArray = NDArray[np.float64]
@@ -258,8 +259,7 @@ class FleetObjective:
             grid: tuple[Any, ...] = (float(terrain.x0), float(terrain.y0), float(terrain.dx),
                                      float(terrain.dy))  # fmt: skip
         else:
-            H, grid = np.zeros((2, 2)), (0.0, 0.0, 1.0, 1.0)
-            H.setflags(write=False)
+            H, grid = read_only(np.zeros((2, 2))), (0.0, 0.0, 1.0, 1.0)
         ends = np.stack([problem.start, problem.goal])
         ends_ground = (terrain.height(ends[:, 0], ends[:, 1]) if terrain is not None
                        else np.zeros(2))  # fmt: skip

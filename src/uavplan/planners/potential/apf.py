@@ -60,6 +60,7 @@ from uavplan.planners.core.registry import register_planner
 from uavplan.planners.core.run import Outcome, Run
 from uavplan.problems.validity import PackedWorld
 from uavplan.world._terrain_kernels import bilinear_one
+from uavplan.world.kernel_arrays import read_only
 from uavplan.world.scenario import Scenario
 
 FloatArray = NDArray[np.float64]
@@ -617,8 +618,7 @@ def _packed(
         grid = (float(t.x0), float(t.y0), float(t.dx), float(t.dy))
         z_args = (1.0, *grid, f_abs, f_rel, c_abs, c_rel)
     else:
-        H = np.zeros((1, 1))
-        H.setflags(write=False)  # read-only as a terrain's heights: one kernel signature
+        H = read_only(np.zeros((1, 1)))  # as a terrain's heights: one kernel signature
         z_args = (0.0, 0.0, 0.0, 1.0, 1.0, f_abs, f_rel, c_abs, c_rel)
     return (
         w.cyl_centers, w.cyl_radii, w.cyl_lo, w.cyl_hi, w.circ_centers, w.circ_radii,
