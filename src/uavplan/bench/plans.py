@@ -25,7 +25,7 @@ def derive_seed(root_seed: int, plan: str, scenario: str, algorithm: str, run_in
     """A 63-bit seed for one run, independent of execution order and executor."""
     key = [zlib.crc32(s.encode()) for s in (plan, scenario, algorithm)] + [int(run_index)]
     ss = np.random.SeedSequence(entropy=int(root_seed), spawn_key=tuple(key))
-    return int(ss.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1))
+    return int(ss.generate_state(1, dtype=np.uint64)[0]) >> 1
 
 
 @dataclass(frozen=True)
