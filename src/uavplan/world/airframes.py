@@ -150,8 +150,8 @@ SMALL_FIXED_WING = Airframe("small-fixed-wing", "fixed-wing", track_h=6.0, track
 #: corners are cut by the L1 guidance, which sets the horizontal figure).
 FAST_FIXED_WING = Airframe("fast-fixed-wing", "fixed-wing", tau_speed=4.0, tau_bank=0.6,
                            max_bank_deg=35.0, tau_gamma=1.5, l1_period=17.0,
-                           k_height=0.2, accept=10.0, track_h=15.0, track_v=20.5,
-                           tail_h=(13.52, 0.77), tail_v=(18.01, 1.55),
+                           k_height=0.2, accept=10.0, track_h=14.5, track_v=22.0,
+                           tail_h=(11.65, 1.89), tail_v=(17.30, 2.98),
                            speed_margin=0.2)  # fmt: skip
 #: A quadrotor under a position and velocity controller (PX4's multicopter defaults; its
 #: planned turns at PX4's default horizontal acceleration in missions, MPC_ACC_HOR 3 m/s^2,
